@@ -1,0 +1,20 @@
+# Compile flags shared by every ccmap target.
+
+# Same rounding on host and aarch64: no FMA contraction, no fast-math.
+add_compile_options(-ffp-contract=off -fno-fast-math)
+
+if(CCMAP_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+# The flight core: warning wall that fails the build, no exceptions, no RTTI.
+add_library(ccmap_core_flags INTERFACE)
+target_compile_options(ccmap_core_flags INTERFACE
+  -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wdouble-promotion -Wshadow
+  -Wold-style-cast -Wfloat-equal -Wcast-align -Wnull-dereference -Werror
+  $<$<COMPILE_LANGUAGE:CXX>:-fno-exceptions -fno-rtti>)
+
+# Tests and host tools: a lighter wall (they compute references in double on purpose).
+add_library(ccmap_host_flags INTERFACE)
+target_compile_options(ccmap_host_flags INTERFACE -Wall -Wextra -Wshadow -Werror)

@@ -1,0 +1,274 @@
+// Converging Covariance Map (CCM) cell: state, incremental update, batch merge, weight
+// limiter, queries and pooling (paper Section IV, eqs. (1)-(15)).
+//
+// Frames and units
+//  - x, y are metres relative to the geometric centre of the cell (paper eq. (2):
+//    mu_m = [M_x - C_x, M_y - C_y, M_z]); z is metres in the map frame of the owning stack
+//    (never absolute world coordinates: see docs/design.md, "Float precision").
+//  - Weights are dimensionless; with the default constant weight 1 a weight counts points.
+//
+// Everything here is float-only, allocation-free, exception-free and O(1) per call (the batch
+// functions are O(n) in their input). Bad input is refused with a Status and leaves the cell
+// bitwise unchanged.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+#include "ccmap/core/status.hpp"
+
+namespace ccmap {
+
+/// Coordinates beyond this magnitude (metres) are refused: the map is local (a stack spans at
+/// most a few hundred metres around its origin) and squares of larger values lose all digits.
+inline constexpr float kMaxAbsCoordinateM = 1.0e5F;
+/// Largest accepted single measurement weight.
+inline constexpr float kMaxMeasurementWeight = 1.0e6F;
+/// A lateral variance (m^2) at or below this is degenerate (all points on one line): the
+/// inclination along that axis is reported as 0 and the cell is not covered.
+inline constexpr float kMinLateralVariance = 1.0e-12F;
+/// Weight limit meaning "never limit".
+inline constexpr float kNoWeightLimit = std::numeric_limits<float>::infinity();
+
+/// The 9 floats of one CCM cell (paper Section IV-B). A zero-initialised cell is "never
+/// observed". S = W * sigma^2 (the co-moments), as in the paper.
+struct CcmCell {
+  float weight;  ///< W: accumulated measurement weight, 0 = never observed
+  float mean_x;  ///< mu_c,x: m, relative to the cell centre
+  float mean_y;  ///< mu_c,y: m, relative to the cell centre
+  float mean_z;  ///< mu_c,z: m, map frame
+  float s_xx;    ///< W * sigma_xx^2  (m^2)
+  float s_yy;    ///< W * sigma_yy^2  (m^2)
+  float s_zz;    ///< W * sigma_zz^2  (m^2)
+  float s_xz;    ///< W * sigma_xz^2  (m^2)
+  float s_yz;    ///< W * sigma_yz^2  (m^2)
+};
+static_assert(sizeof(CcmCell) == 9U * sizeof(float), "CcmCell must stay 9 packed floats");
+
+/// Result of a batch fold: how many points were used and why the others were refused.
+struct CcmBatchCounts {
+  std::uint32_t accepted;
+  std::uint32_t rejected_non_finite;
+  std::uint32_t rejected_out_of_range;
+  std::uint32_t rejected_weight;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Input validation
+// ---------------------------------------------------------------------------------------------
+
+/// kOk if (x, y, z) are finite and within kMaxAbsCoordinateM, else the reason.
+[[nodiscard]] inline Status ccm_check_point(float x, float y, float z) noexcept {
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
+    return Status::kNonFiniteInput;
+  }
+  if (std::fabs(x) > kMaxAbsCoordinateM || std::fabs(y) > kMaxAbsCoordinateM ||
+      std::fabs(z) > kMaxAbsCoordinateM) {
+    return Status::kOutOfRange;
+  }
+  return Status::kOk;
+}
+
+/// kOk if 0 < w <= kMaxMeasurementWeight (NaN fails), else kBadWeight.
+[[nodiscard]] inline Status ccm_check_weight(float w) noexcept {
+  return (w > 0.0F && w <= kMaxMeasurementWeight) ? Status::kOk : Status::kBadWeight;
+}
+
+/// kOk if the limit is > 0 (kNoWeightLimit allowed), else kInvalidArgument (NaN fails).
+[[nodiscard]] inline Status ccm_check_weight_limit(float weight_limit) noexcept {
+  return weight_limit > 0.0F ? Status::kOk : Status::kInvalidArgument;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Weight limiter, eqs. (6)-(7)
+// ---------------------------------------------------------------------------------------------
+
+/// If W > W_l: S *= W_l / W (eq. 7), W = W_l (eq. 6). The variances S/W and the mean are
+/// unchanged; only the relative weight of future measurements is held at w / W_l.
+/// Precondition: weight_limit > 0 (checked by the public update functions).
+inline void ccm_apply_weight_limit(CcmCell& cell, float weight_limit) noexcept {
+  if (cell.weight > weight_limit) {
+    const float scale = weight_limit / cell.weight;
+    cell.s_xx *= scale;
+    cell.s_yy *= scale;
+    cell.s_zz *= scale;
+    cell.s_xz *= scale;
+    cell.s_yz *= scale;
+    cell.weight = weight_limit;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Incremental update, eqs. (1)-(5)
+// ---------------------------------------------------------------------------------------------
+
+namespace detail {
+/// The update without input checks: the hot path for callers that validated already.
+/// Eq. (4)/(5) in the West/Welford form: with d = mu_m - mu_{c,t-1} and W_{t-1} = W_t - w,
+///   S_ij += w * d_i * (mu_m,j - mu_{c,t,j}) = (w * W_{t-1} / W_t) * d_i * d_j,
+/// which equals the paper's eq. (5) exactly in real arithmetic but adds a small, well
+/// conditioned term instead of subtracting large products of means.
+inline void ccm_update_unchecked(CcmCell& cell, float x, float y, float z, float w,
+                                 float weight_limit) noexcept {
+  const float previous_weight = cell.weight;
+  const float weight = previous_weight + w;             // eq. (1)
+  const float gain = w / weight;                        // w_t / W_t, weight > 0
+  const float dx = x - cell.mean_x;                     // mu_m - mu_{c,t-1}
+  const float dy = y - cell.mean_y;
+  const float dz = z - cell.mean_z;
+  cell.mean_x += gain * dx;                             // eq. (3)
+  cell.mean_y += gain * dy;
+  cell.mean_z += gain * dz;
+  const float k = w * (previous_weight / weight);       // = w * (1 - gain)
+  cell.s_xx += k * dx * dx;                             // eq. (4)
+  cell.s_yy += k * dy * dy;
+  cell.s_zz += k * dz * dz;
+  cell.s_xz += k * dx * dz;                             // eq. (5), stable form
+  cell.s_yz += k * dy * dz;
+  cell.weight = weight;
+  ccm_apply_weight_limit(cell, weight_limit);           // eqs. (6)-(7)
+}
+}  // namespace detail
+
+/// Folds one measurement (x, y relative to the cell centre, z map frame, weight w) into the
+/// cell and applies the limiter. Refused (cell unchanged): non-finite or out-of-range
+/// coordinates, bad weight, bad limit.
+[[nodiscard]] inline Status ccm_update(CcmCell& cell, float x, float y, float z, float w,
+                                       float weight_limit) noexcept {
+  const Status point_status = ccm_check_point(x, y, z);
+  if (point_status != Status::kOk) {
+    return point_status;
+  }
+  if (ccm_check_weight(w) != Status::kOk) {
+    return Status::kBadWeight;
+  }
+  if (ccm_check_weight_limit(weight_limit) != Status::kOk) {
+    return Status::kInvalidArgument;
+  }
+  detail::ccm_update_unchecked(cell, x, y, z, w, weight_limit);
+  return Status::kOk;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Batch merge (pairwise merge of Chan, Golub & LeVeque)
+// ---------------------------------------------------------------------------------------------
+
+/// Merges the statistics `other` into `cell`:
+///   W = W_a + W_b,  d = mu_b - mu_a,  mu = mu_a + d * W_b / W,
+///   S_ij = S_a,ij + S_b,ij + d_i * d_j * W_a * W_b / W,
+/// then applies the limiter. Both cells must describe the same cell (same centre).
+/// An empty `other` leaves `cell` unchanged. Refused: bad limit, or `other` holding a negative
+/// or non-finite weight (kBadWeight).
+[[nodiscard]] Status ccm_merge(CcmCell& cell, const CcmCell& other, float weight_limit) noexcept;
+
+/// Folds n points (x[i], y[i] relative to the cell centre, z[i] map frame) into the cell in one
+/// step: a two-pass weighted mean/co-moment of the batch followed by ccm_merge. `weights` may
+/// be nullptr (every point then weighs `constant_weight`). Invalid points are skipped and
+/// counted. Equal to n sequential ccm_update calls within float rounding when the limiter does
+/// not engage inside the batch (the limiter acts once, after the merge).
+[[nodiscard]] CcmBatchCounts ccm_update_batch(CcmCell& cell, const float* x, const float* y,
+                                              const float* z, const float* weights,
+                                              float constant_weight, std::size_t n,
+                                              float weight_limit) noexcept;
+
+// ---------------------------------------------------------------------------------------------
+// Queries, eqs. (8)-(12)
+// ---------------------------------------------------------------------------------------------
+
+/// Variances sigma^2 = S / W (m^2); 0 for a never-observed cell.
+[[nodiscard]] inline float ccm_variance(float s, float weight) noexcept {
+  return weight > 0.0F ? s / weight : 0.0F;
+}
+
+/// Inclinations (dz/dx, dz/dy; dimensionless gradients) and the surface-normal variance.
+struct CcmSurface {
+  float slope_x;          ///< a, eq. (9); 0 if sigma_xx^2 is degenerate
+  float slope_y;          ///< b, eq. (9); 0 if sigma_yy^2 is degenerate
+  float normal_variance;  ///< sigma_s^2, eq. (11), clamped to >= 0 (m^2)
+};
+
+/// a = sigma_xz^2 / sigma_xx^2, b = sigma_yz^2 / sigma_yy^2 (eq. 9),
+/// sigma_s^2 = sigma_zz^2 - sigma_xz^4 / sigma_xx^2 - sigma_yz^4 / sigma_yy^2 (eq. 11).
+/// A degenerate lateral axis (variance <= kMinLateralVariance) contributes slope 0 and no
+/// reduction of sigma_zz^2. Never NaN/Inf for a cell built by this library.
+[[nodiscard]] inline CcmSurface ccm_surface(const CcmCell& cell) noexcept {
+  CcmSurface out{0.0F, 0.0F, 0.0F};
+  if (!(cell.weight > 0.0F)) {
+    return out;
+  }
+  const float var_xx = cell.s_xx / cell.weight;
+  const float var_yy = cell.s_yy / cell.weight;
+  const float var_zz = cell.s_zz / cell.weight;
+  const float cov_xz = cell.s_xz / cell.weight;
+  const float cov_yz = cell.s_yz / cell.weight;
+  float residual = var_zz;
+  if (var_xx > kMinLateralVariance) {
+    out.slope_x = cov_xz / var_xx;
+    residual -= cov_xz * out.slope_x;
+  }
+  if (var_yy > kMinLateralVariance) {
+    out.slope_y = cov_yz / var_yy;
+    residual -= cov_yz * out.slope_y;
+  }
+  out.normal_variance = residual > 0.0F ? residual : 0.0F;
+  return out;
+}
+
+/// Total inclination i_total = sqrt(a^2 + b^2) (dimensionless gradient magnitude).
+[[nodiscard]] inline float ccm_inclination(const CcmSurface& surface) noexcept {
+  return std::sqrt(surface.slope_x * surface.slope_x + surface.slope_y * surface.slope_y);
+}
+
+/// Sub-cell height at (qx, qy) relative to the cell centre, eqs. (8)-(10):
+/// h_q = c + a*q_x + b*q_y with c = mu_z - a*mu_x - b*mu_y. For a never-observed cell: 0.
+[[nodiscard]] inline float ccm_height_at(const CcmCell& cell, const CcmSurface& surface, float qx,
+                                         float qy) noexcept {
+  return cell.mean_z + surface.slope_x * (qx - cell.mean_x) + surface.slope_y * (qy - cell.mean_y);
+}
+
+/// Elevation variance at (qx, qy): the variance of a new sample there under the cell's plane
+/// model, sigma_s^2 * (1 + (1 + (qx-mu_x)^2/sigma_xx^2 + (qy-mu_y)^2/sigma_yy^2) / W), i.e. the
+/// residual spread plus the uncertainty of the fitted plane (W counts points for weight 1).
+[[nodiscard]] float ccm_elevation_variance(const CcmCell& cell, const CcmSurface& surface, float qx,
+                                           float qy) noexcept;
+
+/// Coverage, eq. (12): sigma_xx, sigma_yy >= tau * sqrt(w^2/12), compared as variances
+/// (sigma^2 >= tau^2 * w^2 / 12), and W >= min_weight. A partly covered cell is unknown.
+[[nodiscard]] inline bool ccm_is_covered(const CcmCell& cell, float cell_width_m, float tau,
+                                         float min_weight) noexcept {
+  if (!(cell.weight >= min_weight) || !(cell.weight > 0.0F)) {
+    return false;
+  }
+  const float needed = tau * tau * cell_width_m * cell_width_m * (1.0F / 12.0F);
+  return cell.s_xx >= needed * cell.weight && cell.s_yy >= needed * cell.weight;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pooling, eqs. (13)-(15)
+// ---------------------------------------------------------------------------------------------
+
+/// Pools four child cells of width `child_width_m` into their parent (width 2*child_width_m).
+/// Child order: index = ix + 2*iy with ix, iy in {0,1}; child centre offset from the parent
+/// centre is ((ix - 0.5) * child_width_m, (iy - 0.5) * child_width_m).
+///
+/// Rule (docs/design.md, "Pooling"): each observed child's mean is first shifted into the
+/// parent frame by its centre offset; observed children are then combined with equal area
+/// weights 1/n (eqs. 13-15 use 1/4: every child stands for the same ground area, whatever
+/// its point density), unobserved children (W = 0) are left out so that they neither pull
+/// the mean towards the parent centre nor invent variance. A parent with missing children
+/// has a small lateral variance and so fails the coverage test (unknown), as it should.
+/// The pooled weight is the sum of the children's weights, then limited to weight_limit
+/// (variances unchanged). With no observed child the result is the zero cell.
+[[nodiscard]] CcmCell ccm_pool4(const CcmCell children[4], float child_width_m,
+                                float weight_limit) noexcept;
+
+/// A piece-wise constant cell (height, variance of height, weight) seen as a CCM cell of width
+/// `cell_width_m`: mean (0, 0, height), lateral variances w^2/12 (uniform coverage assumed),
+/// sigma_zz^2 = variance, no covariance. Used to pool the finest, piece-wise constant layer into
+/// the first CCM layer. Weight <= 0 or non-finite input gives the zero cell.
+[[nodiscard]] CcmCell ccm_from_constant(float height, float variance, float weight,
+                                        float cell_width_m) noexcept;
+
+}  // namespace ccmap

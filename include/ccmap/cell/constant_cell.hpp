@@ -1,0 +1,125 @@
+// Piece-wise constant elevation cells: the baselines and the finest layer of a stack.
+//
+//  - Kalman height update (robot-centric elevation mapping, paper ref. [13]): a 1-D Kalman
+//    filter on the cell height with measurement variance sigma_m^2 from the sensor model.
+//    Its variance is the uncertainty of the height estimate; it ignores the spread of the
+//    samples (the paper's criticism of it for large cells).
+//  - OMG update (Optimal Mixture of Gaussians, paper ref. [14]): weighted mean of the
+//    measurements with a variance of the Gaussian mixture, i.e. the weighted mean of
+//    (sigma_m,i^2 + (z_i - mean)^2): it includes the sample spread.
+//
+// Units: metres (height relative to the stack origin), m^2 for variances. Float only,
+// allocation-free, O(1). Refused input (Status != kOk) leaves the cell unchanged.
+#pragma once
+
+#include <cmath>
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/core/status.hpp"
+
+namespace ccmap {
+
+/// Smallest variance a Kalman cell keeps (m^2). Without a floor the variance of a static cell
+/// decays towards 0 and new data stops counting; the floor plays the role of the CCM weight
+/// limiter. 1e-8 m^2 = (0.1 mm)^2.
+inline constexpr float kKalmanDefaultMinVariance = 1.0e-8F;
+
+struct KalmanCell {
+  float height;    ///< m, map frame; meaningless while weight == 0
+  float variance;  ///< m^2, variance of the height estimate
+  float weight;    ///< number of fused measurements (for coverage and export); 0 = never observed
+};
+static_assert(sizeof(KalmanCell) == 3U * sizeof(float), "KalmanCell must stay 3 packed floats");
+
+struct OmgCell {
+  float weight;    ///< W = sum of measurement weights; 0 = never observed
+  float height;    ///< m, weighted mean of the measured heights
+  float s;         ///< W * mixture variance (m^2)
+};
+static_assert(sizeof(OmgCell) == 3U * sizeof(float), "OmgCell must stay 3 packed floats");
+
+/// kOk if z is finite and |z| <= kMaxAbsCoordinateM and 0 < variance (finite), else the reason.
+[[nodiscard]] inline Status constant_check_measurement(float z, float measurement_variance) noexcept {
+  if (!std::isfinite(z) || !std::isfinite(measurement_variance)) {
+    return Status::kNonFiniteInput;
+  }
+  if (std::fabs(z) > kMaxAbsCoordinateM) {
+    return Status::kOutOfRange;
+  }
+  return measurement_variance > 0.0F ? Status::kOk : Status::kInvalidArgument;
+}
+
+namespace detail {
+inline void kalman_update_unchecked(KalmanCell& cell, float z, float measurement_variance,
+                                    float min_variance) noexcept {
+  if (!(cell.weight > 0.0F)) {
+    cell.height = z;
+    cell.variance = measurement_variance > min_variance ? measurement_variance : min_variance;
+    cell.weight = 1.0F;
+    return;
+  }
+  const float sum = cell.variance + measurement_variance;        // > 0
+  const float gain = cell.variance / sum;                        // Kalman gain
+  cell.height += gain * (z - cell.height);
+  const float variance = cell.variance * measurement_variance / sum;
+  cell.variance = variance > min_variance ? variance : min_variance;
+  cell.weight += 1.0F;
+}
+
+inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_variance, float w,
+                                 float weight_limit) noexcept {
+  const float weight = cell.weight + w;
+  const float d = z - cell.height;
+  const float gain = w / weight;
+  cell.height += gain * d;
+  // Mixture second moment about the new mean (Welford form):
+  // s += w * sigma_m^2 + w * (z - mean_old) * (z - mean_new)
+  cell.s += w * measurement_variance + w * d * (z - cell.height);
+  cell.weight = weight;
+  if (cell.weight > weight_limit) {
+    cell.s *= weight_limit / cell.weight;
+    cell.weight = weight_limit;
+  }
+}
+}  // namespace detail
+
+/// Kalman height update: h += K (z - h), K = P / (P + R), P = P R / (P + R), P >= min_variance.
+/// The first measurement initialises h = z, P = R. Refused: non-finite/out-of-range z,
+/// non-positive or non-finite measurement variance or min_variance (kInvalidArgument).
+[[nodiscard]] inline Status kalman_update(KalmanCell& cell, float z, float measurement_variance,
+                                          float min_variance = kKalmanDefaultMinVariance) noexcept {
+  const Status status = constant_check_measurement(z, measurement_variance);
+  if (status != Status::kOk) {
+    return status;
+  }
+  if (!(min_variance > 0.0F) || !std::isfinite(min_variance)) {
+    return Status::kInvalidArgument;
+  }
+  detail::kalman_update_unchecked(cell, z, measurement_variance, min_variance);
+  return Status::kOk;
+}
+
+/// OMG update with measurement weight w (constant, or 1/sigma_m^2 for inverse-variance
+/// weighting) and the same weight limiter as CCM (W <= W_l, variance unchanged by the limit).
+[[nodiscard]] inline Status omg_update(OmgCell& cell, float z, float measurement_variance, float w,
+                                       float weight_limit = kNoWeightLimit) noexcept {
+  const Status status = constant_check_measurement(z, measurement_variance);
+  if (status != Status::kOk) {
+    return status;
+  }
+  if (ccm_check_weight(w) != Status::kOk) {
+    return Status::kBadWeight;
+  }
+  if (ccm_check_weight_limit(weight_limit) != Status::kOk) {
+    return Status::kInvalidArgument;
+  }
+  detail::omg_update_unchecked(cell, z, measurement_variance, w, weight_limit);
+  return Status::kOk;
+}
+
+/// Mixture variance of an OMG cell (m^2); 0 for a never-observed cell.
+[[nodiscard]] inline float omg_variance(const OmgCell& cell) noexcept {
+  return ccm_variance(cell.s, cell.weight);
+}
+
+}  // namespace ccmap

@@ -1,0 +1,30 @@
+// Status codes returned by every ccmap operation that can refuse its input.
+//
+// The core never throws and never crashes on bad input: it answers with a Status, counts the
+// event (see the owning object's counters) and leaves its state unchanged.
+#pragma once
+
+#include <cstdint>
+
+namespace ccmap {
+
+enum class Status : std::uint8_t {
+  kOk = 0,
+  kNonFiniteInput,     ///< NaN or Inf in a coordinate, pose or parameter
+  kOutOfRange,         ///< finite but beyond the documented range (|coordinate| > kMaxAbsCoordinateM)
+  kBadWeight,          ///< weight <= 0, NaN, Inf or above kMaxMeasurementWeight
+  kOutsideMap,         ///< position not covered by the layer or stack
+  kUnknown,            ///< cell not observed (or not adequately covered) for a query
+  kInvalidArgument,    ///< null pointer, inconsistent sizes, bad configuration
+  kBufferTooSmall,     ///< caller's buffer cannot hold the result
+  kNotInitialised,     ///< object used before a successful init()
+  kCorrupt,            ///< serialized data failed its integrity check
+  kVersionMismatch,    ///< serialized data written by an incompatible version
+};
+
+/// Short, stable, lower-case name of a status ("ok", "non_finite_input", ...). Never nullptr.
+[[nodiscard]] const char* to_string(Status status) noexcept;
+
+[[nodiscard]] constexpr bool ok(Status status) noexcept { return status == Status::kOk; }
+
+}  // namespace ccmap

@@ -1,0 +1,217 @@
+#include "ccmap/cell/ccm_cell.hpp"
+
+namespace ccmap {
+
+Status ccm_merge(CcmCell& cell, const CcmCell& other, float weight_limit) noexcept {
+  if (ccm_check_weight_limit(weight_limit) != Status::kOk) {
+    return Status::kInvalidArgument;
+  }
+  if (!std::isfinite(other.weight) || other.weight < 0.0F) {
+    return Status::kBadWeight;
+  }
+  if (!(other.weight > 0.0F)) {
+    return Status::kOk;  // nothing to merge
+  }
+  const float weight = cell.weight + other.weight;
+  const float share = other.weight / weight;                // W_b / W
+  const float dx = other.mean_x - cell.mean_x;
+  const float dy = other.mean_y - cell.mean_y;
+  const float dz = other.mean_z - cell.mean_z;
+  const float k = cell.weight * share;                      // W_a * W_b / W
+  cell.mean_x += dx * share;
+  cell.mean_y += dy * share;
+  cell.mean_z += dz * share;
+  cell.s_xx += other.s_xx + k * dx * dx;
+  cell.s_yy += other.s_yy + k * dy * dy;
+  cell.s_zz += other.s_zz + k * dz * dz;
+  cell.s_xz += other.s_xz + k * dx * dz;
+  cell.s_yz += other.s_yz + k * dy * dz;
+  cell.weight = weight;
+  ccm_apply_weight_limit(cell, weight_limit);
+  return Status::kOk;
+}
+
+namespace {
+bool batch_point_usable(const float* x, const float* y, const float* z, const float* weights,
+                        float constant_weight, std::size_t i, CcmBatchCounts* counts) noexcept {
+  const Status point_status = ccm_check_point(x[i], y[i], z[i]);
+  if (point_status != Status::kOk) {
+    if (counts != nullptr) {
+      if (point_status == Status::kNonFiniteInput) {
+        ++counts->rejected_non_finite;
+      } else {
+        ++counts->rejected_out_of_range;
+      }
+    }
+    return false;
+  }
+  const float w = weights != nullptr ? weights[i] : constant_weight;
+  if (ccm_check_weight(w) != Status::kOk) {
+    if (counts != nullptr) {
+      ++counts->rejected_weight;
+    }
+    return false;
+  }
+  return true;
+}
+}  // namespace
+
+CcmBatchCounts ccm_update_batch(CcmCell& cell, const float* x, const float* y, const float* z,
+                                const float* weights, float constant_weight, std::size_t n,
+                                float weight_limit) noexcept {
+  CcmBatchCounts counts{0U, 0U, 0U, 0U};
+  if (x == nullptr || y == nullptr || z == nullptr || n == 0U ||
+      ccm_check_weight_limit(weight_limit) != Status::kOk) {
+    return counts;
+  }
+  // Pass 1: weighted mean of the batch.
+  float sum_w = 0.0F;
+  float sum_x = 0.0F;
+  float sum_y = 0.0F;
+  float sum_z = 0.0F;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!batch_point_usable(x, y, z, weights, constant_weight, i, &counts)) {
+      continue;
+    }
+    const float w = weights != nullptr ? weights[i] : constant_weight;
+    ++counts.accepted;
+    sum_w += w;
+    sum_x += w * x[i];
+    sum_y += w * y[i];
+    sum_z += w * z[i];
+  }
+  if (counts.accepted == 0U || !(sum_w > 0.0F) || !std::isfinite(sum_w)) {
+    counts.accepted = 0U;
+    return counts;
+  }
+  CcmCell batch{};
+  batch.weight = sum_w;
+  batch.mean_x = sum_x / sum_w;
+  batch.mean_y = sum_y / sum_w;
+  batch.mean_z = sum_z / sum_w;
+  // Pass 2: co-moments about the batch mean (no cancellation of large products).
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!batch_point_usable(x, y, z, weights, constant_weight, i, nullptr)) {
+      continue;
+    }
+    const float w = weights != nullptr ? weights[i] : constant_weight;
+    const float dx = x[i] - batch.mean_x;
+    const float dy = y[i] - batch.mean_y;
+    const float dz = z[i] - batch.mean_z;
+    batch.s_xx += w * dx * dx;
+    batch.s_yy += w * dy * dy;
+    batch.s_zz += w * dz * dz;
+    batch.s_xz += w * dx * dz;
+    batch.s_yz += w * dy * dz;
+  }
+  if (ccm_merge(cell, batch, weight_limit) != Status::kOk) {
+    counts.accepted = 0U;
+  }
+  return counts;
+}
+
+float ccm_elevation_variance(const CcmCell& cell, const CcmSurface& surface, float qx,
+                             float qy) noexcept {
+  if (!(cell.weight > 0.0F)) {
+    return 0.0F;
+  }
+  const float var_xx = cell.s_xx / cell.weight;
+  const float var_yy = cell.s_yy / cell.weight;
+  float leverage = 1.0F;
+  if (var_xx > kMinLateralVariance) {
+    const float ox = qx - cell.mean_x;
+    leverage += ox * ox / var_xx;
+  }
+  if (var_yy > kMinLateralVariance) {
+    const float oy = qy - cell.mean_y;
+    leverage += oy * oy / var_yy;
+  }
+  return surface.normal_variance * (1.0F + leverage / cell.weight);
+}
+
+CcmCell ccm_pool4(const CcmCell children[4], float child_width_m, float weight_limit) noexcept {
+  CcmCell out{};
+  if (children == nullptr || !(child_width_m > 0.0F) || !std::isfinite(child_width_m) ||
+      ccm_check_weight_limit(weight_limit) != Status::kOk) {
+    return out;
+  }
+  const float half = 0.5F * child_width_m;
+  float shifted_x[4] = {};
+  float shifted_y[4] = {};
+  bool observed[4] = {};
+  float count = 0.0F;
+  float total_weight = 0.0F;
+  float mean_x = 0.0F;
+  float mean_y = 0.0F;
+  float mean_z = 0.0F;
+  for (int i = 0; i < 4; ++i) {
+    const CcmCell& child = children[i];
+    observed[i] = child.weight > 0.0F && std::isfinite(child.weight);
+    if (!observed[i]) {
+      continue;
+    }
+    shifted_x[i] = child.mean_x + ((i & 1) != 0 ? half : -half);
+    shifted_y[i] = child.mean_y + ((i & 2) != 0 ? half : -half);
+    count += 1.0F;
+    total_weight += child.weight;
+    mean_x += shifted_x[i];                                   // eq. (13)
+    mean_y += shifted_y[i];
+    mean_z += child.mean_z;
+  }
+  if (!(count > 0.0F)) {
+    return out;
+  }
+  const float inv_count = 1.0F / count;
+  mean_x *= inv_count;
+  mean_y *= inv_count;
+  mean_z *= inv_count;
+  float var_xx = 0.0F;
+  float var_yy = 0.0F;
+  float var_zz = 0.0F;
+  float cov_xz = 0.0F;
+  float cov_yz = 0.0F;
+  for (int i = 0; i < 4; ++i) {
+    if (!observed[i]) {
+      continue;
+    }
+    const CcmCell& child = children[i];
+    const float inv_w = 1.0F / child.weight;
+    const float dx = shifted_x[i] - mean_x;
+    const float dy = shifted_y[i] - mean_y;
+    const float dz = child.mean_z - mean_z;
+    var_xx += child.s_xx * inv_w + dx * dx;                   // eq. (14)
+    var_yy += child.s_yy * inv_w + dy * dy;
+    var_zz += child.s_zz * inv_w + dz * dz;
+    cov_xz += child.s_xz * inv_w + dx * dz;                   // eq. (15)
+    cov_yz += child.s_yz * inv_w + dy * dz;
+  }
+  out.weight = total_weight;
+  out.mean_x = mean_x;
+  out.mean_y = mean_y;
+  out.mean_z = mean_z;
+  const float scale = total_weight * inv_count;               // S = W * sigma^2
+  out.s_xx = var_xx * scale;
+  out.s_yy = var_yy * scale;
+  out.s_zz = var_zz * scale;
+  out.s_xz = cov_xz * scale;
+  out.s_yz = cov_yz * scale;
+  ccm_apply_weight_limit(out, weight_limit);
+  return out;
+}
+
+CcmCell ccm_from_constant(float height, float variance, float weight, float cell_width_m) noexcept {
+  CcmCell out{};
+  if (!(weight > 0.0F) || !std::isfinite(weight) || !std::isfinite(height) ||
+      !std::isfinite(variance) || !(cell_width_m > 0.0F) || !std::isfinite(cell_width_m)) {
+    return out;
+  }
+  const float lateral = cell_width_m * cell_width_m * (1.0F / 12.0F);
+  out.weight = weight;
+  out.mean_z = height;
+  out.s_xx = lateral * weight;
+  out.s_yy = lateral * weight;
+  out.s_zz = (variance > 0.0F ? variance : 0.0F) * weight;
+  return out;
+}
+
+}  // namespace ccmap

@@ -1,0 +1,145 @@
+// Pooling four fine CCM cells into one coarse cell (eqs. 13-15 with the child-centre offsets).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "support/reference.hpp"
+
+namespace ccmap {
+namespace {
+
+using test::Point;
+using test::Rng;
+
+struct FineAndCoarse {
+  CcmCell children[4]{};
+  CcmCell coarse{};
+};
+
+// Fills one coarse cell of width 2*child and its four children from the same points.
+template <typename HeightFn>
+FineAndCoarse fill(Rng& rng, int n, float child, HeightFn height) {
+  FineAndCoarse out;
+  const float half = 0.5F * child;
+  for (int i = 0; i < n; ++i) {
+    const float x = static_cast<float>(rng.uniform(-child, child));
+    const float y = static_cast<float>(rng.uniform(-child, child));
+    const float z = height(x, y, rng);
+    const int ix = x >= 0.0F ? 1 : 0;
+    const int iy = y >= 0.0F ? 1 : 0;
+    const float cx = ix != 0 ? half : -half;
+    const float cy = iy != 0 ? half : -half;
+    EXPECT_EQ(ccm_update(out.children[ix + 2 * iy], x - cx, y - cy, z, 1.0F, kNoWeightLimit), Status::kOk);
+    EXPECT_EQ(ccm_update(out.coarse, x, y, z, 1.0F, kNoWeightLimit), Status::kOk);
+  }
+  return out;
+}
+
+TEST(CcmPool, FourFineCellsEqualOneCoarseCellOnAUniformCloud) {
+  Rng rng(2);
+  const float child = 0.16F;
+  const auto cells = fill(rng, 40000, child, [](float x, float y, Rng& r) {
+    return 0.5F + 0.3F * x - 0.15F * y + 0.01F * static_cast<float>(r.normal());
+  });
+  const CcmCell pooled = ccm_pool4(cells.children, child, kNoWeightLimit);
+  const CcmCell& direct = cells.coarse;
+  EXPECT_FLOAT_EQ(pooled.weight, direct.weight);
+  // Equal-area weighting differs from point weighting only by the random imbalance of the
+  // four point counts (~0.5% for 10000 points each): tolerances reflect that.
+  EXPECT_NEAR(pooled.mean_x, direct.mean_x, 2e-3);
+  EXPECT_NEAR(pooled.mean_y, direct.mean_y, 2e-3);
+  EXPECT_NEAR(pooled.mean_z, direct.mean_z, 1e-3);
+  const auto var = [](float s, float w) { return s / w; };
+  EXPECT_NEAR(var(pooled.s_xx, pooled.weight), var(direct.s_xx, direct.weight), 2e-4);
+  EXPECT_NEAR(var(pooled.s_yy, pooled.weight), var(direct.s_yy, direct.weight), 2e-4);
+  EXPECT_NEAR(var(pooled.s_zz, pooled.weight), var(direct.s_zz, direct.weight), 2e-5);
+  EXPECT_NEAR(var(pooled.s_xz, pooled.weight), var(direct.s_xz, direct.weight), 5e-5);
+  EXPECT_NEAR(var(pooled.s_yz, pooled.weight), var(direct.s_yz, direct.weight), 5e-5);
+  const CcmSurface sp = ccm_surface(pooled);
+  const CcmSurface sd = ccm_surface(direct);
+  EXPECT_NEAR(sp.slope_x, 0.3, 0.01) << "pooled slope_x off";
+  EXPECT_NEAR(sp.slope_y, -0.15, 0.01) << "pooled slope_y off";
+  EXPECT_NEAR(sp.slope_x, sd.slope_x, 0.01);
+  EXPECT_NEAR(sp.normal_variance, sd.normal_variance, 1e-5);
+  EXPECT_TRUE(ccm_is_covered(pooled, 2.0F * child, 0.8F, 3.0F));
+}
+
+TEST(CcmPool, WithoutChildOffsetsTheSlopeWouldBeLost) {
+  // The printed eqs. (13)-(15) without the +-w/4 shift see four cells stacked at one centre:
+  // a steep plane then pools to slope 0 from the between-child term. With the shift the slope
+  // survives; this is the reason for the rule (docs/design.md, "Pooling").
+  Rng rng(8);
+  const float child = 0.32F;
+  const auto cells = fill(rng, 8000, child, [](float x, float, Rng&) { return 0.7F * x; });
+  const CcmSurface sp = ccm_surface(ccm_pool4(cells.children, child, kNoWeightLimit));
+  EXPECT_NEAR(sp.slope_x, 0.7, 1e-3);
+  EXPECT_NEAR(sp.normal_variance, 0.0, 1e-6);
+}
+
+TEST(CcmPool, StepBetweenChildrenShowsAsNormalVariance) {
+  Rng rng(12);
+  const float child = 0.16F;
+  const auto cells = fill(rng, 20000, child, [](float x, float, Rng&) { return x > 0.0F ? 0.2F : 0.0F; });
+  const CcmCell pooled = ccm_pool4(cells.children, child, kNoWeightLimit);
+  // A 50% step of height h in a cell: residual variance of the best plane is h^2/16 (analytic:
+  // the step's variance h^2/4 minus the part explained by the linear fit, 3h^2/16).
+  EXPECT_NEAR(ccm_surface(pooled).normal_variance, 0.2 * 0.2 / 16.0, 1e-4);
+  EXPECT_NEAR(ccm_surface(pooled).normal_variance, ccm_surface(cells.coarse).normal_variance, 2e-4);
+}
+
+TEST(CcmPool, MissingChildrenAreLeftOutAndMakeTheParentUnknown) {
+  Rng rng(13);
+  const float child = 0.1F;
+  auto cells = fill(rng, 4000, child, [](float, float, Rng&) { return 1.0F; });
+  cells.children[1] = CcmCell{};
+  cells.children[3] = CcmCell{};  // the +x half never seen
+  const CcmCell pooled = ccm_pool4(cells.children, child, kNoWeightLimit);
+  EXPECT_FLOAT_EQ(pooled.mean_z, 1.0F) << "unobserved children must not pull the height";
+  EXPECT_NEAR(pooled.mean_x, -0.05, 2e-3);
+  EXPECT_FALSE(ccm_is_covered(pooled, 2.0F * child, 0.8F, 1.0F));
+  CcmCell none[4] = {};
+  const CcmCell empty = ccm_pool4(none, child, kNoWeightLimit);
+  EXPECT_EQ(empty.weight, 0.0F);
+  EXPECT_EQ(empty.s_zz, 0.0F);
+}
+
+TEST(CcmPool, PooledWeightIsLimitedWithVariancesKept) {
+  Rng rng(14);
+  const float child = 0.1F;
+  const auto cells = fill(rng, 4000, child, [](float x, float, Rng&) { return 0.2F * x; });
+  const CcmCell unlimited = ccm_pool4(cells.children, child, kNoWeightLimit);
+  const CcmCell limited = ccm_pool4(cells.children, child, 100.0F);
+  EXPECT_FLOAT_EQ(limited.weight, 100.0F);
+  EXPECT_NEAR(limited.s_xx / limited.weight, unlimited.s_xx / unlimited.weight, 1e-7);
+  EXPECT_NEAR(ccm_surface(limited).slope_x, ccm_surface(unlimited).slope_x, 1e-5);
+}
+
+TEST(CcmPool, BadArgumentsGiveTheZeroCell) {
+  CcmCell children[4] = {};
+  children[0].weight = 1.0F;
+  EXPECT_EQ(ccm_pool4(children, 0.0F, kNoWeightLimit).weight, 0.0F);
+  EXPECT_EQ(ccm_pool4(children, -1.0F, kNoWeightLimit).weight, 0.0F);
+  EXPECT_EQ(ccm_pool4(children, 0.1F, 0.0F).weight, 0.0F);
+  EXPECT_EQ(ccm_pool4(nullptr, 0.1F, kNoWeightLimit).weight, 0.0F);
+}
+
+TEST(CcmPool, ConstantCellsPoolLikeUniformSurfels) {
+  // Four constant children at heights of a 0.5 slope along x pool into a slope 0.5 parent.
+  const float child = 0.04F;
+  CcmCell children[4];
+  for (int i = 0; i < 4; ++i) {
+    const float cx = (i & 1) != 0 ? 0.02F : -0.02F;
+    children[i] = ccm_from_constant(0.5F * cx, 1e-6F, 10.0F, child);
+  }
+  const CcmSurface s = ccm_surface(ccm_pool4(children, child, kNoWeightLimit));
+  EXPECT_NEAR(s.slope_x, 0.5 * 0.0004 / (0.0016 / 12.0 + 0.0004), 1e-4)
+      << "slope of pooled constant cells (attenuated by their within-cell spread)";
+  EXPECT_NEAR(s.slope_y, 0.0, 1e-6);
+  EXPECT_EQ(ccm_from_constant(1.0F, 0.1F, 0.0F, child).weight, 0.0F);
+  EXPECT_EQ(ccm_from_constant(NAN, 0.1F, 1.0F, child).weight, 0.0F);
+}
+
+}  // namespace
+}  // namespace ccmap
