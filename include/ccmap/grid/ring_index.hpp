@@ -1,0 +1,119 @@
+// Index math of the ring-buffer grid layer: pure free functions, exhaustively tested
+// (tests/grid/ring_index_test.cpp).
+//
+// Two kinds of index, never mixed up
+//  - A *global* cell index (CellIndex) names a cell of a layer for the life of the map: cell
+//    (x, y) covers [x*w, (x+1)*w) x [y*w, (y+1)*w) metres of the map frame (relative to the
+//    stack origin), w the cell width. It does not change when the window moves.
+//  - A *ring position* / *buffer offset* is where that cell lives in a side x side buffer. It is
+//    a pure function of the global index (wrap, buffer_offset) and never leaves the grid layer:
+//    callers hold global indices only.
+//
+// Global indices used by the grid stay within +-kMaxCellIndex (plus half a window), so every
+// sum and difference the grid forms fits int32 or is computed in int64.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+namespace ccmap {
+
+/// Global cell index of a layer (stable across moves): cell (x, y) covers
+/// [x*w, (x+1)*w) x [y*w, (y+1)*w) metres of the map frame (relative to the stack origin).
+struct CellIndex {
+  std::int32_t x;
+  std::int32_t y;
+};
+
+[[nodiscard]] constexpr bool operator==(CellIndex a, CellIndex b) noexcept {
+  return a.x == b.x && a.y == b.y;
+}
+[[nodiscard]] constexpr bool operator!=(CellIndex a, CellIndex b) noexcept { return !(a == b); }
+
+namespace grid {
+
+/// Largest magnitude of a global cell index produced from a position (index_of_position) and
+/// accepted as a window centre (RingGrid::init, RingGrid::move_to): 2^30. With the largest
+/// side (kMaxSide) a window then spans at most [-2^30 - 2^14, 2^30 + 2^14), well inside int32.
+inline constexpr std::int32_t kMaxCellIndex = std::int32_t{1} << 30;
+
+/// Largest side of a ring buffer (cells per axis): 2^15, so side*side = 2^30 cells fits int32
+/// and a 32-bit size_t. (Memory runs out long before: 2^30 cells of one byte are 1 GiB.)
+inline constexpr std::int32_t kMaxSide = std::int32_t{1} << 15;
+
+/// True if n is a positive power of two (1, 2, 4, ..., 2^30). False for 0, negatives and
+/// INT32_MIN.
+[[nodiscard]] constexpr bool is_power_of_two(std::int32_t n) noexcept {
+  return n > 0 && (n & (n - 1)) == 0;
+}
+
+/// Ring position of a global index on a power-of-two side: in [0, side) for any int32, negative
+/// included (the mask of the two's complement bit pattern, i.e. the mathematical
+/// global_index mod side_pow2). wrap(-1, 8) == 7, wrap(INT32_MIN, s) == 0,
+/// wrap(INT32_MAX, s) == s - 1.
+/// Precondition: is_power_of_two(side_pow2) (not checked here: this is the innermost hot path;
+/// RingGrid::init checks it). Never undefined behaviour, whatever the arguments.
+[[nodiscard]] constexpr std::int32_t wrap(std::int32_t global_index,
+                                          std::int32_t side_pow2) noexcept {
+  // Unsigned arithmetic: int32 -> uint32 is defined modulo 2^32, so the mask is the remainder
+  // for negative indices too, and side_pow2 - 1 cannot overflow in uint32.
+  const std::uint32_t mask = static_cast<std::uint32_t>(side_pow2) - 1U;
+  return static_cast<std::int32_t>(static_cast<std::uint32_t>(global_index) & mask);
+}
+
+/// Offset of a global cell in a side x side buffer (row-major by ring position):
+/// wrap(y)*side + wrap(x), in [0, side*side). Any side consecutive global indices on each axis
+/// (any window) map onto every offset exactly once.
+/// Precondition: is_power_of_two(side_pow2) and side_pow2 <= kMaxSide.
+[[nodiscard]] constexpr std::size_t buffer_offset(CellIndex index,
+                                                  std::int32_t side_pow2) noexcept {
+  return static_cast<std::size_t>(wrap(index.y, side_pow2)) * static_cast<std::size_t>(side_pow2) +
+         static_cast<std::size_t>(wrap(index.x, side_pow2));
+}
+
+/// Global index of the cell holding the map-frame position (x, y) metres:
+/// floor(x * inv_cell_width), floor(y * inv_cell_width).
+///
+/// Returns false, and leaves *out untouched, if out is nullptr, if x or y is NaN or infinite,
+/// if inv_cell_width is not > 0 (NaN included), or if an index would leave
+/// [-kMaxCellIndex, kMaxCellIndex].
+///
+/// Float precision limit: the product x * inv_cell_width is rounded, and inv_cell_width is
+/// itself the rounded 1/w (0.1 m, 0.2 m, ... are not floats). The relative error of the
+/// product is below 2^-23, so a position within about 2^-23 * |x| of a cell boundary
+/// (1.2e-7 * |x|: 12 um at 100 m) may be put into the neighbouring cell: off by one, never
+/// more. For power-of-two widths (0.125 m, 0.25 m, ...) the result is exact, except that a
+/// negative x so small that the product underflows to -0 (|x * inv_cell_width| < 2^-150, i.e.
+/// subnormal positions) lands in cell 0 instead of -1. Beyond |x / w| = 2^23 consecutive
+/// floats are a cell or more apart, so not every cell can be named by a position (the map
+/// frame is local: see kMaxAbsCoordinateM in cell/ccm_cell.hpp).
+/// Tested in tests/grid/ring_index_test.cpp (IndexOfPosition.FloatRoundingLimitNearEdges).
+[[nodiscard]] inline bool index_of_position(float x, float y, float inv_cell_width,
+                                            CellIndex* out) noexcept {
+  if (out == nullptr || !(inv_cell_width > 0.0F)) {
+    return false;
+  }
+  const float fx = std::floor(x * inv_cell_width);
+  const float fy = std::floor(y * inv_cell_width);
+  // 2^30 is exact in float; NaN fails every comparison, +-Inf fails one of them.
+  constexpr float kLimit = static_cast<float>(kMaxCellIndex);
+  if (!(fx >= -kLimit && fx <= kLimit && fy >= -kLimit && fy <= kLimit)) {
+    return false;
+  }
+  out->x = static_cast<std::int32_t>(fx);  // exact: an integral float within +-2^30
+  out->y = static_cast<std::int32_t>(fy);
+  return true;
+}
+
+/// Centre (metres, map frame) of global cell i along one axis: (i + 0.5) * cell_width.
+/// Float precision: i + 0.5 is exact up to |i| = 2^23 and the product carries one rounding
+/// (relative 2^-24). Mapping the centre back through index_of_position adds two more, so the
+/// round trip is off by at most 3 * 2^-24 * |i + 0.5| cells: for |i| <= 2^21 (2.1e6 cells,
+/// 210 km of 0.1 m cells) index_of_position(cell_centre(i, w), ..., 1/w) == i.
+[[nodiscard]] constexpr float cell_centre(std::int32_t i, float cell_width) noexcept {
+  return (static_cast<float>(i) + 0.5F) * cell_width;
+}
+
+}  // namespace grid
+}  // namespace ccmap
