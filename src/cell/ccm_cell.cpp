@@ -200,16 +200,14 @@ CcmCell ccm_pool4(const CcmCell children[4], float child_width_m, float weight_l
 }
 
 CcmCell ccm_from_constant(float height, float variance, float weight, float cell_width_m) noexcept {
+  // cell_width_m is only validated: the constant cell is a sample at its centre (header).
   CcmCell out{};
   if (!(weight > 0.0F) || !std::isfinite(weight) || !std::isfinite(height) ||
       !std::isfinite(variance) || !(cell_width_m > 0.0F) || !std::isfinite(cell_width_m)) {
     return out;
   }
-  const float lateral = cell_width_m * cell_width_m * (1.0F / 12.0F);
   out.weight = weight;
   out.mean_z = height;
-  out.s_xx = lateral * weight;
-  out.s_yy = lateral * weight;
   out.s_zz = (variance > 0.0F ? variance : 0.0F) * weight;
   return out;
 }

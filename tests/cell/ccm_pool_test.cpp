@@ -125,18 +125,23 @@ TEST(CcmPool, BadArgumentsGiveTheZeroCell) {
   EXPECT_EQ(ccm_pool4(nullptr, 0.1F, kNoWeightLimit).weight, 0.0F);
 }
 
-TEST(CcmPool, ConstantCellsPoolLikeUniformSurfels) {
-  // Four constant children at heights of a 0.5 slope along x pool into a slope 0.5 parent.
+TEST(CcmPool, ConstantCellsPoolAsCentreSamples) {
+  // Four constant children on a plane of slope 0.5 along x and -0.2 along y pool into a parent
+  // with exactly that slope (a surfel model without covariance would give 3/4 of it).
   const float child = 0.04F;
   CcmCell children[4];
   for (int i = 0; i < 4; ++i) {
     const float cx = (i & 1) != 0 ? 0.02F : -0.02F;
-    children[i] = ccm_from_constant(0.5F * cx, 1e-6F, 10.0F, child);
+    const float cy = (i & 2) != 0 ? 0.02F : -0.02F;
+    children[i] = ccm_from_constant(1.0F + 0.5F * cx - 0.2F * cy, 1e-6F, 10.0F, child);
   }
-  const CcmSurface s = ccm_surface(ccm_pool4(children, child, kNoWeightLimit));
-  EXPECT_NEAR(s.slope_x, 0.5 * 0.0004 / (0.0016 / 12.0 + 0.0004), 1e-4)
-      << "slope of pooled constant cells (attenuated by their within-cell spread)";
-  EXPECT_NEAR(s.slope_y, 0.0, 1e-6);
+  const CcmCell pooled = ccm_pool4(children, child, kNoWeightLimit);
+  const CcmSurface s = ccm_surface(pooled);
+  EXPECT_NEAR(s.slope_x, 0.5, 1e-4) << "slope of pooled constant cells";
+  EXPECT_NEAR(s.slope_y, -0.2, 1e-4);
+  EXPECT_NEAR(s.normal_variance, 1e-6, 1e-8) << "children's own variance carries over";
+  EXPECT_NEAR(pooled.s_xx / pooled.weight, 0.02 * 0.02, 1e-8);
+  EXPECT_TRUE(ccm_is_covered(pooled, 2.0F * child, 0.8F, 1.0F)) << "four centre samples cover the parent";
   EXPECT_EQ(ccm_from_constant(1.0F, 0.1F, 0.0F, child).weight, 0.0F);
   EXPECT_EQ(ccm_from_constant(NAN, 0.1F, 1.0F, child).weight, 0.0F);
 }

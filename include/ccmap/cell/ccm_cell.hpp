@@ -264,10 +264,15 @@ struct CcmSurface {
 [[nodiscard]] CcmCell ccm_pool4(const CcmCell children[4], float child_width_m,
                                 float weight_limit) noexcept;
 
-/// A piece-wise constant cell (height, variance of height, weight) seen as a CCM cell of width
-/// `cell_width_m`: mean (0, 0, height), lateral variances w^2/12 (uniform coverage assumed),
+/// A piece-wise constant cell (height, variance of height, weight) seen as a CCM cell: a
+/// sample of the surface at the cell centre, i.e. mean (0, 0, height), no lateral variance,
 /// sigma_zz^2 = variance, no covariance. Used to pool the finest, piece-wise constant layer into
-/// the first CCM layer. Weight <= 0 or non-finite input gives the zero cell.
+/// the first CCM layer. Why a point and not a uniform surfel: a constant cell keeps no slope, so
+/// a surfel with lateral variance w^2/12 but zero covariance would bias every pooled slope low
+/// by a factor 3/4 (the pooled sigma_xx^2 = w^2/12 + w^2/4 against a covariance of s w^2/4); as
+/// centre samples four children reproduce a plane's slope exactly, and the pooled lateral
+/// variance (w_child/2)^2 is 0.866^2 of the uniform value, above the coverage bound tau = 0.8.
+/// Weight <= 0 or non-finite input gives the zero cell; cell_width_m must be > 0.
 [[nodiscard]] CcmCell ccm_from_constant(float height, float variance, float weight,
                                         float cell_width_m) noexcept;
 

@@ -1,0 +1,90 @@
+// Compile-time shape of a map stack and its run-time parameters.
+//
+// A stack (paper Fig. 2) is an optional piece-wise constant finest layer followed by CCM
+// layers, each twice the cell width of the one before and centred on the robot. The sides (in
+// cells, powers of two) are part of the type, so the whole map is one statically sized object;
+// the cell widths are run-time parameters (finest width * 2^k) so one type serves several
+// resolutions. See docs/design.md, "The CADRE preset", for the argument behind the sizes.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/sensor/noise_model.hpp"
+
+namespace ccmap {
+
+/// Cell type of the finest layer.
+enum class FineKind : std::uint8_t {
+  kNone = 0,    ///< no piece-wise constant layer: every layer is CCM
+  kKalman = 1,  ///< Kalman height update (paper ref. [13])
+  kOmg = 2,     ///< Optimal Mixture of Gaussians update (paper ref. [14])
+};
+
+/// CADRE-like stack: 4 cm Kalman layer, then 8/16/32/64 cm CCM layers (default widths).
+///   layer 0: 4 cm,  64 x 64  -> +-1.28 m around the robot
+///   layer 1: 8 cm,  64 x 64  -> +-2.56 m
+///   layer 2: 16 cm, 64 x 64  -> +-5.12 m
+///   layer 3: 32 cm, 32 x 32  -> +-5.12 m
+///   layer 4: 64 cm, 32 x 32  -> +-10.24 m
+struct CadreConfig {
+  static constexpr FineKind kFineKind = FineKind::kKalman;
+  static constexpr std::int32_t kFineSide = 64;
+  static constexpr std::array<std::int32_t, 4> kCcmSides{{64, 64, 32, 32}};
+  static constexpr float kDefaultFinestCellWidthM = 0.04F;
+};
+
+/// One CCM layer of 256 x 256 cells (8 cm default: +-10.24 m).
+struct SingleCcmConfig {
+  static constexpr FineKind kFineKind = FineKind::kNone;
+  static constexpr std::int32_t kFineSide = 0;
+  static constexpr std::array<std::int32_t, 1> kCcmSides{{256}};
+  static constexpr float kDefaultFinestCellWidthM = 0.08F;
+};
+
+/// One Kalman layer of 256 x 256 cells (baseline).
+struct SingleKalmanConfig {
+  static constexpr FineKind kFineKind = FineKind::kKalman;
+  static constexpr std::int32_t kFineSide = 256;
+  static constexpr std::array<std::int32_t, 0> kCcmSides{};
+  static constexpr float kDefaultFinestCellWidthM = 0.08F;
+};
+
+/// One OMG layer of 256 x 256 cells (baseline).
+struct SingleOmgConfig {
+  static constexpr FineKind kFineKind = FineKind::kOmg;
+  static constexpr std::int32_t kFineSide = 256;
+  static constexpr std::array<std::int32_t, 0> kCcmSides{};
+  static constexpr float kDefaultFinestCellWidthM = 0.08F;
+};
+
+/// Largest number of layers a stack may have (bounds the per-layer parameter arrays).
+inline constexpr int kMaxLayers = 8;
+
+/// Run-time parameters of a stack. Start from default_stack_params() and change what you need.
+struct StackParams {
+  float finest_cell_width_m;    ///< width of layer 0; layer k is 2^k times wider
+  float weight_limit;           ///< W_l of CCM and OMG cells (eqs. 6-7)
+  float coverage_tau;           ///< tau of eq. (12), paper: 0.8
+  float min_weight;             ///< a cell with less accumulated weight is unknown
+  float obstacle_fraction;      ///< minimum obstacle height as a share of the cell width (paper: 0.75)
+  float max_inclination;        ///< steeper gradients (dz/dxy, not degrees) are kSteep
+  float kalman_min_variance;    ///< variance floor of Kalman cells (m^2)
+  /// Normal-variance thresholds (m^2) per layer; a value <= 0 means "calibrate at init" from
+  /// obstacle_fraction (Section IV-E: step of the minimum height at 50 % coverage).
+  std::array<float, kMaxLayers> normal_variance_threshold;
+  /// Finest (piece-wise constant) layer: largest range sigma_m it accepts (m). Section IV-G
+  /// constrains CCM layers only; the default is the layer's own IV-G bound
+  /// (sensor::constant_layer_max_sigma). Must stay below layer 1's IV-G bound.
+  float finest_max_sigma_m;
+  sensor::NoiseModel noise;     ///< routes points and gives their weight and variance
+};
+
+/// CADRE defaults: W_l = 1000, tau = 0.8, min weight 5, obstacles at 75 % of a cell,
+/// 20 deg maximum inclination (tan 20 deg = 0.364), the CADRE stereo model, calibrated
+/// thresholds.
+[[nodiscard]] StackParams default_stack_params(float finest_cell_width_m) noexcept;
+
+}  // namespace ccmap

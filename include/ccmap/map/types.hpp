@@ -1,0 +1,86 @@
+// Value types of the map API: points, poses, query results, export records, counters.
+//
+// Frames: every position the core sees is in the *map frame* of its stack, in metres, relative
+// to the stack's own origin (chosen by the integrator, e.g. the landing site or the start of a
+// drive). Never pass absolute world coordinates (a UTM northing of 4.9e6 m has 0.5 m steps in
+// float): subtract the origin in your own (double or fixed-point) precision first.
+#pragma once
+
+#include <cstdint>
+
+#include <Eigen/Core>
+
+#include "ccmap/core/status.hpp"
+#include "ccmap/grid/ring_grid.hpp"
+
+namespace ccmap {
+
+/// One measured point, metres (map frame for update_frame, sensor frame for update_frame_sensor).
+struct PointXYZ {
+  float x;
+  float y;
+  float z;
+};
+static_assert(sizeof(PointXYZ) == 12U, "PointXYZ must stay 3 packed floats (caller buffers)");
+
+/// Rigid transform sensor -> map: p_map = rotation * p_sensor + translation (metres).
+/// The caller builds the rotation (from its estimator's quaternion or matrix); the core does
+/// not evaluate trigonometric functions, so results are bitwise reproducible across targets.
+struct Pose {
+  Eigen::Matrix3f rotation;
+  Eigen::Vector3f translation;
+};
+
+/// Hazard class of a cell (paper Section IV-E, IV-D).
+enum class CellClass : std::uint8_t {
+  kUnknown = 0,      ///< not observed, too few points, or partly covered (eq. 12)
+  kTraversable = 1,  ///< covered, normal variance and inclination below their thresholds
+  kObstacle = 2,     ///< surface-normal variance above the layer's threshold (sub-cell step)
+  kSteep = 3,        ///< inclination above the maximum
+};
+
+/// "unknown", "traversable", "obstacle", "steep"; never nullptr.
+[[nodiscard]] const char* to_string(CellClass cell_class) noexcept;
+
+/// Answer of a point query. On status != kOk the numbers are 0 and the class is kUnknown;
+/// `layer` is the finest layer that contains the point (-1 if no layer does).
+struct QueryResult {
+  Status status;
+  std::int32_t layer;          ///< layer that answered (0 = finest)
+  float cell_width_m;          ///< cell width of that layer
+  float height_m;              ///< height at the query point (sub-cell for CCM, eq. 10)
+  float slope_x;               ///< a = dz/dx (eq. 9); 0 for piece-wise constant cells
+  float slope_y;               ///< b = dz/dy
+  float inclination;           ///< sqrt(a^2 + b^2)
+  float normal_variance;       ///< sigma_s^2 (eq. 11), m^2; constant cells: their own variance
+  float elevation_variance;    ///< m^2, variance of the height at the point
+  float weight;                ///< accumulated weight of the answering (pooled) cell
+  CellClass cell_class;
+};
+
+/// One cell of an exported layer (only cells with weight > 0 are exported).
+struct CellRecord {
+  CellIndex index;             ///< global index in that layer (stable across moves)
+  float centre_x;              ///< cell centre, map frame (m)
+  float centre_y;
+  float weight;
+  float height_m;              ///< height at the cell centre
+  float slope_x;
+  float slope_y;
+  float normal_variance;
+  float elevation_variance;
+  CellClass cell_class;
+};
+
+/// What happened to the points of one frame (also accumulated over the life of a stack).
+struct FrameCounters {
+  std::uint32_t received;
+  std::uint32_t used;
+  std::uint32_t rejected_non_finite;    ///< NaN/Inf coordinate
+  std::uint32_t rejected_out_of_range;  ///< |coordinate| > kMaxAbsCoordinateM
+  std::uint32_t rejected_weight;        ///< weight from the model out of range
+  std::uint32_t outside_map;            ///< no layer window holds the point
+  std::uint32_t too_noisy;              ///< sigma_m too large for every layer (Section IV-G)
+};
+
+}  // namespace ccmap

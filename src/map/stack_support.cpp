@@ -1,0 +1,120 @@
+#include <cmath>
+
+#include "ccmap/map/calibration.hpp"
+#include "ccmap/map/classify.hpp"
+#include "ccmap/map/stack.hpp"
+
+namespace ccmap {
+
+const char* to_string(CellClass cell_class) noexcept {
+  switch (cell_class) {
+    case CellClass::kUnknown: return "unknown";
+    case CellClass::kTraversable: return "traversable";
+    case CellClass::kObstacle: return "obstacle";
+    case CellClass::kSteep: return "steep";
+  }
+  return "unknown";
+}
+
+namespace detail {
+namespace {
+std::uint32_t saturating_add(std::uint32_t a, std::uint32_t b) noexcept {
+  return (a > 0xFFFFFFFFU - b) ? 0xFFFFFFFFU : a + b;
+}
+}  // namespace
+
+void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept {
+  total.received = saturating_add(total.received, frame.received);
+  total.used = saturating_add(total.used, frame.used);
+  total.rejected_non_finite = saturating_add(total.rejected_non_finite, frame.rejected_non_finite);
+  total.rejected_out_of_range = saturating_add(total.rejected_out_of_range, frame.rejected_out_of_range);
+  total.rejected_weight = saturating_add(total.rejected_weight, frame.rejected_weight);
+  total.outside_map = saturating_add(total.outside_map, frame.outside_map);
+  total.too_noisy = saturating_add(total.too_noisy, frame.too_noisy);
+}
+}  // namespace detail
+
+StackParams default_stack_params(float finest_cell_width_m) noexcept {
+  StackParams p{};
+  p.finest_cell_width_m = finest_cell_width_m;
+  p.weight_limit = 1000.0F;
+  p.coverage_tau = 0.8F;
+  p.min_weight = 5.0F;
+  p.obstacle_fraction = 0.75F;
+  p.max_inclination = 0.36397023F;  // tan(20 deg)
+  p.kalman_min_variance = kKalmanDefaultMinVariance;
+  for (float& t : p.normal_variance_threshold) {
+    t = 0.0F;
+  }
+  // The constant finest layer takes points while sigma_m <= its own IV-G bound
+  // (sensor/noise_model.hpp, constant_layer_max_sigma, argues why).
+  p.finest_max_sigma_m = sensor::constant_layer_max_sigma(finest_cell_width_m);
+  p.noise = sensor::cadre_stereo();
+  return p;
+}
+
+Status validate_stack_params(const StackParams& p, int layer_count) noexcept {
+  const float values[] = {p.finest_cell_width_m, p.coverage_tau, p.min_weight, p.obstacle_fraction,
+                          p.max_inclination, p.kalman_min_variance, p.finest_max_sigma_m};
+  for (const float v : values) {
+    if (!std::isfinite(v)) {
+      return Status::kNonFiniteInput;
+    }
+  }
+  for (const float t : p.normal_variance_threshold) {
+    if (!std::isfinite(t)) {
+      return Status::kNonFiniteInput;
+    }
+  }
+  if (layer_count < 1 || layer_count > kMaxLayers) {
+    return Status::kInvalidArgument;
+  }
+  if (!(p.finest_cell_width_m > 0.0F) || p.finest_cell_width_m * static_cast<float>(1 << (layer_count - 1)) > 100.0F) {
+    return Status::kInvalidArgument;
+  }
+  if (ccm_check_weight_limit(p.weight_limit) != Status::kOk || !(p.coverage_tau > 0.0F) ||
+      p.coverage_tau > 1.0F || p.min_weight < 0.0F || !(p.obstacle_fraction > 0.0F) ||
+      p.obstacle_fraction > 4.0F || !(p.max_inclination > 0.0F) || !(p.kalman_min_variance > 0.0F)) {
+    return Status::kInvalidArgument;
+  }
+  return p.noise.validate();
+}
+
+Status check_position(float x, float y) noexcept {
+  if (!std::isfinite(x) || !std::isfinite(y)) {
+    return Status::kNonFiniteInput;
+  }
+  if (std::fabs(x) > kMaxAbsCoordinateM || std::fabs(y) > kMaxAbsCoordinateM) {
+    return Status::kOutOfRange;
+  }
+  return Status::kOk;
+}
+
+float layer_threshold(const StackParams& params, int layer, float width) noexcept {
+  if (layer >= 0 && layer < kMaxLayers && params.normal_variance_threshold[static_cast<std::size_t>(layer)] > 0.0F) {
+    return params.normal_variance_threshold[static_cast<std::size_t>(layer)];
+  }
+  ThresholdCalibration calibration{};
+  if (calibrate_normal_variance_threshold(width, params.obstacle_fraction * width, &calibration) == Status::kOk) {
+    return calibration.threshold;
+  }
+  // Analytic fallback: a step of height h at 50 % coverage leaves sigma_s^2 = h^2 / 16.
+  const float h = params.obstacle_fraction * width;
+  return h * h * 0.0625F;
+}
+
+CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& params, float threshold) noexcept {
+  if (!ccm_is_covered(cell, width, params.coverage_tau, params.min_weight)) {
+    return CellClass::kUnknown;
+  }
+  const CcmSurface surface = ccm_surface(cell);
+  if (surface.normal_variance > threshold) {
+    return CellClass::kObstacle;
+  }
+  if (ccm_inclination(surface) > params.max_inclination) {
+    return CellClass::kSteep;
+  }
+  return CellClass::kTraversable;
+}
+
+}  // namespace ccmap

@@ -1,0 +1,124 @@
+// Proof of "no heap after initialisation": this test binary replaces the global allocation
+// functions (operator new/delete in all forms, and malloc/calloc/realloc/free through glibc's
+// __libc_* entry points) with counting versions, builds a CADRE stack, and asserts that
+// feeding frames, moving, querying and exporting allocate nothing.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <memory>
+#include <new>
+#include <vector>
+
+#include "ccmap/map/stack.hpp"
+
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t n, std::size_t size);
+void* __libc_realloc(void* p, std::size_t size);
+void __libc_free(void* p);
+}
+
+namespace {
+std::atomic<long> g_allocations{0};
+std::atomic<bool> g_counting{false};
+void count() {
+  if (g_counting.load(std::memory_order_relaxed)) {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+}  // namespace
+
+extern "C" {
+void* malloc(std::size_t size) {
+  count();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t n, std::size_t size) {
+  count();
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t size) {
+  count();
+  return __libc_realloc(p, size);
+}
+void free(void* p) { __libc_free(p); }
+}
+
+void* operator new(std::size_t size) {
+  count();
+  void* p = __libc_malloc(size == 0 ? 1 : size);
+  if (p == nullptr) throw std::bad_alloc();
+  return p;
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  count();
+  return __libc_malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept { return operator new(size, std::nothrow); }
+void operator delete(void* p) noexcept { __libc_free(p); }
+void operator delete[](void* p) noexcept { __libc_free(p); }
+void operator delete(void* p, std::size_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::size_t) noexcept { __libc_free(p); }
+
+namespace ccmap {
+namespace {
+
+// Stack in static storage, as flight software would place it.
+Stack<CadreConfig> g_stack;
+CellRecord g_records[64 * 64];
+
+TEST(NoHeap, CountingAllocatorSeesAllocations) {
+  // The instrument works: a vector allocation is counted.
+  g_allocations = 0;
+  g_counting = true;
+  { std::vector<int> v(100); (void)v; }
+  { auto p = std::make_unique<int>(3); (void)p; }
+  void* raw = std::malloc(10);
+  std::free(raw);
+  g_counting = false;
+  EXPECT_GE(g_allocations.load(), 3L);
+}
+
+TEST(NoHeap, CadreStackRunsWithoutAllocatingAfterInit) {
+  ASSERT_EQ(g_stack.init(default_stack_params(0.04F)), Status::kOk);
+  // Frames prepared before counting (the caller's buffers).
+  std::vector<PointXYZ> frame;
+  for (int i = 0; i < 100000; ++i) {
+    const float x = -4.0F + 8.0F * static_cast<float>(i % 400) / 400.0F;
+    const float y = -4.0F + 8.0F * static_cast<float>(i / 400) / 250.0F;
+    frame.push_back(PointXYZ{x, y, 0.1F * x + ((i % 37) == 0 ? 0.2F : 0.0F)});
+  }
+  frame[5].x = std::numeric_limits<float>::quiet_NaN();
+  Pose pose;
+  pose.rotation.setIdentity();
+  pose.translation << 0.1F, 0.0F, 0.175F;
+
+  g_allocations = 0;
+  g_counting = true;
+  FrameCounters counters{};
+  long status_errors = 0;
+  for (int step = 0; step < 5; ++step) {
+    status_errors += g_stack.move_to(0.3F * static_cast<float>(step), 0.1F) != Status::kOk;
+    status_errors += g_stack.update_frame(frame.data(), frame.size(), PointXYZ{0.0F, 0.0F, 0.175F}, &counters) != Status::kOk;
+    status_errors += g_stack.update_frame_sensor(frame.data(), frame.size(), pose, &counters) != Status::kOk;
+    for (int q = 0; q < 1000; ++q) {
+      const QueryResult r = g_stack.query(-3.0F + 0.006F * static_cast<float>(q), 0.5F);
+      status_errors += r.status == Status::kNotInitialised;
+    }
+    for (int layer = 0; layer < Stack<CadreConfig>::kLayerCount; ++layer) {
+      std::size_t written = 0;
+      status_errors += g_stack.export_layer(layer, g_records, 64 * 64, &written) != Status::kOk;
+    }
+  }
+  (void)g_stack.move_to(std::numeric_limits<float>::quiet_NaN(), 0.0F);
+  (void)g_stack.move_to(1000.0F, 1000.0F);
+  g_counting = false;
+  EXPECT_EQ(status_errors, 0);
+  EXPECT_EQ(g_allocations.load(), 0L) << "the map allocated on the heap after init";
+  EXPECT_GT(g_stack.total_counters().used, 100000U);
+}
+
+}  // namespace
+}  // namespace ccmap

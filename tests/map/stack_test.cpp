@@ -1,0 +1,454 @@
+// The map stack: routing against the noise model, nesting after moves, pooling at query
+// against pooling by hand, queries and classes on synthetic terrain, export, bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "ccmap/map/stack.hpp"
+#include "support/reference.hpp"
+
+namespace ccmap {
+namespace {
+
+using test::Rng;
+
+// A stereo model with round numbers so the test can compute sigma(r) = r^2 / 300 itself.
+sensor::NoiseModel test_stereo() { return sensor::NoiseModel::stereo(sensor::StereoParams{600.0F, 0.05F, 0.1F}); }
+double test_sigma(double range) { return range * range * 0.1 / (600.0 * 0.05); }
+
+// A nearly noise-free lidar: every point satisfies IV-G for every layer, so it goes to the
+// finest layer whose window holds it.
+sensor::NoiseModel precise_lidar() { return sensor::NoiseModel::lidar(sensor::LidarParams{0.0005F, 0.0F}); }
+
+// Field-wise (QueryResult has padding bytes after the class).
+void expect_same_result(const QueryResult& a, const QueryResult& b, const char* what) {
+  EXPECT_EQ(a.status, b.status) << what;
+  EXPECT_EQ(a.layer, b.layer) << what;
+  const float fa[] = {a.cell_width_m, a.height_m, a.slope_x, a.slope_y, a.inclination, a.normal_variance, a.elevation_variance, a.weight};
+  const float fb[] = {b.cell_width_m, b.height_m, b.slope_x, b.slope_y, b.inclination, b.normal_variance, b.elevation_variance, b.weight};
+  EXPECT_EQ(std::memcmp(fa, fb, sizeof fa), 0) << what;
+  EXPECT_EQ(a.cell_class, b.cell_class) << what;
+}
+
+template <typename Config>
+std::unique_ptr<Stack<Config>> make_stack(StackParams params) {
+  auto stack = std::make_unique<Stack<Config>>();
+  EXPECT_EQ(stack->init(params), Status::kOk);
+  return stack;
+}
+
+template <typename HeightFn>
+std::vector<PointXYZ> grid_cloud(float x0, float x1, float y0, float y1, float step, HeightFn h) {
+  std::vector<PointXYZ> pts;
+  for (float y = y0 + 0.5F * step; y < y1; y += step) {
+    for (float x = x0 + 0.5F * step; x < x1; x += step) {
+      pts.push_back(PointXYZ{x, y, h(x, y)});
+    }
+  }
+  return pts;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Routing
+// ---------------------------------------------------------------------------------------------
+
+TEST(StackRouting, PointsGoToTheFinestLayerThatSatisfiesSectionIVG) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = test_stereo();
+  auto stack = make_stack<CadreConfig>(params);
+  using S = Stack<CadreConfig>;
+  const PointXYZ sensor{0.0F, 0.0F, 0.0F};
+  // Points along +x at increasing range, one at a time, each into a fresh stack state.
+  for (double range = 0.3; range < 6.0; range += 0.07) {
+    ASSERT_EQ(stack->init(params), Status::kOk);
+    const PointXYZ p{static_cast<float>(range), 0.013F, 0.0F};
+    FrameCounters counters{};
+    ASSERT_EQ(stack->update_frame(&p, 1U, sensor, &counters), Status::kOk);
+    // Independent expectation: finest layer k whose width satisfies w/sqrt(12) >= 2 sigma(r)
+    // and whose window (+-side*w/2) holds the point.
+    int expected = -1;
+    for (int k = 0; k < S::kLayerCount; ++k) {
+      const double w = stack->layer_cell_width(k);
+      const bool quiet = w / std::sqrt(12.0) >= 2.0 * test_sigma(range);  // layer 0 by default too
+      const bool inside = range < 0.5 * S::layer_side(k) * w;
+      if (quiet && inside) {
+        expected = k;
+        break;
+      }
+    }
+    int got = -1;
+    for (int k = 0; k < S::kLayerCount && got < 0; ++k) {
+      const QueryResult q = stack->query_layer(k, p.x, p.y);
+      if (q.weight > 0.0F || (q.status == Status::kUnknown && k == 0 && stack->fine_layer().cell_at(p.x, p.y)->weight > 0.0F)) {
+        got = k;
+      }
+      if (k > 0 && stack->ccm_layer(k - 1).cell_at(p.x, p.y) != nullptr &&
+          stack->ccm_layer(k - 1).cell_at(p.x, p.y)->weight > 0.0F) {
+        got = k;
+      }
+    }
+    if (expected < 0) {
+      EXPECT_EQ(counters.used, 0U) << "range " << range;
+      EXPECT_EQ(counters.too_noisy + counters.outside_map, 1U) << "range " << range;
+    } else {
+      EXPECT_EQ(counters.used, 1U) << "range " << range;
+      EXPECT_EQ(got, expected) << "point at range " << range << " m routed to the wrong layer";
+    }
+  }
+}
+
+TEST(StackRouting, RangeLimitsGrowWithCellWidthAsTheModelSays) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = test_stereo();
+  auto stack = make_stack<CadreConfig>(params);
+  for (int k = 0; k < Stack<CadreConfig>::kLayerCount; ++k) {
+    // sigma(r) = r^2/300 = w / (2 sqrt 12)  =>  r^2 = 300 w / (2 sqrt 12)  (layer 0: default rule)
+    const double w = stack->layer_cell_width(k);
+    EXPECT_NEAR(stack->layer_max_range_sq(k), 300.0 * w / (2.0 * std::sqrt(12.0)), 1e-3)
+        << "layer " << k << " range limit";
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Moves and nesting
+// ---------------------------------------------------------------------------------------------
+
+TEST(StackMove, LayersStayNestedAfterRandomMoves) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<CadreConfig>(params);
+  using S = Stack<CadreConfig>;
+  Rng rng(3);
+  for (int step = 0; step < 300; ++step) {
+    const float x = static_cast<float>(rng.uniform(-50.0, 50.0));
+    const float y = static_cast<float>(rng.uniform(-50.0, 50.0));
+    ASSERT_EQ(stack->move_to(x, y), Status::kOk);
+    for (int k = 0; k < S::kLayerCount; ++k) {
+      const CellIndex c = stack->layer_centre(k);
+      const std::int32_t half = S::layer_side(k) / 2;
+      // Window starts on an even index: every cell of layer k+1 covers 2x2 cells of layer k,
+      // and a coarse cell is either fully inside the finer window or fully outside.
+      EXPECT_EQ(((c.x - half) % 2 + 2) % 2, 0) << "layer " << k << " window not aligned";
+      EXPECT_EQ(((c.y - half) % 2 + 2) % 2, 0) << "layer " << k << " window not aligned";
+      // Robot within one cell of the layer centre.
+      const double w = stack->layer_cell_width(k);
+      EXPECT_LE(std::fabs(c.x * w - x), w + 1e-4) << "layer " << k << " not centred on the robot";
+      EXPECT_LE(std::fabs(c.y * w - y), w + 1e-4);
+    }
+  }
+}
+
+TEST(StackMove, MovingAwayAndBackForgetsOnlyWhatLeft) {
+  StackParams params = default_stack_params(0.08F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<SingleCcmConfig>(params);
+  const auto pts = grid_cloud(-2.0F, 2.0F, -2.0F, 2.0F, 0.01F, [](float x, float) { return 0.1F * x; });
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 1}, nullptr), Status::kOk);
+  const QueryResult before = stack->query(1.0F, 1.0F);
+  ASSERT_EQ(before.status, Status::kOk);
+  ASSERT_EQ(stack->move_to(5.0F, 0.0F), Status::kOk);  // 256 * 0.08 = 20.48 m window: (1,1) stays
+  const QueryResult after = stack->query(1.0F, 1.0F);
+  expect_same_result(before, after, "a cell that stayed changed on a move");
+  ASSERT_EQ(stack->move_to(40.0F, 0.0F), Status::kOk);  // teleport: everything leaves
+  EXPECT_EQ(stack->query(1.0F, 1.0F).status, Status::kOutsideMap);
+  ASSERT_EQ(stack->move_to(0.0F, 0.0F), Status::kOk);
+  EXPECT_EQ(stack->query(1.0F, 1.0F).status, Status::kUnknown) << "cells that left must come back empty";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pooling at query
+// ---------------------------------------------------------------------------------------------
+
+TEST(StackPooling, QueryPoolsFinerLayersLikePoolingByHand) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<CadreConfig>(params);
+  using S = Stack<CadreConfig>;
+  Rng rng(5);
+  std::vector<PointXYZ> pts;
+  for (int i = 0; i < 400000; ++i) {
+    const float x = static_cast<float>(rng.uniform(-6.0, 6.0));
+    const float y = static_cast<float>(rng.uniform(-6.0, 6.0));
+    pts.push_back(PointXYZ{x, y, 0.2F * x - 0.1F * y + 0.002F * static_cast<float>(rng.normal())});
+  }
+  FrameCounters counters{};
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 0.2F}, &counters), Status::kOk);
+  EXPECT_EQ(counters.used + counters.outside_map, counters.received);
+
+  // By hand, layer 1 (first CCM layer) over the fine Kalman layer.
+  for (const CellIndex idx : {CellIndex{0, 0}, CellIndex{-5, 7}, CellIndex{10, -12}}) {
+    CcmCell children[4];
+    for (int i = 0; i < 4; ++i) {
+      const KalmanCell& k = *stack->fine_layer().cell(CellIndex{2 * idx.x + (i & 1), 2 * idx.y + (i >> 1)});
+      children[i] = ccm_from_constant(k.height, k.variance, k.weight, 0.04F);
+    }
+    CcmCell expected = ccm_pool4(children, 0.04F, params.weight_limit);
+    ASSERT_EQ(ccm_merge(expected, *stack->ccm_layer(0).cell(idx), params.weight_limit), Status::kOk);
+    const CcmCell got = stack->pooled_cell(1, idx);
+    EXPECT_EQ(std::memcmp(&got, &expected, sizeof got), 0) << "layer-1 pooling differs from pooling by hand";
+  }
+  // By hand, layer 3 from layer 2 pooled cells (recursion).
+  for (const CellIndex idx : {CellIndex{0, 0}, CellIndex{-3, 2}}) {
+    CcmCell children[4];
+    for (int i = 0; i < 4; ++i) {
+      children[i] = stack->pooled_cell(2, CellIndex{2 * idx.x + (i & 1), 2 * idx.y + (i >> 1)});
+    }
+    CcmCell expected = ccm_pool4(children, stack->layer_cell_width(2), params.weight_limit);
+    ASSERT_EQ(ccm_merge(expected, *stack->ccm_layer(2).cell(idx), params.weight_limit), Status::kOk);
+    const CcmCell got = stack->pooled_cell(3, idx);
+    EXPECT_EQ(std::memcmp(&got, &expected, sizeof got), 0) << "layer-3 pooling differs from pooling by hand";
+  }
+  // A coarse cell outside every finer window answers from its own points only.
+  const CellIndex far{15, 15};  // layer 4 (64 cm): x = 9.9 m, beyond layer 3's +-5.12 m
+  ASSERT_FALSE(stack->ccm_layer(2).contains(CellIndex{30, 30}));
+  const CcmCell own = *stack->ccm_layer(3).cell(far);
+  const CcmCell got = stack->pooled_cell(S::kLayerCount - 1, far);
+  EXPECT_EQ(std::memcmp(&got, &own, sizeof got), 0);
+}
+
+TEST(StackPooling, EveryLayerSeesThePlaneSlope) {
+  // A regular sampling, so that each 4 cm constant cell's mean lies at its centre (with random
+  // positions a constant cell's height is that of its points' mean position, and the slope
+  // pooled from four of them scatters by ~15 % at 20 points per cell).
+  StackParams params = default_stack_params(0.04F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<CadreConfig>(params);
+  using S = Stack<CadreConfig>;
+  const auto pts = grid_cloud(-3.0F, 3.0F, -3.0F, 3.0F, 0.005F, [](float x, float y) { return 0.2F * x - 0.1F * y; });
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 0.2F}, nullptr), Status::kOk);
+  for (int k = 1; k < S::kLayerCount; ++k) {
+    const QueryResult q = stack->query_layer(k, 0.3F, 0.3F);
+    ASSERT_EQ(q.status, Status::kOk) << "layer " << k;
+    EXPECT_NEAR(q.slope_x, 0.2, 0.002) << "layer " << k;
+    EXPECT_NEAR(q.slope_y, -0.1, 0.002) << "layer " << k;
+    EXPECT_NEAR(q.height_m, 0.2 * 0.3 - 0.1 * 0.3, 0.001) << "layer " << k;
+    EXPECT_EQ(q.cell_class, CellClass::kTraversable) << "layer " << k;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Queries and classes
+// ---------------------------------------------------------------------------------------------
+
+TEST(StackQuery, SubCellHeightFollowsAnInclinedPlane) {
+  StackParams params = default_stack_params(0.32F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<SingleCcmConfig>(params);
+  const auto pts = grid_cloud(-3.0F, 3.0F, -3.0F, 3.0F, 0.02F, [](float x, float y) { return 1.0F + 0.3F * x + 0.1F * y; });
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 2}, nullptr), Status::kOk);
+  Rng rng(2);
+  for (int i = 0; i < 200; ++i) {
+    const float x = static_cast<float>(rng.uniform(-2.5, 2.5));
+    const float y = static_cast<float>(rng.uniform(-2.5, 2.5));
+    const QueryResult q = stack->query(x, y);
+    ASSERT_EQ(q.status, Status::kOk);
+    EXPECT_NEAR(q.height_m, 1.0 + 0.3 * x + 0.1 * y, 2e-4) << "sub-cell height at (" << x << "," << y << ")";
+    EXPECT_NEAR(q.slope_x, 0.3, 1e-3);
+    EXPECT_NEAR(q.inclination, std::hypot(0.3, 0.1), 1e-3);
+    EXPECT_EQ(q.cell_class, CellClass::kTraversable);
+  }
+}
+
+TEST(StackQuery, ClassesOnStepsAndSlopes) {
+  StackParams params = default_stack_params(0.32F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<SingleCcmConfig>(params);
+  const float w = 0.32F;
+  // x < 0: a 30 deg slope (steep); 0 <= x < 4*w: flat; a 0.75*w step covering 30 % of the cell
+  // at x in [4w, 5w) (obstacle: 30 % lies inside the 9 %..91 % band of the 50 % threshold;
+  // exactly 50 % is the band's local minimum and sits on the threshold); beyond: flat again.
+  const float steep = std::tan(30.0F * 3.14159265F / 180.0F);
+  const auto height = [&](float x, float) {
+    if (x < 0.0F) return steep * x;
+    if (x >= 4.7F * w && x < 5.0F * w) return 0.75F * w;
+    return 0.0F;
+  };
+  const auto pts = grid_cloud(-4 * w, 8 * w, 0.0F, 2 * w, 0.01F, height);
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 1}, nullptr), Status::kOk);
+  EXPECT_EQ(stack->query(-2.5F * w, 0.5F * w).cell_class, CellClass::kSteep);
+  EXPECT_EQ(stack->query(2.5F * w, 0.5F * w).cell_class, CellClass::kTraversable);
+  EXPECT_EQ(stack->query(4.5F * w, 0.5F * w).cell_class, CellClass::kObstacle)
+      << "a 0.75 w step covering 30 % of a cell must be an obstacle; threshold "
+      << stack->normal_variance_threshold(0) << " normal var " << stack->query(4.5F * w, 0.5F * w).normal_variance;
+  EXPECT_EQ(stack->query(6.5F * w, 0.5F * w).cell_class, CellClass::kTraversable);
+  EXPECT_EQ(stack->query(2.5F * w, 5.5F * w).status, Status::kUnknown) << "unobserved cell";
+  EXPECT_EQ(stack->query(2.5F * w, 5.5F * w).cell_class, CellClass::kUnknown);
+  EXPECT_EQ(stack->query(500.0F, 0.0F).status, Status::kOutsideMap);
+}
+
+TEST(StackQuery, PartlyCoveredCellIsUnknownAndTheCoarserLayerAnswers) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<CadreConfig>(params);
+  // Fill only x in [0, 0.04) of the 8 cm cell [0, 0.08): layer-1 cell half covered; the 16 cm
+  // cell also half covered... fill y fully so only x is partial.
+  const auto pts = grid_cloud(0.0F, 0.04F, 0.0F, 0.16F, 0.004F, [](float, float) { return 0.0F; });
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 0.2F}, nullptr), Status::kOk);
+  const QueryResult q1 = stack->query_layer(1, 0.02F, 0.02F);
+  EXPECT_EQ(q1.status, Status::kUnknown) << "a half-covered CCM cell must be unknown (eq. 12)";
+  const QueryResult q0 = stack->query_layer(0, 0.02F, 0.02F);
+  EXPECT_EQ(q0.status, Status::kOk) << "the 4 cm constant cell is fully observed";
+}
+
+TEST(StackQuery, ConstantLayerAnswersWithCcmHazards) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<CadreConfig>(params);
+  const auto pts = grid_cloud(-1.0F, 1.0F, -1.0F, 1.0F, 0.005F, [](float x, float) { return 0.25F * x; });
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 0.2F}, nullptr), Status::kOk);
+  const QueryResult q = stack->query(0.3F, 0.1F);
+  ASSERT_EQ(q.status, Status::kOk);
+  EXPECT_EQ(q.layer, 0) << "the finest layer knows the cell";
+  EXPECT_NEAR(q.height_m, 0.25 * 0.3, 0.04 * 0.25) << "constant cell height within half a cell's rise";
+  EXPECT_GT(q.slope_x, 0.15) << "slope should come from the pooled 8 cm CCM cell";
+  EXPECT_EQ(q.cell_class, CellClass::kTraversable);
+}
+
+TEST(StackQuery, SingleLayerBaselinesUseTheRoughnessFilter) {
+  StackParams params = default_stack_params(0.08F);
+  params.noise = precise_lidar();
+  auto kalman = make_stack<SingleKalmanConfig>(params);
+  auto omg = make_stack<SingleOmgConfig>(params);
+  // A 10 cm step at x = 0: the roughness filter (20 deg over 8 cm = 2.9 cm) flags both sides.
+  const auto pts = grid_cloud(-1.0F, 1.0F, -1.0F, 1.0F, 0.01F, [](float x, float) { return x >= 0.0F ? 0.1F : 0.0F; });
+  ASSERT_EQ(kalman->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 1}, nullptr), Status::kOk);
+  ASSERT_EQ(omg->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 1}, nullptr), Status::kOk);
+  EXPECT_EQ(kalman->query(0.04F, 0.5F).cell_class, CellClass::kObstacle);
+  EXPECT_EQ(kalman->query(-0.04F, 0.5F).cell_class, CellClass::kObstacle);
+  EXPECT_EQ(kalman->query(0.5F, 0.5F).cell_class, CellClass::kTraversable);
+  EXPECT_EQ(omg->query(0.04F, 0.5F).cell_class, CellClass::kObstacle);
+  EXPECT_EQ(omg->query(-0.5F, 0.5F).cell_class, CellClass::kTraversable);
+  EXPECT_NEAR(kalman->query(0.5F, 0.5F).height_m, 0.1, 1e-5);
+  EXPECT_NEAR(omg->query(-0.5F, 0.5F).height_m, 0.0, 1e-5);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sensor frame, export, bad input
+// ---------------------------------------------------------------------------------------------
+
+TEST(StackUpdate, SensorFrameEqualsPreAlignedPoints) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = test_stereo();
+  auto a = make_stack<CadreConfig>(params);
+  auto b = make_stack<CadreConfig>(params);
+  Pose pose;
+  pose.rotation << 0.0F, -1.0F, 0.0F, 1.0F, 0.0F, 0.0F, 0.0F, 0.0F, 1.0F;  // yaw 90 deg, exact
+  pose.translation << 0.5F, -0.25F, 0.175F;
+  Rng rng(8);
+  std::vector<PointXYZ> sensor_pts, map_pts;
+  for (int i = 0; i < 20000; ++i) {
+    const PointXYZ s{static_cast<float>(rng.uniform(0.2, 4.0)), static_cast<float>(rng.uniform(-2.0, 2.0)),
+                     static_cast<float>(rng.uniform(-0.3, 0.0))};
+    sensor_pts.push_back(s);
+    map_pts.push_back(PointXYZ{0.0F * s.x + -1.0F * s.y + 0.0F * s.z + 0.5F, 1.0F * s.x + 0.0F * s.y + 0.0F * s.z + -0.25F,
+                               0.0F * s.x + 0.0F * s.y + 1.0F * s.z + 0.175F});
+  }
+  FrameCounters ca{}, cb{};
+  ASSERT_EQ(a->update_frame_sensor(sensor_pts.data(), sensor_pts.size(), pose, &ca), Status::kOk);
+  ASSERT_EQ(b->update_frame(map_pts.data(), map_pts.size(), PointXYZ{0.5F, -0.25F, 0.175F}, &cb), Status::kOk);
+  EXPECT_EQ(std::memcmp(&ca, &cb, sizeof ca), 0);
+  for (int k = 0; k < Stack<CadreConfig>::kLayerCount - 1; ++k) {
+    const auto& la = a->ccm_layer(k);
+    const auto& lb = b->ccm_layer(k);
+    EXPECT_EQ(std::memcmp(la.storage(), lb.storage(), Stack<CadreConfig>::layer_capacity(k + 1) * sizeof(CcmCell)), 0)
+        << "CCM layer " << k + 1 << " differs between sensor-frame and pre-aligned input";
+  }
+}
+
+TEST(StackExport, RecordsMatchLayerQueries) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<CadreConfig>(params);
+  const auto pts = grid_cloud(-1.5F, 2.5F, -1.0F, 1.0F, 0.01F, [](float x, float y) { return 0.1F * x * y; });
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 0.2F}, nullptr), Status::kOk);
+  for (int k = 0; k < Stack<CadreConfig>::kLayerCount; ++k) {
+    std::vector<CellRecord> records(Stack<CadreConfig>::layer_capacity(k));
+    std::size_t written = 0;
+    ASSERT_EQ(stack->export_layer(k, records.data(), records.size(), &written), Status::kOk);
+    EXPECT_GT(written, 0U) << "layer " << k;
+    for (std::size_t i = 0; i < written; ++i) {
+      const CellRecord& r = records[i];
+      EXPECT_GT(r.weight, 0.0F);
+      const QueryResult q = stack->query_layer(k, r.centre_x, r.centre_y);
+      if (q.status == Status::kOk) {
+        EXPECT_EQ(q.height_m, r.height_m);
+        EXPECT_EQ(q.normal_variance, r.normal_variance);
+        EXPECT_EQ(q.cell_class, r.cell_class);
+      } else {
+        EXPECT_EQ(r.cell_class, CellClass::kUnknown);
+      }
+    }
+    std::size_t small_written = 99;
+    EXPECT_EQ(stack->export_layer(k, records.data(), records.size() - 1, &small_written), Status::kBufferTooSmall);
+    EXPECT_EQ(small_written, 0U);
+  }
+  std::size_t written = 0;
+  CellRecord one{};
+  EXPECT_EQ(stack->export_layer(-1, &one, 1, &written), Status::kInvalidArgument);
+  EXPECT_EQ(stack->export_layer(9, &one, 1, &written), Status::kInvalidArgument);
+}
+
+TEST(StackHostile, BadInputIsCountedAndLeavesTheMapUnchanged) {
+  StackParams params = default_stack_params(0.04F);
+  params.noise = test_stereo();
+  auto stack = make_stack<CadreConfig>(params);
+  const auto pts = grid_cloud(-1.0F, 1.0F, -1.0F, 1.0F, 0.02F, [](float x, float) { return 0.1F * x; });
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 0.2F}, nullptr), Status::kOk);
+  const QueryResult before = stack->query(0.3F, 0.3F);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const PointXYZ bad[] = {{nan, 0, 0}, {0, inf, 0}, {0, 0, -inf}, {2e5F, 0, 0}, {0.3F, 0.3F, 1e30F}};
+  FrameCounters c{};
+  ASSERT_EQ(stack->update_frame(bad, 5U, PointXYZ{0, 0, 0.2F}, &c), Status::kOk);
+  EXPECT_EQ(c.received, 5U);
+  EXPECT_EQ(c.used, 0U);
+  EXPECT_EQ(c.rejected_non_finite, 3U);
+  EXPECT_EQ(c.rejected_out_of_range, 2U);
+  EXPECT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{nan, 0, 0}, &c), Status::kNonFiniteInput);
+  EXPECT_EQ(stack->update_frame(nullptr, 3U, PointXYZ{0, 0, 0}, &c), Status::kInvalidArgument);
+  EXPECT_EQ(stack->update_frame(nullptr, 0U, PointXYZ{0, 0, 0}, &c), Status::kOk) << "an empty frame is fine";
+  EXPECT_EQ(stack->move_to(nan, 0.0F), Status::kNonFiniteInput);
+  EXPECT_EQ(stack->move_to(0.0F, 1e9F), Status::kOutOfRange);
+  EXPECT_EQ(stack->rejected_moves(), 2U);
+  Pose pose;
+  pose.rotation.setIdentity();
+  pose.rotation(1, 1) = nan;
+  pose.translation.setZero();
+  EXPECT_EQ(stack->update_frame_sensor(pts.data(), pts.size(), pose, &c), Status::kNonFiniteInput);
+  EXPECT_EQ(stack->rejected_frames(), 3U);
+  const QueryResult after = stack->query(0.3F, 0.3F);
+  expect_same_result(before, after, "refused input changed the map");
+  // Queries outside and of bad layers.
+  EXPECT_EQ(stack->query(nan, 0.0F).status, Status::kOutsideMap);
+  EXPECT_EQ(stack->query_layer(7, 0.0F, 0.0F).status, Status::kInvalidArgument);
+}
+
+TEST(StackInit, BadParametersAreRefusedAndTheStackStaysUnusable) {
+  auto stack = std::make_unique<Stack<CadreConfig>>();
+  EXPECT_EQ(stack->query(0, 0).status, Status::kNotInitialised);
+  EXPECT_EQ(stack->move_to(0, 0), Status::kNotInitialised);
+  const PointXYZ origin{0, 0, 0};
+  EXPECT_EQ(stack->update_frame(&origin, 1, origin, nullptr), Status::kNotInitialised);
+  const auto refuse = [&](auto mutate) {
+    StackParams params = default_stack_params(0.04F);
+    mutate(params);
+    EXPECT_NE(stack->init(params), Status::kOk);
+    EXPECT_FALSE(stack->initialised());
+  };
+  refuse([](StackParams& p) { p.finest_cell_width_m = 0.0F; });
+  refuse([](StackParams& p) { p.finest_cell_width_m = std::numeric_limits<float>::quiet_NaN(); });
+  refuse([](StackParams& p) { p.finest_cell_width_m = 20.0F; });
+  refuse([](StackParams& p) { p.weight_limit = 0.0F; });
+  refuse([](StackParams& p) { p.coverage_tau = 1.5F; });
+  refuse([](StackParams& p) { p.max_inclination = -1.0F; });
+  refuse([](StackParams& p) { p.normal_variance_threshold[2] = std::numeric_limits<float>::infinity(); });
+  refuse([](StackParams& p) { p.noise = sensor::NoiseModel::stereo(sensor::StereoParams{0.0F, 0.05F, 0.1F}); });
+  EXPECT_EQ(stack->init(default_stack_params(0.04F)), Status::kOk);
+}
+
+}  // namespace
+}  // namespace ccmap
