@@ -1,0 +1,438 @@
+#include "cli.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "cloud_reader.hpp"
+#include "csv_writer.hpp"
+#include "layer_images.hpp"
+#include "map_runner.hpp"
+
+namespace ccmap::tools {
+namespace {
+
+constexpr const char* kMainHelp =
+    "usage: ccmap <command> [options]\n"
+    "\n"
+    "Builds Converging Covariance Maps (CCM) from point clouds.\n"
+    "\n"
+    "commands:\n"
+    "  map     map clouds and write per-layer CSV files and pictures\n"
+    "  query   map clouds and print the map's answer at one point\n"
+    "\n"
+    "Run 'ccmap map --help' or 'ccmap query --help' for the options.\n";
+
+constexpr const char* kMapHelp =
+    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR\n"
+    "                 [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
+    "\n"
+    "  --preset NAME   cadre: 4 cm piece-wise constant Kalman layer, then 8/16/32/64 cm CCM layers\n"
+    "                  ccm, kf, omg: one 256 x 256 layer of CCM, Kalman or OMG cells\n"
+    "  --res METRES    finest cell width (default 0.04 for cadre, 0.08 otherwise); the layers of\n"
+    "                  cadre keep their 1:2:4:8:16 ratios\n"
+    "  --wl W_L        weight limit W_l of CCM and OMG cells (default 1000)\n"
+    "  --cloud FILE    one frame, map-frame coordinates: .ply (ascii/binary), .las (1.0-1.4,\n"
+    "                  uncompressed) or text 'x y z [w]' per line; repeat for more frames,\n"
+    "                  applied in order. Per-point weights are read but not used: the library\n"
+    "                  weights points by its sensor model.\n"
+    "  --poses FILE    one line 'x y z yaw' per frame: the sensor position in the map frame; the\n"
+    "                  map is re-centred on (x, y) before the frame. Without it the map stays\n"
+    "                  centred on the first cloud's centroid.\n"
+    "  --sensor NAME   lidar (default): constant range noise --sigma (default 0.005 m);\n"
+    "                  stereo: the CADRE stereo model (noise grows with range^2 from the pose)\n"
+    "  --out DIR       writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
+    "                  normal_var,class}.png; class colours: unknown grey, traversable green,\n"
+    "                  obstacle red, steep orange, unobserved black\n"
+    "\n"
+    "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the first\n"
+    "cloud's centroid rounded to the coarsest cell width) in double precision before the\n"
+    "float library sees them, and adds it back to every output coordinate and height.\n";
+
+constexpr const char* kQueryHelp =
+    "usage: ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --at X,Y\n"
+    "                   [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
+    "\n"
+    "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
+    "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
+    "variance, elevation variance and class, one 'key: value' per line.\n";
+
+/// Thrown inside this file only, turned into "ccmap: error: ..." by run_cli.
+struct CliError {
+  std::string message;
+  int code;
+};
+[[noreturn]] void fail(const std::string& message, int code = 1) { throw CliError{message, code}; }
+
+std::string fmt(const char* format, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+double parse_number(const std::string& flag, const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || std::isspace(static_cast<unsigned char>(text[0]))) {
+    fail(flag + ": '" + text + "' is not a number", 2);
+  }
+  return v;
+}
+
+double parse_positive(const std::string& flag, const std::string& text, double max, bool allow_inf = false) {
+  const double v = parse_number(flag, text);
+  if (std::isnan(v) || !(v > 0.0) || (!allow_inf && !std::isfinite(v)) || (std::isfinite(v) && v > max)) {
+    fail(flag + ": " + text + " is out of range (expected a number > 0" +
+             (std::isfinite(max) ? " and <= " + fmt("%g", max) : std::string()) + ")",
+         2);
+  }
+  return v;
+}
+
+struct Options {
+  std::string command;
+  std::string preset;
+  double res = 0.0;
+  double wl = 0.0;
+  std::vector<std::string> clouds;
+  std::string poses;
+  std::string out_dir;
+  bool have_at = false;
+  double at_x = 0.0, at_y = 0.0;
+  SensorChoice sensor = SensorChoice::kLidar;
+  double sigma = 0.005;
+  bool help = false;
+};
+
+Options parse_options(int argc, char** argv) {
+  Options o;
+  o.command = argv[1];
+  for (int i = 2; i < argc; ++i) {
+    std::string arg = argv[i];
+    std::string value;
+    bool have_value = false;
+    if (arg == "--help" || arg == "-h") {
+      o.help = true;
+      continue;
+    }
+    if (arg.rfind("--", 0) != 0) fail("unexpected argument '" + arg + "' (options start with --)", 2);
+    const std::size_t eq = arg.find('=');
+    if (eq != std::string::npos) {
+      value = arg.substr(eq + 1);
+      arg = arg.substr(0, eq);
+      have_value = true;
+    }
+    static const char* kKnown[] = {"--preset", "--res", "--wl", "--cloud", "--poses", "--out", "--at", "--sensor", "--sigma"};
+    if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
+      fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
+    }
+    if (!have_value) {
+      if (i + 1 >= argc) fail(arg + " needs a value", 2);
+      value = argv[++i];
+    }
+    if (arg == "--preset") {
+      o.preset = value;
+    } else if (arg == "--res") {
+      o.res = parse_positive(arg, value, 100.0);
+    } else if (arg == "--wl") {
+      o.wl = parse_positive(arg, value, 1e30, /*allow_inf=*/true);
+    } else if (arg == "--cloud") {
+      if (value.empty()) fail("--cloud needs a file name", 2);
+      o.clouds.push_back(value);
+    } else if (arg == "--poses") {
+      o.poses = value;
+    } else if (arg == "--out") {
+      if (value.empty()) fail("--out needs a directory", 2);
+      o.out_dir = value;
+    } else if (arg == "--at") {
+      const std::size_t comma = value.find(',');
+      if (comma == std::string::npos) fail("--at: expected X,Y, got '" + value + "'", 2);
+      o.at_x = parse_number("--at", value.substr(0, comma));
+      o.at_y = parse_number("--at", value.substr(comma + 1));
+      if (!std::isfinite(o.at_x) || !std::isfinite(o.at_y)) fail("--at: coordinates must be finite", 2);
+      o.have_at = true;
+    } else if (arg == "--sensor") {
+      if (value == "lidar") o.sensor = SensorChoice::kLidar;
+      else if (value == "stereo") o.sensor = SensorChoice::kCadreStereo;
+      else fail("--sensor: unknown sensor '" + value + "' (expected lidar or stereo)", 2);
+    } else if (arg == "--sigma") {
+      o.sigma = parse_positive(arg, value, 10.0);
+    }
+  }
+  return o;
+}
+
+std::string base_name(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+/// A mapped sequence: the runner, the local origin and the per-frame accounting.
+struct MappedClouds {
+  std::unique_ptr<MapRunner> runner;
+  double origin[3] = {0.0, 0.0, 0.0};  ///< map-frame position of the local origin (m)
+  std::int64_t origin_cells[3] = {0, 0, 0};  ///< origin / coarsest cell width (exact integers)
+  double coarsest_width = 0.0;
+  std::vector<double> widths;          ///< requested cell width per layer (m), finest first
+  FrameStats totals;
+  std::uint64_t read = 0, reader_non_finite = 0;
+};
+
+const char* sensor_name(const Options& o) {
+  return o.sensor == SensorChoice::kLidar ? "lidar" : "stereo (CADRE model)";
+}
+
+MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
+  if (o.preset.empty()) fail("--preset is required (cadre, ccm, kf or omg)", 2);
+  std::string error;
+  MappedClouds m;
+  m.runner = make_map_runner(o.preset, &error);
+  if (!m.runner) fail(error, 2);
+  if (o.clouds.empty()) fail("at least one --cloud FILE is required", 2);
+
+  const int layers = preset_layer_count(o.preset);
+  const double finest = o.res > 0.0 ? o.res : preset_default_cell_width(o.preset);
+  for (int k = 0; k < layers; ++k) m.widths.push_back(finest * std::ldexp(1.0, k));
+  m.coarsest_width = m.widths.back();
+
+  RunnerOptions ro;
+  ro.preset = o.preset;
+  ro.finest_cell_width_m = finest;
+  ro.weight_limit = o.wl;
+  ro.sensor = o.sensor;
+  ro.lidar_sigma_m = o.sigma;
+  if (!m.runner->init(ro, &error)) fail(error);
+
+  std::vector<Pose> poses;
+  if (!o.poses.empty()) {
+    if (!read_poses(o.poses, &poses, &error)) fail(error);
+    if (poses.size() != o.clouds.size()) {
+      fail(o.poses + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(o.clouds.size()) +
+           " clouds (one line per --cloud expected)");
+    }
+  }
+
+  std::vector<float> xyz;
+  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
+    const Cloud cloud = read_cloud(o.clouds[f]);
+    if (!cloud.ok()) fail(cloud.error);
+    if (cloud.size() == 0) {
+      fail(o.clouds[f] + ": empty cloud (" + std::to_string(cloud.declared) + " points, " +
+           std::to_string(cloud.skipped_non_finite) + " of them non-finite)");
+    }
+    m.read += cloud.declared;
+    m.reader_non_finite += cloud.skipped_non_finite;
+    if (f == 0) {
+      // Local origin: the centroid (double), rounded to the coarsest cell width so that every
+      // layer's cell grid stays aligned with whole map-frame cells.
+      double sum[3] = {0.0, 0.0, 0.0};
+      const std::vector<double>* axes[3] = {&cloud.x, &cloud.y, &cloud.z};
+      for (int a = 0; a < 3; ++a) {
+        for (double v : *axes[a]) sum[a] += v;
+        const double centroid = sum[a] / static_cast<double>(cloud.size());
+        m.origin_cells[a] = std::llround(centroid / m.coarsest_width);
+        m.origin[a] = static_cast<double>(m.origin_cells[a]) * m.coarsest_width;
+      }
+      if (verbose) {
+        out << "ccmap " << o.command << ": preset " << o.preset << ", " << layers << " layer(s), cell widths";
+        for (double w : m.widths) out << ' ' << fmt("%g", w);
+        out << " m, W_l " << fmt("%g", m.runner->weight_limit()) << ", min weight "
+            << fmt("%g", m.runner->min_weight()) << ", sensor " << sensor_name(o);
+        if (o.sensor == SensorChoice::kLidar) out << " (sigma " << fmt("%g", o.sigma) << " m)";
+        out << "\n";
+        out << "origin (map frame): " << fmt("%.3f", m.origin[0]) << ' ' << fmt("%.3f", m.origin[1]) << ' '
+            << fmt("%.3f", m.origin[2]) << "  (first cloud's centroid rounded to " << fmt("%g", m.coarsest_width)
+            << " m)\n";
+      }
+    }
+    // Pose: re-centre, and the sensor origin for the noise model (local frame).
+    float sensor[3] = {0.0F, 0.0F, 0.0F};
+    if (!poses.empty()) {
+      const Pose& p = poses[f];
+      sensor[0] = static_cast<float>(p.x - m.origin[0]);
+      sensor[1] = static_cast<float>(p.y - m.origin[1]);
+      sensor[2] = static_cast<float>(p.z - m.origin[2]);
+      if (!m.runner->move_to(sensor[0], sensor[1], &error)) {
+        fail(o.poses + ": pose " + std::to_string(f + 1) + ": " + error + "; is it in the clouds' frame?");
+      }
+    } else if (f == 0) {
+      if (!m.runner->move_to(0.0F, 0.0F, &error)) fail(error);
+    }
+    xyz.resize(3U * cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      // Subtract the origin in double, then round to float.
+      xyz[3 * i] = static_cast<float>(cloud.x[i] - m.origin[0]);
+      xyz[3 * i + 1] = static_cast<float>(cloud.y[i] - m.origin[1]);
+      xyz[3 * i + 2] = static_cast<float>(cloud.z[i] - m.origin[2]);
+    }
+    FrameStats stats;
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!m.runner->update_frame(xyz, sensor, &stats, &error)) fail(o.clouds[f] + ": " + error);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    stats.rejected_non_finite += cloud.skipped_non_finite;
+    stats.received += cloud.skipped_non_finite;
+    m.totals.add(stats);
+    if (verbose) {
+      out << "frame " << (f + 1) << ": " << base_name(o.clouds[f]) << " [" << cloud.format << "]: " << cloud.declared
+          << " points, used " << stats.used << ", rejected: non-finite " << stats.rejected_non_finite
+          << ", out of range " << stats.rejected_out_of_range << ", bad weight " << stats.rejected_weight
+          << ", outside map " << stats.outside_map << ", too noisy " << stats.too_noisy << "; "
+          << fmt("%.1f", ms) << " ms\n";
+      if (cloud.has_weight) {
+        out << "note: " << base_name(o.clouds[f])
+            << ": per-point weights ignored (the library weights points by its sensor model)\n";
+      }
+    }
+  }
+  if (verbose) {
+    const FrameStats& t = m.totals;
+    out << "points: read " << m.read << ", used " << t.used << ", rejected: non-finite " << t.rejected_non_finite
+        << ", out of range " << t.rejected_out_of_range << ", bad weight " << t.rejected_weight << ", outside map "
+        << t.outside_map << ", too noisy " << t.too_noisy << "\n";
+  }
+  return m;
+}
+
+/// Layer rows in the map frame (origin added back in double).
+std::vector<LayerCellRow> layer_rows(const MappedClouds& m, int layer, const std::vector<LocalCell>& cells) {
+  const double res = m.widths[static_cast<std::size_t>(layer)];
+  const std::int64_t scale = std::int64_t{1} << (static_cast<int>(m.widths.size()) - 1 - layer);
+  std::vector<LayerCellRow> rows;
+  rows.reserve(cells.size());
+  for (const LocalCell& c : cells) {
+    LayerCellRow r;
+    r.layer = layer;
+    r.ix = static_cast<std::int64_t>(c.ix) + m.origin_cells[0] * scale;
+    r.iy = static_cast<std::int64_t>(c.iy) + m.origin_cells[1] * scale;
+    r.cx = (static_cast<double>(r.ix) + 0.5) * res;
+    r.cy = (static_cast<double>(r.iy) + 0.5) * res;
+    r.res = res;
+    r.weight = c.weight;
+    r.height = static_cast<double>(c.height) + m.origin[2];
+    r.slope_x = c.slope_x;
+    r.slope_y = c.slope_y;
+    r.normal_var = c.normal_variance;
+    r.elev_var = c.elevation_variance;
+    r.cell_class = c.cell_class;
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
+
+int run_map(const Options& o, std::ostream& out) {
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  MappedClouds m = build_map(o, out, true);
+  std::error_code ec;
+  std::filesystem::create_directories(o.out_dir, ec);
+  if (ec || !std::filesystem::is_directory(o.out_dir)) {
+    fail("cannot create output directory '" + o.out_dir + "'" + (ec ? ": " + ec.message() : std::string()));
+  }
+  std::string error;
+  for (int k = 0; k < m.runner->layer_count(); ++k) {
+    std::vector<LocalCell> cells;
+    if (!m.runner->export_layer(k, &cells, &error)) fail(error);
+    const std::vector<LayerCellRow> rows = layer_rows(m, k, cells);
+    const std::string prefix = o.out_dir + "/layer_" + std::to_string(k);
+    if (!write_layer_csv(prefix + ".csv", rows, &error)) fail(error);
+    // Pictures show the bounding box of the observed cells (a small scan in a large layer
+    // would otherwise be a speck); a layer with no observed cell is drawn whole, black.
+    LayerWindow window{};
+    if (rows.empty()) {
+      std::int32_t wx = 0, wy = 0;
+      m.runner->layer_window_min(k, &wx, &wy);
+      const std::int64_t scale = std::int64_t{1} << (static_cast<int>(m.widths.size()) - 1 - k);
+      window = LayerWindow{wx + m.origin_cells[0] * scale, wy + m.origin_cells[1] * scale, m.runner->layer_side(k),
+                           m.runner->layer_side(k)};
+    }
+    if (!write_layer_images(prefix, rows, window, &error)) fail(error);
+    std::size_t counts[4] = {0, 0, 0, 0};
+    for (const LayerCellRow& r : rows) {
+      if (r.cell_class == "traversable") ++counts[1];
+      else if (r.cell_class == "obstacle") ++counts[2];
+      else if (r.cell_class == "steep") ++counts[3];
+      else ++counts[0];
+    }
+    const int side = m.runner->layer_side(k);
+    out << "layer " << k << " (" << fmt("%g", m.widths[static_cast<std::size_t>(k)]) << " m, " << side << " x "
+        << side << ", " << (m.runner->layer_is_ccm(k) ? "CCM" : (o.preset == "omg" ? "OMG" : "Kalman"))
+        << "): " << (rows.size() - counts[0]) << " cells known of " << rows.size() << " observed (traversable "
+        << counts[1] << ", obstacle " << counts[2] << ", steep " << counts[3] << ", unknown " << counts[0]
+        << ") -> " << prefix << ".csv\n";
+  }
+  out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
+      << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+  return 0;
+}
+
+int run_query(const Options& o, std::ostream& out) {
+  if (!o.have_at) fail("--at X,Y is required", 2);
+  if (!o.out_dir.empty()) fail("--out belongs to 'ccmap map'", 2);
+  std::ostringstream log;
+  MappedClouds m = build_map(o, log, true);
+  const double lx = o.at_x - m.origin[0], ly = o.at_y - m.origin[1];
+  const LocalQuery q = m.runner->query(static_cast<float>(lx), static_cast<float>(ly));
+  const double kPi = 3.14159265358979323846;
+  out << "x: " << fmt("%.6f", o.at_x) << "\n";
+  out << "y: " << fmt("%.6f", o.at_y) << "\n";
+  out << "status: " << q.status << "\n";
+  out << "layer: " << q.layer << "\n";
+  const bool layer_ok = q.layer >= 0 && q.layer < static_cast<int>(m.widths.size());
+  out << "cell_width_m: " << fmt("%g", layer_ok ? m.widths[static_cast<std::size_t>(q.layer)] : 0.0)
+      << "\n";
+  const bool ok = q.status == "ok";
+  out << "height_m: " << (ok ? fmt("%.6f", static_cast<double>(q.height) + m.origin[2]) : std::string("nan")) << "\n";
+  out << "slope_x: " << fmt("%.6g", q.slope_x) << "\n";
+  out << "slope_y: " << fmt("%.6g", q.slope_y) << "\n";
+  out << "inclination: " << fmt("%.6g", q.inclination) << "\n";
+  out << "inclination_deg: " << fmt("%.3f", std::atan(static_cast<double>(q.inclination)) * 180.0 / kPi) << "\n";
+  out << "normal_variance_m2: " << fmt("%.6g", q.normal_variance) << "\n";
+  out << "elevation_variance_m2: " << fmt("%.6g", q.elevation_variance) << "\n";
+  out << "weight: " << fmt("%.6g", q.weight) << "\n";
+  out << "class: " << q.cell_class << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int run_cli(int argc, char** argv, std::ostream& out, std::ostream& err) {
+  try {
+    if (argc < 2 || argv == nullptr) {
+      err << kMainHelp;
+      return 2;
+    }
+    const std::string command = argv[1];
+    if (command == "--help" || command == "-h" || command == "help") {
+      out << kMainHelp;
+      return 0;
+    }
+    if (command != "map" && command != "query") fail("unknown command '" + command + "' (expected map or query)", 2);
+    const Options o = parse_options(argc, argv);
+    if (o.help) {
+      out << (command == "map" ? kMapHelp : kQueryHelp);
+      return 0;
+    }
+    return command == "map" ? run_map(o, out) : run_query(o, out);
+  } catch (const CliError& e) {
+    err << "ccmap: error: " << e.message << "\n";
+    return e.code;
+  } catch (const std::bad_alloc&) {
+    err << "ccmap: error: out of memory\n";
+    return 1;
+  } catch (const std::exception& e) {
+    err << "ccmap: error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace ccmap::tools

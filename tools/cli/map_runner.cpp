@@ -1,0 +1,183 @@
+#include "map_runner.hpp"
+
+#include <cmath>
+
+#include "ccmap/map/config.hpp"
+#include "ccmap/map/stack.hpp"
+#include "ccmap/sensor/noise_model.hpp"
+
+namespace ccmap::tools {
+namespace {
+
+FrameStats to_stats(const FrameCounters& c) {
+  FrameStats s;
+  s.received = c.received;
+  s.used = c.used;
+  s.rejected_non_finite = c.rejected_non_finite;
+  s.rejected_out_of_range = c.rejected_out_of_range;
+  s.rejected_weight = c.rejected_weight;
+  s.outside_map = c.outside_map;
+  s.too_noisy = c.too_noisy;
+  return s;
+}
+
+template <typename Config>
+class StackRunner final : public MapRunner {
+ public:
+  using StackType = Stack<Config>;
+
+  bool init(const RunnerOptions& options, std::string* error) override {
+    const float width = options.finest_cell_width_m > 0.0 ? static_cast<float>(options.finest_cell_width_m)
+                                                          : Config::kDefaultFinestCellWidthM;
+    StackParams params = default_stack_params(width);
+    if (options.weight_limit > 0.0) params.weight_limit = static_cast<float>(options.weight_limit);
+    if (options.sensor == SensorChoice::kLidar) {
+      params.noise = sensor::NoiseModel::lidar(sensor::LidarParams{static_cast<float>(options.lidar_sigma_m), 0.0F});
+    }
+    const Status status = stack_->init(params);
+    if (status != Status::kOk) {
+      *error = std::string("the map refused its parameters (") + to_string(status) + ")";
+      return false;
+    }
+    return true;
+  }
+
+  bool move_to(float x, float y, std::string* error) override {
+    const Status status = stack_->move_to(x, y);
+    if (status != Status::kOk) {
+      *error = std::string("cannot move the map (") + to_string(status) + ")";
+      return false;
+    }
+    return true;
+  }
+
+  bool update_frame(const std::vector<float>& xyz, const float sensor_origin[3], FrameStats* stats,
+                    std::string* error) override {
+    points_.resize(xyz.size() / 3U);
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      points_[i] = PointXYZ{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+    }
+    FrameCounters counters{};
+    const PointXYZ origin{sensor_origin[0], sensor_origin[1], sensor_origin[2]};
+    const Status status = stack_->update_frame(points_.data(), points_.size(), origin, &counters);
+    if (status != Status::kOk) {
+      *error = std::string("the map refused the frame (") + to_string(status) + ")";
+      return false;
+    }
+    *stats = to_stats(counters);
+    return true;
+  }
+
+  int layer_count() const override { return StackType::kLayerCount; }
+  float layer_cell_width(int layer) const override { return stack_->layer_cell_width(layer); }
+  int layer_side(int layer) const override { return StackType::layer_side(layer); }
+  bool layer_is_ccm(int layer) const override { return StackType::layer_is_ccm(layer); }
+  float layer_normal_variance_threshold(int layer) const override {
+    return stack_->normal_variance_threshold(layer);
+  }
+  void layer_window_min(int layer, std::int32_t* ix, std::int32_t* iy) const override {
+    const CellIndex centre = stack_->layer_centre(layer);
+    const std::int32_t half = StackType::layer_side(layer) / 2;
+    *ix = centre.x - half;
+    *iy = centre.y - half;
+  }
+
+  bool export_layer(int layer, std::vector<LocalCell>* cells, std::string* error) const override {
+    std::vector<CellRecord> records(StackType::layer_capacity(layer));
+    std::size_t written = 0;
+    const Status status = stack_->export_layer(layer, records.data(), records.size(), &written);
+    if (status != Status::kOk) {
+      *error = "cannot export layer " + std::to_string(layer) + " (" + to_string(status) + ")";
+      return false;
+    }
+    cells->clear();
+    cells->reserve(written);
+    for (std::size_t i = 0; i < written; ++i) {
+      const CellRecord& r = records[i];
+      LocalCell c;
+      c.ix = r.index.x;
+      c.iy = r.index.y;
+      c.centre_x = r.centre_x;
+      c.centre_y = r.centre_y;
+      c.weight = r.weight;
+      c.height = r.height_m;
+      c.slope_x = r.slope_x;
+      c.slope_y = r.slope_y;
+      c.normal_variance = r.normal_variance;
+      c.elevation_variance = r.elevation_variance;
+      c.cell_class = to_string(r.cell_class);
+      cells->push_back(c);
+    }
+    return true;
+  }
+
+  LocalQuery query(float x, float y) const override {
+    const QueryResult q = stack_->query(x, y);
+    LocalQuery out;
+    out.status = to_string(q.status);
+    out.layer = q.layer;
+    out.cell_width = q.cell_width_m;
+    out.height = q.height_m;
+    out.slope_x = q.slope_x;
+    out.slope_y = q.slope_y;
+    out.inclination = q.inclination;
+    out.normal_variance = q.normal_variance;
+    out.elevation_variance = q.elevation_variance;
+    out.weight = q.weight;
+    out.cell_class = to_string(q.cell_class);
+    return out;
+  }
+
+  FrameStats totals() const override { return to_stats(stack_->total_counters()); }
+  float weight_limit() const override { return stack_->params().weight_limit; }
+  float min_weight() const override { return stack_->params().min_weight; }
+
+ private:
+  std::unique_ptr<StackType> stack_ = std::make_unique<StackType>();  // MBs: never on the stack
+  std::vector<PointXYZ> points_;
+};
+
+struct PresetInfo {
+  const char* name;
+  double default_width;
+  int layers;
+};
+const PresetInfo kPresets[] = {
+    {"cadre", static_cast<double>(CadreConfig::kDefaultFinestCellWidthM), Stack<CadreConfig>::kLayerCount},
+    {"ccm", static_cast<double>(SingleCcmConfig::kDefaultFinestCellWidthM), Stack<SingleCcmConfig>::kLayerCount},
+    {"kf", static_cast<double>(SingleKalmanConfig::kDefaultFinestCellWidthM), Stack<SingleKalmanConfig>::kLayerCount},
+    {"omg", static_cast<double>(SingleOmgConfig::kDefaultFinestCellWidthM), Stack<SingleOmgConfig>::kLayerCount},
+};
+
+}  // namespace
+
+const std::vector<std::string>& preset_names() {
+  static const std::vector<std::string> names = {"cadre", "ccm", "kf", "omg"};
+  return names;
+}
+
+double preset_default_cell_width(const std::string& preset) {
+  for (const PresetInfo& p : kPresets) {
+    // The float defaults (0.04F, 0.08F) as the decimal the user would type.
+    if (preset == p.name) return std::round(p.default_width * 1e6) / 1e6;
+  }
+  return 0.0;
+}
+
+int preset_layer_count(const std::string& preset) {
+  for (const PresetInfo& p : kPresets) {
+    if (preset == p.name) return p.layers;
+  }
+  return 0;
+}
+
+std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, std::string* error) {
+  if (preset == "cadre") return std::make_unique<StackRunner<CadreConfig>>();
+  if (preset == "ccm") return std::make_unique<StackRunner<SingleCcmConfig>>();
+  if (preset == "kf") return std::make_unique<StackRunner<SingleKalmanConfig>>();
+  if (preset == "omg") return std::make_unique<StackRunner<SingleOmgConfig>>();
+  *error = "unknown preset '" + preset + "' (expected one of: cadre, ccm, kf, omg)";
+  return nullptr;
+}
+
+}  // namespace ccmap::tools

@@ -1,0 +1,87 @@
+// Host adapter between the ccmap command-line tool and the library's Stack<Config> templates:
+// one run-time polymorphic interface over the presets, in the library's local float frame
+// (metres relative to the origin the tool chose). Nothing here knows about files or absolute
+// coordinates.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ccmap::tools {
+
+enum class SensorChoice : std::uint8_t {
+  kLidar,        ///< constant range noise (sigma_m), e.g. a terrestrial or mobile laser scan
+  kCadreStereo,  ///< the CADRE stereo model: noise grows with range^2 from the sensor origin
+};
+
+struct RunnerOptions {
+  std::string preset;                     ///< cadre, ccm, kf, omg
+  double finest_cell_width_m = 0.0;       ///< <= 0: the preset's default
+  double weight_limit = 0.0;              ///< <= 0: the library default
+  SensorChoice sensor = SensorChoice::kLidar;
+  double lidar_sigma_m = 0.005;           ///< range noise of the lidar model (m)
+};
+
+/// Per-frame point accounting (the library's FrameCounters).
+struct FrameStats {
+  std::uint64_t received = 0, used = 0, rejected_non_finite = 0, rejected_out_of_range = 0,
+                rejected_weight = 0, outside_map = 0, too_noisy = 0;
+  void add(const FrameStats& o) {
+    received += o.received; used += o.used; rejected_non_finite += o.rejected_non_finite;
+    rejected_out_of_range += o.rejected_out_of_range; rejected_weight += o.rejected_weight;
+    outside_map += o.outside_map; too_noisy += o.too_noisy;
+  }
+};
+
+/// One exported cell in the local frame (library units).
+struct LocalCell {
+  std::int32_t ix = 0, iy = 0;  ///< library global index (relative to the local origin)
+  float centre_x = 0, centre_y = 0, weight = 0, height = 0, slope_x = 0, slope_y = 0;
+  float normal_variance = 0, elevation_variance = 0;
+  const char* cell_class = "unknown";
+};
+
+struct LocalQuery {
+  std::string status;           ///< ok, unknown, outside_map, ...
+  int layer = -1;
+  float cell_width = 0, height = 0, slope_x = 0, slope_y = 0, inclination = 0;
+  float normal_variance = 0, elevation_variance = 0, weight = 0;
+  const char* cell_class = "unknown";
+};
+
+class MapRunner {
+ public:
+  virtual ~MapRunner() = default;
+  /// Configures the stack; false with a one-line reason.
+  virtual bool init(const RunnerOptions& options, std::string* error) = 0;
+  /// Re-centres the stack on (x, y), local metres.
+  virtual bool move_to(float x, float y, std::string* error) = 0;
+  /// Folds one frame (xyz interleaved, local metres); sensor origin in local metres.
+  virtual bool update_frame(const std::vector<float>& xyz, const float sensor_origin[3], FrameStats* stats,
+                            std::string* error) = 0;
+  virtual int layer_count() const = 0;
+  virtual float layer_cell_width(int layer) const = 0;
+  virtual int layer_side(int layer) const = 0;                 ///< cells per axis
+  virtual bool layer_is_ccm(int layer) const = 0;
+  virtual float layer_normal_variance_threshold(int layer) const = 0;
+  /// Lowest global index (x, y) of the layer's window.
+  virtual void layer_window_min(int layer, std::int32_t* ix, std::int32_t* iy) const = 0;
+  virtual bool export_layer(int layer, std::vector<LocalCell>* cells, std::string* error) const = 0;
+  virtual LocalQuery query(float x, float y) const = 0;
+  virtual FrameStats totals() const = 0;
+  virtual float weight_limit() const = 0;
+  virtual float min_weight() const = 0;
+};
+
+/// Preset names, in the order shown by --help.
+const std::vector<std::string>& preset_names();
+/// Default finest cell width of a preset (m); 0 for an unknown preset.
+double preset_default_cell_width(const std::string& preset);
+/// Number of layers of a preset; 0 for an unknown preset.
+int preset_layer_count(const std::string& preset);
+/// A runner for the preset, not yet initialised; nullptr with a message for an unknown preset.
+std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, std::string* error);
+
+}  // namespace ccmap::tools
