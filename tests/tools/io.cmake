@@ -10,7 +10,7 @@ add_executable(ccmap_test_tools_cli ${CMAKE_CURRENT_LIST_DIR}/cli_test.cpp)
 target_link_libraries(ccmap_test_tools_cli PRIVATE GTest::gtest_main ccmap_cli_lib ccmap_tools_io ccmap_host_flags)
 # Real data for the end-to-end test (overridable at run time with CCMAP_DATA_DIR).
 target_compile_definitions(ccmap_test_tools_cli PRIVATE
-  CCMAP_DEFAULT_DATA_DIR="/work/shared/data"
+  CCMAP_DEFAULT_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data"
   CCMAP_CLI_BINARY="$<TARGET_FILE:ccmap>")
 add_dependencies(ccmap_test_tools_cli ccmap)
 gtest_discover_tests(ccmap_test_tools_cli DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60

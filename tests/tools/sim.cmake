@@ -1,0 +1,12 @@
+# Tests of the host simulator (tools/sim) and the paper experiments (tools/experiments).
+# Included from tests/tools/CMakeLists.txt (host builds only). tests/ is configured before
+# tools/, so the tool targets are referenced by name (resolved at generation time).
+add_executable(ccmap_test_tools_sim ${CMAKE_CURRENT_LIST_DIR}/sim_test.cpp)
+target_link_libraries(ccmap_test_tools_sim PRIVATE GTest::gtest_main ccmap_sim ccmap_host_flags)
+gtest_discover_tests(ccmap_test_tools_sim DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
+                     PROPERTIES LABELS "tools" TIMEOUT 300)
+
+add_executable(ccmap_test_tools_experiments ${CMAKE_CURRENT_LIST_DIR}/experiments_test.cpp)
+target_link_libraries(ccmap_test_tools_experiments PRIVATE GTest::gtest_main ccmap_sim ccmap_experiments ccmap_host_flags)
+gtest_discover_tests(ccmap_test_tools_experiments DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
+                     PROPERTIES LABELS "tools" TIMEOUT 300)

@@ -1,0 +1,42 @@
+// Shared plumbing of the experiment programs: command-line flags, output directory, tables.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace ccmap::experiments {
+
+/// Flags every experiment accepts:
+///   --seed N   (default 1)  --out DIR (default out/experiments)  --quick (reduced size)
+///   --data DIR (real data; default $CCMAP_DATA_DIR, else <source>/../shared/data)
+struct ExperimentArgs {
+  std::uint64_t seed = 1;
+  std::string out_dir = "out/experiments";
+  bool quick = false;
+  std::string data_dir;  ///< resolved (never empty after parse_experiment_args)
+};
+
+/// Parses argv into *args. Returns -1 to go on, otherwise the exit code to return right away
+/// (0 after --help, 2 after a usage error; the message is printed).
+int parse_experiment_args(int argc, char** argv, const std::string& description, ExperimentArgs* args);
+
+/// Creates `dir` (and parents) if needed; false with a reason in *error.
+bool ensure_directory(const std::string& dir, std::string* error);
+
+/// Plain-text table printed with aligned columns.
+class Table {
+ public:
+  explicit Table(std::vector<std::string> header) : header_(std::move(header)) {}
+  void add_row(std::vector<std::string> row) { rows_.push_back(std::move(row)); }
+  std::string str() const;
+
+ private:
+  std::vector<std::string> header_;
+  std::vector<std::vector<std::string>> rows_;
+};
+
+/// printf-style formatting into a std::string.
+std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+
+}  // namespace ccmap::experiments

@@ -1,0 +1,115 @@
+// ccmap_sim_demo: one stereo frame over a lunar-like terrain. Prints the ray-casting time of a
+// full 850 x 650 frame and writes the depth image and a top view of the points as PNGs.
+//   ccmap_sim_demo [--seed N] [--out DIR] [--stride K] [--res M] [--pitch DEG] [--streaks P]
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "png.hpp"
+#include "sim/rng.hpp"
+#include "sim/stereo.hpp"
+#include "sim/terrain.hpp"
+
+namespace {
+
+int usage(const char* argv0) {
+  std::fprintf(stderr, "usage: %s [--seed N] [--out DIR] [--stride K] [--res M] [--pitch DEG] [--streaks P]\n", argv0);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::uint64_t seed = 1;
+  std::string out = "out/sim";
+  int stride = 1;
+  double res = 0.01, pitch = 25.0, streaks = 0.0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    const char* v = nullptr;
+    if (a == "--seed" && (v = next())) seed = std::strtoull(v, nullptr, 10);
+    else if (a == "--out" && (v = next())) out = v;
+    else if (a == "--stride" && (v = next())) stride = std::atoi(v);
+    else if (a == "--res" && (v = next())) res = std::atof(v);
+    else if (a == "--pitch" && (v = next())) pitch = std::atof(v);
+    else if (a == "--streaks" && (v = next())) streaks = std::atof(v);
+    else return usage(argv[0]);
+  }
+  using ccmap::sim::Rect;
+  const Rect area{0.0, 0.0, 20.0, 20.0};
+  const auto t0 = std::chrono::steady_clock::now();
+  const ccmap::sim::ProceduralTerrain terrain(ccmap::sim::lunar_terrain_params(area, seed));
+  const ccmap::sim::HeightRaster raster = ccmap::sim::rasterize(terrain, area, res);
+  const auto t1 = std::chrono::steady_clock::now();
+  ccmap::sim::StereoParams sp;
+  sp.pixel_stride = stride;
+  sp.pitch_deg = pitch;
+  sp.border_streak_probability = streaks;
+  const ccmap::sim::StereoCamera camera(sp);
+  const ccmap::sim::Pose2 pose{2.0, 4.0, 0.5};
+  // CPU time (one core), not wall time: the figure should not depend on other load.
+  const std::clock_t t2 = std::clock();
+  const ccmap::sim::StereoFrame frame = camera.capture(raster, pose, seed);
+  const std::clock_t t3 = std::clock();
+  const ccmap::sim::DepthImage depth = camera.render_depth(raster, pose);
+  const std::clock_t t4 = std::clock();
+  auto cpu_ms = [](std::clock_t a, std::clock_t b) { return 1000.0 * static_cast<double>(b - a) / CLOCKS_PER_SEC; };
+  auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+  std::printf("terrain: %zu rocks, %zu craters; raster %d x %d at %.3f m built in %.0f ms\n", terrain.rocks().size(),
+              terrain.craters().size(), raster.nx(), raster.ny(), res, ms(t0, t1));
+  std::printf("frame %d x %d (stride %d): %zu rays, %zu hits, %zu points, %zu streak pixels\n", sp.width_px,
+              sp.height_px, stride, frame.rays_cast, frame.rays_hit, frame.points_map.size(), frame.streak_pixels);
+  std::printf("CPU time: capture (ray casting + noise) %.0f ms; noise-free depth render %.0f ms\n", cpu_ms(t2, t3),
+              cpu_ms(t3, t4));
+
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  ccmap::tools::RgbImage img(depth.cols, depth.rows, 0);
+  for (int r = 0; r < depth.rows; ++r) {
+    for (int c = 0; c < depth.cols; ++c) {
+      const float z = depth.at(c, r);
+      std::uint8_t col[3] = {0, 0, 0};
+      if (std::isfinite(z)) ccmap::tools::colormap_viridis(std::log(z / 0.3) / std::log(20.0 / 0.3), col);
+      img.set(c, r, col);
+    }
+  }
+  std::string error;
+  const std::string depth_path = out + "/sim_depth.png";
+  if (!ccmap::tools::write_png(depth_path, img, &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return 1;
+  }
+  // Top view: hillshade of the terrain with the measured points in red.
+  const int n = 800;
+  ccmap::tools::RgbImage top(n, n, 0);
+  const double px = area.width() / n;
+  for (int r = 0; r < n; ++r) {
+    for (int c = 0; c < n; ++c) {
+      const double x = area.x0 + (c + 0.5) * px, y = area.y1 - (r + 0.5) * px;
+      const double e = 0.02;
+      const double gx = (raster.height(x + e, y) - raster.height(x - e, y)) / (2 * e);
+      const double gy = (raster.height(x, y + e) - raster.height(x, y - e)) / (2 * e);
+      const double s = ccmap::tools::hillshade(gx, gy);
+      const std::uint8_t g = static_cast<std::uint8_t>(std::lround(std::isfinite(s) ? 255.0 * s : 0.0));
+      const std::uint8_t col[3] = {g, g, g};
+      top.set(c, r, col);
+    }
+  }
+  const std::uint8_t red[3] = {230, 40, 40};
+  for (const auto& p : frame.points_map) {
+    top.set(static_cast<int>((p.x - area.x0) / px), static_cast<int>((area.y1 - p.y) / px), red);
+  }
+  const std::string top_path = out + "/sim_topview.png";
+  if (!ccmap::tools::write_png(top_path, top, &error)) {
+    std::fprintf(stderr, "%s\n", error.c_str());
+    return 1;
+  }
+  std::printf("wrote %s and %s\n", depth_path.c_str(), top_path.c_str());
+  return 0;
+}
