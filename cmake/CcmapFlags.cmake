@@ -8,12 +8,22 @@ if(CCMAP_SANITIZE)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
+# libFuzzer build (clang): everything instrumented for coverage; the fuzz targets link -fsanitize=fuzzer.
+if(CCMAP_BUILD_FUZZ)
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
 # The flight core: warning wall that fails the build, no exceptions, no RTTI.
 add_library(ccmap_core_flags INTERFACE)
 target_compile_options(ccmap_core_flags INTERFACE
   -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wdouble-promotion -Wshadow
   -Wold-style-cast -Wfloat-equal -Wcast-align -Wnull-dereference -Werror
   $<$<COMPILE_LANGUAGE:CXX>:-fno-exceptions -fno-rtti>)
+# Per-function stack frame sizes and call graphs (.su, .ci next to each object) for tools/stack-usage.
+if(CCMAP_STACK_USAGE)
+  target_compile_options(ccmap_core_flags INTERFACE -fstack-usage -fcallgraph-info=su)
+endif()
 
 # Tests and host tools: a lighter wall (they compute references in double on purpose).
 add_library(ccmap_host_flags INTERFACE)

@@ -20,12 +20,13 @@ void log_write(LogLevel level, const char* message) noexcept {
   }
   static const char* const kNames[] = {"debug", "info", "warning", "error"};
   const auto index = static_cast<unsigned>(level);
-  const char* name = index < 4U ? kNames[index] : "?";
-  std::fprintf(stderr, "ccmap[%s] %s\n", name, message);
+  const char* level_name = index < 4U ? kNames[index] : "?";
+  // Best effort: a failed write to stderr has nowhere else to be reported.
+  (void)std::fprintf(stderr, "ccmap[%s] %s\n", level_name, message);
 }
 
 void fault(const char* file, int line, const char* expression) noexcept {
-  std::fprintf(stderr, "ccmap[fault] %s:%d: %s\n", file != nullptr ? file : "?", line,
+  (void)std::fprintf(stderr, "ccmap[fault] %s:%d: %s\n", file != nullptr ? file : "?", line,
                expression != nullptr ? expression : "?");
 }
 

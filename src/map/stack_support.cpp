@@ -72,6 +72,12 @@ Status validate_stack_params(const StackParams& p, int layer_count) noexcept {
   if (!(p.finest_cell_width_m > 0.0F) || p.finest_cell_width_m * static_cast<float>(1 << (layer_count - 1)) > 100.0F) {
     return Status::kInvalidArgument;
   }
+  // Cell indices of positions up to kMaxAbsCoordinateM must stay within +-2^29, so that the
+  // window centre move_to snaps to (an even index) and the child index 2 * i used by pooling
+  // fit int32 and grid::kMaxCellIndex: width >= 1e5 m / 2^29 = 0.19 mm.
+  if (p.finest_cell_width_m * static_cast<float>(1 << 29) < kMaxAbsCoordinateM) {
+    return Status::kInvalidArgument;
+  }
   if (ccm_check_weight_limit(p.weight_limit) != Status::kOk || !(p.coverage_tau > 0.0F) ||
       p.coverage_tau > 1.0F || p.min_weight < 0.0F || !(p.obstacle_fraction > 0.0F) ||
       p.obstacle_fraction > 4.0F || !(p.max_inclination > 0.0F) || !(p.kalman_min_variance > 0.0F)) {
@@ -104,12 +110,18 @@ float layer_threshold(const StackParams& params, int layer, float width) noexcep
 }
 
 CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& params, float threshold) noexcept {
-  if (!ccm_is_covered(cell, width, params.coverage_tau, params.min_weight)) {
+  if (!(cell.weight >= params.min_weight) || !(cell.weight > 0.0F)) {
     return CellClass::kUnknown;
   }
+  // Obstacle evidence before coverage: an obstacle's own shadow leaves its border cells partly
+  // covered, and eq. (12) would call them unknown although the points that were seen already
+  // spread beyond the threshold around their plane (docs/design.md, "Queries and classes").
   const CcmSurface surface = ccm_surface(cell);
   if (surface.normal_variance > threshold) {
     return CellClass::kObstacle;
+  }
+  if (!ccm_is_covered(cell, width, params.coverage_tau, params.min_weight)) {
+    return CellClass::kUnknown;
   }
   if (ccm_inclination(surface) > params.max_inclination) {
     return CellClass::kSteep;

@@ -114,3 +114,47 @@ TEST(ConstantCells, RejectedInputLeavesCellsUnchanged) {
 
 }  // namespace
 }  // namespace ccmap
+
+namespace ccmap {
+namespace {
+
+TEST(KalmanCell, FrameBatchEqualsSequentialUpdatesWithTheSameVariance) {
+  // n measurements of variance R fused as one of their mean with R / n: the same posterior as
+  // n sequential updates (information form), while the floor does not engage.
+  test::Rng rng(4);
+  for (int trial = 0; trial < 50; ++trial) {
+    KalmanCell sequential{};
+    KalmanCell batch{};
+    const float r = static_cast<float>(rng.uniform(1e-6, 1e-3));
+    // A prior from an earlier frame (or none, on even trials).
+    if (trial % 2 == 1) {
+      const float z0 = static_cast<float>(rng.uniform(-1.0, 1.0));
+      ASSERT_EQ(kalman_update(sequential, z0, 4.0F * r), Status::kOk);
+      ASSERT_EQ(kalman_update(batch, z0, 4.0F * r), Status::kOk);
+    }
+    const std::uint32_t n = 1U + static_cast<std::uint32_t>(rng.uniform(0.0, 300.0));
+    double sum = 0.0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const float z = static_cast<float>(0.3 + 0.01 * rng.normal());
+      sum += z;
+      ASSERT_EQ(kalman_update(sequential, z, r, 1e-12F), Status::kOk);
+    }
+    detail::kalman_update_batch_unchecked(batch, static_cast<float>(sum / n), r, n, 1e-12F);
+    EXPECT_NEAR(batch.height, sequential.height, 2e-6) << "trial " << trial << ", n " << n;
+    EXPECT_NEAR(batch.variance, sequential.variance, 1e-4 * sequential.variance) << "trial " << trial;
+    EXPECT_EQ(batch.weight, sequential.weight);
+  }
+}
+
+TEST(KalmanCell, FrameBatchOfOneIsTheSingleUpdate) {
+  KalmanCell a{};
+  KalmanCell b{};
+  ASSERT_EQ(kalman_update(a, 1.0F, 0.01F), Status::kOk);
+  ASSERT_EQ(kalman_update(b, 1.0F, 0.01F), Status::kOk);
+  ASSERT_EQ(kalman_update(a, 1.5F, 0.02F), Status::kOk);
+  detail::kalman_update_batch_unchecked(b, 1.5F, 0.02F, 1U, kKalmanDefaultMinVariance);
+  EXPECT_EQ(std::memcmp(&a, &b, sizeof a), 0);
+}
+
+}  // namespace
+}  // namespace ccmap

@@ -161,12 +161,9 @@ TEST(IndexOfPosition, ExactAtAndBesideEdgesForPowerOfTwoWidths) {
       const float below = std::nextafter(edge, -std::numeric_limits<float>::infinity());
       const float above = std::nextafter(edge, std::numeric_limits<float>::infinity());
       ASSERT_TRUE(grid::index_of_position(below, above, inv, &index));
-      if (k == 0 && width > 1.0F) {
-        // Documented underflow: -denorm_min * (1/w) rounds to -0 for w > 1 m: cell 0.
-        ASSERT_EQ(index.x, 0) << "one ulp below 0 with width " << width;
-      } else {
-        ASSERT_EQ(index.x, k - 1) << "one ulp below edge " << edge << " m, width " << width;
-      }
+      // The product is not rounded (exact_floor_mul): one ulp below an edge is the cell below,
+      // also one ulp below 0 (a float product would underflow to -0 there for w > 1 m).
+      ASSERT_EQ(index.x, k - 1) << "one ulp below edge " << edge << " m, width " << width;
       ASSERT_EQ(index.y, k) << "one ulp above edge " << edge << " m, width " << width;
     }
   }
@@ -181,11 +178,11 @@ TEST(IndexOfPosition, NegativePositionsFloorRatherThanTruncate) {
   ASSERT_TRUE(grid::index_of_position(-std::numeric_limits<float>::denorm_min(),
                                       std::numeric_limits<float>::denorm_min(), 4.0F, &index));
   EXPECT_EQ(index, (CellIndex{-1, 0})) << "the smallest negative float is in cell -1";
-  // The documented underflow limit: a negative product smaller than half the smallest
-  // subnormal rounds to -0, whose floor is cell 0 (positions below 1e-38 m from an axis).
+  // No underflow: the product is exact, so even a negative position whose float product
+  // would round to -0 (|x / w| < 2^-150) is in cell -1.
   ASSERT_TRUE(
       grid::index_of_position(-std::numeric_limits<float>::denorm_min(), 0.0F, 0.5F, &index));
-  EXPECT_EQ(index, (CellIndex{0, 0})) << "underflow to -0 gives cell 0, as documented";
+  EXPECT_EQ(index, (CellIndex{-1, 0})) << "exact product: the smallest negative float is in cell -1";
   ASSERT_TRUE(grid::index_of_position(-std::numeric_limits<float>::min(), 0.0F, 0.5F, &index));
   EXPECT_EQ(index, (CellIndex{-1, 0})) << "the smallest normal negative float is in cell -1";
 }

@@ -74,7 +74,9 @@ TEST(StackRouting, PointsGoToTheFinestLayerThatSatisfiesSectionIVG) {
     for (int k = 0; k < S::kLayerCount; ++k) {
       const double w = stack->layer_cell_width(k);
       const bool quiet = w / std::sqrt(12.0) >= 2.0 * test_sigma(range);  // layer 0 by default too
-      const bool inside = range < 0.5 * S::layer_side(k) * w;
+      // Cell membership as documented (grid::index_of_position): floor(x * fl(1/w)), exact.
+      const double inv_w = static_cast<double>(1.0F / stack->layer_cell_width(k));
+      const bool inside = std::floor(static_cast<double>(p.x) * inv_w) < 0.5 * S::layer_side(k);
       if (quiet && inside) {
         expected = k;
         break;
@@ -294,6 +296,29 @@ TEST(StackQuery, PartlyCoveredCellIsUnknownAndTheCoarserLayerAnswers) {
   EXPECT_EQ(q0.status, Status::kOk) << "the 4 cm constant cell is fully observed";
 }
 
+TEST(StackQuery, PartlyCoveredCellWithAStepIsAnObstacleNotUnknown) {
+  // Only the near half of a 32 cm cell is seen (the obstacle's shadow hides the rest); the
+  // seen half holds a 0.75 w step over 40 % of it. Coverage (eq. 12) fails, but the seen
+  // points already exceed the threshold: obstacle evidence wins over "unknown".
+  StackParams params = default_stack_params(0.32F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<SingleCcmConfig>(params);
+  const float w = 0.32F;
+  const auto pts = grid_cloud(0.0F, 0.5F * w, 0.0F, w, 0.005F, [&](float x, float) { return x >= 0.3F * w ? 0.75F * w : 0.0F; });
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0, 0, 1}, nullptr), Status::kOk);
+  const CcmCell cell = stack->pooled_cell(0, CellIndex{0, 0});
+  ASSERT_FALSE(ccm_is_covered(cell, w, params.coverage_tau, params.min_weight)) << "test premise: half covered";
+  const QueryResult q = stack->query_layer(0, 0.1F, 0.1F);
+  EXPECT_EQ(q.status, Status::kOk) << "an obstacle is known even when partly covered";
+  EXPECT_EQ(q.cell_class, CellClass::kObstacle);
+  std::vector<CellRecord> records(Stack<SingleCcmConfig>::layer_capacity(0));
+  std::size_t written = 0;
+  ASSERT_EQ(stack->export_layer(0, records.data(), records.size(), &written), Status::kOk);
+  ASSERT_EQ(written, 1U);
+  EXPECT_EQ(records[0].cell_class, CellClass::kObstacle) << "normal variance " << records[0].normal_variance
+                                                         << " threshold " << stack->normal_variance_threshold(0);
+}
+
 TEST(StackQuery, ConstantLayerAnswersWithCcmHazards) {
   StackParams params = default_stack_params(0.04F);
   params.noise = precise_lidar();
@@ -322,7 +347,8 @@ TEST(StackQuery, SingleLayerBaselinesUseTheRoughnessFilter) {
   EXPECT_EQ(kalman->query(0.5F, 0.5F).cell_class, CellClass::kTraversable);
   EXPECT_EQ(omg->query(0.04F, 0.5F).cell_class, CellClass::kObstacle);
   EXPECT_EQ(omg->query(-0.5F, 0.5F).cell_class, CellClass::kTraversable);
-  EXPECT_NEAR(kalman->query(0.5F, 0.5F).height_m, 0.1, 1e-5);
+  // Kalman heights are fused in fixed point of w/256 (0.31 mm here): within half a unit.
+  EXPECT_NEAR(kalman->query(0.5F, 0.5F).height_m, 0.1, 0.08 / 256.0 / 2.0 + 1e-6);
   EXPECT_NEAR(omg->query(-0.5F, 0.5F).height_m, 0.0, 1e-5);
 }
 

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/core/status.hpp"
@@ -59,11 +60,33 @@ inline void kalman_update_unchecked(KalmanCell& cell, float z, float measurement
     return;
   }
   const float sum = cell.variance + measurement_variance;        // > 0
-  const float gain = cell.variance / sum;                        // Kalman gain
+  const float gain = cell.variance / sum;                        // Kalman gain K = P / (P + R)
   cell.height += gain * (z - cell.height);
-  const float variance = cell.variance * measurement_variance / sum;
+  const float variance = gain * measurement_variance;            // P R / (P + R) = K R
   cell.variance = variance > min_variance ? variance : min_variance;
   cell.weight += 1.0F;
+}
+
+/// n measurements of one frame with the same variance R fused at once: the Kalman update with
+/// their mean and variance R / n, which equals n sequential updates with variance R in real
+/// arithmetic while the floor does not engage (the floor then acts once per batch, not per
+/// measurement). n == 1 is kalman_update_unchecked exactly.
+inline void kalman_update_batch_unchecked(KalmanCell& cell, float mean_z, float measurement_variance,
+                                          std::uint32_t n, float min_variance) noexcept {
+  const float count = static_cast<float>(n);
+  const float batch_variance = n == 1U ? measurement_variance : measurement_variance / count;
+  if (!(cell.weight > 0.0F)) {
+    cell.height = mean_z;
+    cell.variance = batch_variance > min_variance ? batch_variance : min_variance;
+    cell.weight = count;
+    return;
+  }
+  const float sum = cell.variance + batch_variance;
+  const float gain = cell.variance / sum;
+  cell.height += gain * (mean_z - cell.height);
+  const float variance = gain * batch_variance;
+  cell.variance = variance > min_variance ? variance : min_variance;
+  cell.weight += count;
 }
 
 inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_variance, float w,

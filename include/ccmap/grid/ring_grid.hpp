@@ -100,7 +100,9 @@ class RingGrid {
     // int64: index - min spans up to 2^31 + 2^30 for arbitrary int32 input.
     const std::int64_t rx = std::int64_t{index.x} - std::int64_t{min_.x};
     const std::int64_t ry = std::int64_t{index.y} - std::int64_t{min_.y};
-    return rx >= 0 && rx < side_ && ry >= 0 && ry < side_;
+    // Unsigned: a negative offset wraps above side, so one compare per axis.
+    const auto side = static_cast<std::uint64_t>(side_);
+    return static_cast<std::uint64_t>(rx) < side && static_cast<std::uint64_t>(ry) < side;
   }
 
   /// The cell at a global index; nullptr when outside the window (or not initialised).

@@ -16,6 +16,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
+#include <cstring>
 
 namespace ccmap {
 
@@ -72,37 +74,80 @@ inline constexpr std::int32_t kMaxSide = std::int32_t{1} << 15;
          static_cast<std::size_t>(wrap(index.x, side_pow2));
 }
 
+namespace detail {
+/// floor(v * mult * 2^-q) for the float v with bit pattern `bits`, in integer operations only,
+/// exact: the product of the 24-bit significand and mult (< 2^39) is formed in 64 bits, signed,
+/// and shifted arithmetically (which floors negative values). Precondition for a meaningful
+/// result: v finite and 150 + q - exponent(v) >= 0, i.e. |v * mult * 2^-q| below 2^(63-24)
+/// or so (callers check the magnitude first; a negative shift is undefined behaviour, so
+/// they must); shifts beyond 63 saturate (tiny v: 0 or -1).
+[[nodiscard]] inline std::int64_t floor_scaled_bits(std::uint32_t bits, std::uint64_t mult, std::int32_t q) noexcept {
+  const std::uint32_t biased = (bits >> 23) & 0xFFU;
+  const std::uint64_t significand =
+      (bits & 0x7FFFFFU) | (static_cast<std::uint64_t>(biased != 0U) << 23);  // subnormal: no implicit bit
+  const std::int32_t exponent = static_cast<std::int32_t>(biased) + static_cast<std::int32_t>(biased == 0U);
+  const std::int32_t shift = 150 + q - exponent;  // v = significand * 2^(exponent - 150); >= 0 by precondition
+  const auto product = static_cast<std::int64_t>(significand * mult);
+  const std::int64_t sign = -static_cast<std::int64_t>(bits >> 31);  // 0 or -1
+  const std::int64_t signed_product = (product ^ sign) - sign;
+  // Arithmetic shift: floor (gcc/clang; standard since C++20); beyond 63 the result is 0 or -1.
+  return signed_product >> (shift > 63 ? 63 : shift);
+}
+
+[[nodiscard]] inline std::uint32_t float_bits(float v) noexcept {
+  std::uint32_t u = 0U;
+  std::memcpy(&u, &v, sizeof u);
+  return u;
+}
+}  // namespace detail
+
+/// floor(x * c) of the exact (unrounded) product, for finite x and a positive normal c with
+/// |x * c| < 2^40: integer operations only. The float expression std::floor(x * c) rounds the
+/// product first and may land one cell up within ~2^-24 |x c| below an integer; this does not.
+[[nodiscard]] inline std::int64_t exact_floor_mul(float x, float c) noexcept {
+  const std::uint32_t c_bits = detail::float_bits(c);
+  const auto c_exponent = static_cast<std::int32_t>((c_bits >> 23) & 0xFFU);
+  const std::uint64_t c_significand = (c_bits & 0x7FFFFFU) | 0x800000U;
+  return detail::floor_scaled_bits(detail::float_bits(x), c_significand, 150 - c_exponent);
+}
+
 /// Global index of the cell holding the map-frame position (x, y) metres:
-/// floor(x * inv_cell_width), floor(y * inv_cell_width).
+/// floor(x * inv_cell_width), floor(y * inv_cell_width), of the exact product.
 ///
 /// Returns false, and leaves *out untouched, if out is nullptr, if x or y is NaN or infinite,
-/// if inv_cell_width is not > 0 (NaN included), or if an index would leave
+/// if inv_cell_width is not a positive normal float (NaN included), or if an index would leave
 /// [-kMaxCellIndex, kMaxCellIndex].
 ///
-/// Float precision limit: the product x * inv_cell_width is rounded, and inv_cell_width is
-/// itself the rounded 1/w (0.1 m, 0.2 m, ... are not floats). The relative error of the
-/// product is below 2^-23, so a position within about 2^-23 * |x| of a cell boundary
-/// (1.2e-7 * |x|: 12 um at 100 m) may be put into the neighbouring cell: off by one, never
-/// more. For power-of-two widths (0.125 m, 0.25 m, ...) the result is exact, except that a
-/// negative x so small that the product underflows to -0 (|x * inv_cell_width| < 2^-150, i.e.
-/// subnormal positions) lands in cell 0 instead of -1. Beyond |x / w| = 2^23 consecutive
-/// floats are a cell or more apart, so not every cell can be named by a position (the map
-/// frame is local: see kMaxAbsCoordinateM in cell/ccm_cell.hpp).
+/// Precision limit: inv_cell_width is the rounded 1/w (0.1 m, 0.2 m, ... are not floats), a
+/// relative error below 2^-24, so a position within about 2^-24 * |x| of a cell boundary
+/// (6 um at 100 m) may be put into the neighbouring cell of the true 1/w: off by one, never
+/// more. For power-of-two widths (0.125 m, 0.25 m, ...) the result is exact. The product
+/// itself is not rounded (exact_floor_mul), so the map update (map/frame_chunk.hpp) and
+/// every query name the same cell for a position, edges included. Beyond |x / w| = 2^23
+/// consecutive floats are a cell or more apart, so not every cell can be named by a position
+/// (the map frame is local: see kMaxAbsCoordinateM in cell/ccm_cell.hpp).
 /// Tested in tests/grid/ring_index_test.cpp (IndexOfPosition.FloatRoundingLimitNearEdges).
 [[nodiscard]] inline bool index_of_position(float x, float y, float inv_cell_width,
                                             CellIndex* out) noexcept {
-  if (out == nullptr || !(inv_cell_width > 0.0F)) {
+  if (out == nullptr || !(inv_cell_width >= std::numeric_limits<float>::min()) ||
+      !(inv_cell_width <= std::numeric_limits<float>::max())) {
     return false;
   }
-  const float fx = std::floor(x * inv_cell_width);
-  const float fy = std::floor(y * inv_cell_width);
-  // 2^30 is exact in float; NaN fails every comparison, +-Inf fails one of them.
-  constexpr float kLimit = static_cast<float>(kMaxCellIndex);
-  if (!(fx >= -kLimit && fx <= kLimit && fy >= -kLimit && fy <= kLimit)) {
+  // Gate in float (NaN fails every comparison, +-Inf one of them); 2^30 + 2 leaves room for
+  // the exact floor below to be checked against the limit itself.
+  constexpr float kGate = static_cast<float>(kMaxCellIndex) + 2.0F;
+  const float fx = x * inv_cell_width;
+  const float fy = y * inv_cell_width;
+  if (!(fx >= -kGate && fx <= kGate && fy >= -kGate && fy <= kGate)) {
     return false;
   }
-  out->x = static_cast<std::int32_t>(fx);  // exact: an integral float within +-2^30
-  out->y = static_cast<std::int32_t>(fy);
+  const std::int64_t ix = exact_floor_mul(x, inv_cell_width);
+  const std::int64_t iy = exact_floor_mul(y, inv_cell_width);
+  if (ix < -kMaxCellIndex || ix > kMaxCellIndex || iy < -kMaxCellIndex || iy > kMaxCellIndex) {
+    return false;
+  }
+  out->x = static_cast<std::int32_t>(ix);
+  out->y = static_cast<std::int32_t>(iy);
   return true;
 }
 

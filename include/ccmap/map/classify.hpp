@@ -8,7 +8,7 @@
 namespace ccmap {
 
 /// kOk if the parameters describe a usable stack of `layer_count` layers: finite, positive
-/// width (<= 100 m), W_l > 0, tau in (0, 1], min_weight >= 0, obstacle_fraction in (0, 4],
+/// width (0.19 mm = kMaxAbsCoordinateM / 2^29 <= width, coarsest <= 100 m), W_l > 0, tau in (0, 1], min_weight >= 0, obstacle_fraction in (0, 4],
 /// max_inclination > 0, kalman_min_variance > 0, finite thresholds, a valid noise model.
 /// Otherwise kInvalidArgument or kNonFiniteInput.
 [[nodiscard]] Status validate_stack_params(const StackParams& params, int layer_count) noexcept;
@@ -20,8 +20,9 @@ namespace ccmap {
 /// step of obstacle_fraction * width at 50 % coverage (Section IV-E).
 [[nodiscard]] float layer_threshold(const StackParams& params, int layer, float width) noexcept;
 
-/// Class of a (pooled) CCM cell: unknown unless covered (eq. 12, min weight), obstacle if
-/// sigma_s^2 > threshold, steep if the inclination exceeds the maximum, else traversable.
+/// Class of a (pooled) CCM cell: unknown below min_weight; obstacle if sigma_s^2 > threshold
+/// (even when partly covered: the seen points already prove the step); unknown if not covered
+/// (eq. 12); steep if the inclination exceeds the maximum; else traversable.
 [[nodiscard]] CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& params,
                                      float threshold) noexcept;
 

@@ -64,22 +64,23 @@ struct SingleOmgConfig {
 inline constexpr int kMaxLayers = 8;
 
 /// Run-time parameters of a stack. Start from default_stack_params() and change what you need.
+/// Every member starts at zero (init() refuses such params), never uninitialised.
 struct StackParams {
-  float finest_cell_width_m;    ///< width of layer 0; layer k is 2^k times wider
-  float weight_limit;           ///< W_l of CCM and OMG cells (eqs. 6-7)
-  float coverage_tau;           ///< tau of eq. (12), paper: 0.8
-  float min_weight;             ///< a cell with less accumulated weight is unknown
-  float obstacle_fraction;      ///< minimum obstacle height as a share of the cell width (paper: 0.75)
-  float max_inclination;        ///< steeper gradients (dz/dxy, not degrees) are kSteep
-  float kalman_min_variance;    ///< variance floor of Kalman cells (m^2)
+  float finest_cell_width_m = 0.0F;   ///< width of layer 0; layer k is 2^k times wider
+  float weight_limit = 0.0F;          ///< W_l of CCM and OMG cells (eqs. 6-7)
+  float coverage_tau = 0.0F;          ///< tau of eq. (12), paper: 0.8
+  float min_weight = 0.0F;            ///< a cell with less accumulated weight is unknown
+  float obstacle_fraction = 0.0F;     ///< minimum obstacle height as a share of the cell width (paper: 0.75)
+  float max_inclination = 0.0F;       ///< steeper gradients (dz/dxy, not degrees) are kSteep
+  float kalman_min_variance = 0.0F;   ///< variance floor of Kalman cells (m^2)
   /// Normal-variance thresholds (m^2) per layer; a value <= 0 means "calibrate at init" from
   /// obstacle_fraction (Section IV-E: step of the minimum height at 50 % coverage).
-  std::array<float, kMaxLayers> normal_variance_threshold;
+  std::array<float, kMaxLayers> normal_variance_threshold{};
   /// Finest (piece-wise constant) layer: largest range sigma_m it accepts (m). Section IV-G
   /// constrains CCM layers only; the default is the layer's own IV-G bound
   /// (sensor::constant_layer_max_sigma). Must stay below layer 1's IV-G bound.
-  float finest_max_sigma_m;
-  sensor::NoiseModel noise;     ///< routes points and gives their weight and variance
+  float finest_max_sigma_m = 0.0F;
+  sensor::NoiseModel noise;           ///< routes points and gives their weight and variance
 };
 
 /// CADRE defaults: W_l = 1000, tau = 0.8, min weight 5, obstacles at 75 % of a cell,

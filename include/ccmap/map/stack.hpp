@@ -27,6 +27,7 @@
 #include "ccmap/grid/ring_grid.hpp"
 #include "ccmap/map/classify.hpp"
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/frame_chunk.hpp"
 #include "ccmap/map/types.hpp"
 #include "ccmap/platform/platform.hpp"
 #include "ccmap/sensor/noise_model.hpp"
@@ -56,6 +57,12 @@ constexpr bool all_valid_sides(const std::array<std::int32_t, N>& sides) noexcep
 void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept;
 }  // namespace detail
 
+// ---- snapshot access (map/snapshot.hpp) ----
+namespace detail {
+template <typename Config>
+struct SnapshotAccess;  // defined in map/snapshot.hpp: save/load read and restore the raw state
+}  // namespace detail
+
 template <typename Config>
 class Stack {
  public:
@@ -81,6 +88,7 @@ class Stack {
   Stack& operator=(const Stack&) = delete;
   Stack(Stack&&) = delete;
   Stack& operator=(Stack&&) = delete;
+  ~Stack() = default;
 
   // -------------------------------------------------------------------------------------------
   // Set-up
@@ -123,6 +131,9 @@ class Stack {
     }
     for (int layer = 0; layer < kLayerCount; ++layer) {
       thresholds_[layer] = layer_threshold(params_, layer, widths_[layer]);
+    }
+    if (init_update_path() != Status::kOk) {
+      return Status::kInvalidArgument;
     }
     totals_ = FrameCounters{};
     rejected_moves_ = 0U;
@@ -169,8 +180,21 @@ class Stack {
   /// noise; rejected points are counted by reason in `counters` (may be nullptr) and in
   /// total_counters(). Refused as a whole: null points with n > 0 (kInvalidArgument),
   /// non-finite sensor origin (kNonFiniteInput).
+  /// The frame is processed in chunks of detail::kFrameChunkPoints (scratch inside the stack,
+  /// no heap); the cells end bitwise as update_frame_sequential leaves them
+  /// (tests/map/update_path_test.cpp).
   [[nodiscard]] Status update_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
                                     FrameCounters* counters) noexcept {
+    return update_frame(points, nullptr, n, sensor_origin, counters);
+  }
+
+  /// Same, with a weight per point (the w_t of eq. (1), e.g. from a PLY's confidence):
+  /// weights[i] replaces the noise model's weight for points[i]; weights == nullptr means the
+  /// noise model's weight. A weight that is not in (0, kMaxMeasurementWeight] (NaN included)
+  /// refuses its point, counted as rejected_weight. Kalman cells ignore weights (their gain comes
+  /// from the range variance); CCM and OMG cells use them.
+  [[nodiscard]] Status update_frame(const PointXYZ* points, const float* weights, std::size_t n,
+                                    const PointXYZ& sensor_origin, FrameCounters* counters) noexcept {
     FrameCounters frame{};
     const Status status = check_frame(points, n, sensor_origin);
     if (status != Status::kOk) {
@@ -180,9 +204,7 @@ class Stack {
     }
     const std::uint64_t start = platform::monotonic_ns();
     frame.received = static_cast<std::uint32_t>(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      insert_point(points[i], sensor_origin, frame);
-    }
+    run_frame(points, weights, n, sensor_origin, nullptr, frame);
     finish_frame(frame, start, counters);
     return Status::kOk;
   }
@@ -204,13 +226,32 @@ class Stack {
     const std::uint64_t start = platform::monotonic_ns();
     frame.received = static_cast<std::uint32_t>(n);
     const Eigen::Matrix3f& r = sensor_pose.rotation;
-    for (std::size_t i = 0; i < n; ++i) {
-      const PointXYZ& p = points[i];
-      const PointXYZ q{r(0, 0) * p.x + r(0, 1) * p.y + r(0, 2) * p.z + origin.x,
-                       r(1, 0) * p.x + r(1, 1) * p.y + r(1, 2) * p.z + origin.y,
-                       r(2, 0) * p.x + r(2, 1) * p.y + r(2, 2) * p.z + origin.z};
-      insert_point(q, origin, frame);
+    const detail::ChunkTransform transform{{r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)},
+                                           {origin.x, origin.y, origin.z}};
+    run_frame(points, nullptr, n, origin, &transform, frame);
+    finish_frame(frame, start, counters);
+    return Status::kOk;
+  }
+
+  /// The reference update: the same contract as update_frame (weights may be nullptr), one
+  /// point after the other through routing and one cell update, without chunking. Slower; kept
+  /// as the definition the fast path is tested against (tests/map/update_path_test.cpp).
+  [[nodiscard]] Status update_frame_sequential(const PointXYZ* points, const float* weights, std::size_t n,
+                                               const PointXYZ& sensor_origin, FrameCounters* counters) noexcept {
+    FrameCounters frame{};
+    const Status status = check_frame(points, n, sensor_origin);
+    if (status != Status::kOk) {
+      ++rejected_frames_;
+      write_counters(frame, counters);
+      return status;
     }
+    const std::uint64_t start = platform::monotonic_ns();
+    frame.received = static_cast<std::uint32_t>(n);
+    detail::set_front_origin(front_, sensor_origin);
+    for (std::size_t i = 0; i < n; ++i) {
+      insert_point(points[i], weights != nullptr ? weights + i : nullptr, frame);
+    }
+    finish_fine_frame();
     finish_frame(frame, start, counters);
     return Status::kOk;
   }
@@ -220,7 +261,8 @@ class Stack {
   // -------------------------------------------------------------------------------------------
 
   /// Answer from the finest layer that knows the cell at (x, y): a piece-wise constant cell
-  /// with at least min_weight, or a (pooled) CCM cell that passes the coverage test (eq. 12).
+  /// with at least min_weight, or a (pooled) CCM cell that passes the coverage test (eq. 12)
+  /// or is an obstacle (see classify_ccm).
   /// For an answer from the piece-wise constant layer, height and elevation variance come from
   /// it and slope, normal variance and class from the first CCM layer's pooled cell there when
   /// that is covered (hazards are a CCM matter); otherwise the roughness filter classifies.
@@ -270,7 +312,10 @@ class Stack {
   /// The CCM statistics of a CCM layer's cell as a query sees them: the cell's own points
   /// merged with the pooled finer layers (Section IV-F), recursively. Zero cell outside.
   [[nodiscard]] CcmCell pooled_cell(int layer, CellIndex index) const noexcept {
-    if (!initialised_ || layer < kFineLayerCount || layer >= kLayerCount) {
+    // Outside the window: the zero cell, before pooled() forms the child index 2 * index (an
+    // arbitrary index would overflow int32 and alias cells near the origin).
+    if (!initialised_ || layer < kFineLayerCount || layer >= kLayerCount ||
+        !ccm_[layer - kFineLayerCount].contains(index)) {
       return CcmCell{};
     }
     return pooled(layer, index);
@@ -364,6 +409,12 @@ class Stack {
   [[nodiscard]] const RingGrid<CcmCell>& ccm_layer(int ccm_index) const noexcept { return ccm_[ccm_index]; }
   [[nodiscard]] const RingGrid<FineCell>& fine_layer() const noexcept { return fine_; }
 
+  // ---- snapshot access (map/snapshot.hpp) ----
+  // save_snapshot / load_snapshot read and restore the private state through this friend only;
+  // a new state member must be added to the snapshot format (map/snapshot.hpp) as well.
+  friend struct detail::SnapshotAccess<Config>;
+  // ---- end of snapshot access ----
+
  private:
   // ---- frame helpers ----
   [[nodiscard]] Status check_frame(const PointXYZ* points, std::size_t n, const PointXYZ& origin) const noexcept {
@@ -392,43 +443,83 @@ class Stack {
     }
   }
 
-  void insert_point(const PointXYZ& p, const PointXYZ& origin, FrameCounters& frame) noexcept {
-    const Status point_status = ccm_check_point(p.x, p.y, p.z);
-    if (point_status != Status::kOk) {
-      if (point_status == Status::kNonFiniteInput) {
-        ++frame.rejected_non_finite;
-      } else {
-        ++frame.rejected_out_of_range;
+  /// The per-point path (update_frame_sequential): `weight` points at the caller's weight for
+  /// this point, or is nullptr for the noise model's weight.
+  void insert_point(const PointXYZ& p, const float* weight_in, FrameCounters& frame) noexcept {
+    const detail::PointFront front = detail::update_point_front(p.x, p.y, p.z, front_);
+    apply_point(p, front, weight_in, weight_in == nullptr && constant_weight_, frame);
+  }
+
+  // ---- the chunked update path (update_frame, update_frame_sensor) ----
+  /// Front half per chunk (detail::prepare_chunk: transform, validation, range, routing,
+  /// finest index), back half (apply_point: window walk and one cell update per point), then
+  /// the frame's piece-wise constant batches (finish_fine_frame).
+  void run_frame(const PointXYZ* points, const float* weights, std::size_t n, const PointXYZ& origin,
+                 const detail::ChunkTransform* transform, FrameCounters& frame) noexcept {
+    detail::set_front_origin(front_, origin);
+    const bool unit_weights = weights == nullptr && constant_weight_;
+    if (transform == nullptr) {
+      // Map-frame input: one pass, front and cell per point, no scratch traffic.
+      for (std::size_t i = 0; i < n; ++i) {
+        const PointXYZ& p = points[i];
+        apply_point(p, detail::update_point_front(p.x, p.y, p.z, front_), weights != nullptr ? weights + i : nullptr,
+                    unit_weights, frame);
       }
-      return;
-    }
-    const float dx = p.x - origin.x;
-    const float dy = p.y - origin.y;
-    const float dz = p.z - origin.z;
-    const float range_sq = dx * dx + dy * dy + dz * dz;
-    int layer = routing_.select(range_sq);
-    if (layer < 0) {
-      ++frame.too_noisy;
-      return;
-    }
-    const float weight = params_.noise.weight_at_range_sq(range_sq);
-    if (ccm_check_weight(weight) != Status::kOk) {
-      ++frame.rejected_weight;
-      return;
-    }
-    for (; layer < kLayerCount; ++layer) {
-      CellIndex index{};
-      if (!locate(layer, p.x, p.y, &index)) {
-        continue;
+    } else {
+      for (std::size_t begin = 0; begin < n; begin += detail::kFrameChunkPoints) {
+        const std::size_t count = n - begin < detail::kFrameChunkPoints ? n - begin : detail::kFrameChunkPoints;
+        detail::prepare_chunk(points + begin, count, transform, front_, chunk_);
+        for (std::size_t i = 0; i < count; ++i) {
+          const detail::PointFront front{chunk_.code[i], chunk_.ix[i], chunk_.iy[i], chunk_.range_units_sq[i],
+                                         chunk_.z_units[i]};
+          apply_point(PointXYZ{chunk_.x[i], chunk_.y[i], chunk_.z[i]}, front,
+                      weights != nullptr ? weights + begin + i : nullptr, unit_weights, frame);
+        }
       }
+    }
+    finish_fine_frame();
+  }
+
+  /// Back half for one routed point. The layer walk uses index_k = index_0 >> k (floor
+  /// division by 2^k): widths are w_0 * 2^k exactly and 1/w_k = (1/w_0) * 2^-k exactly in
+  /// float, so floor(x / w_k) = floor(floor(x / w_0) / 2^k), the index locate() computes. (>>
+  /// of a negative int32 is an arithmetic shift with gcc and clang, the floor division; C++20
+  /// makes it standard.)
+  void apply_point(const PointXYZ& p, const detail::PointFront& front, const float* weight_in, bool unit_weights,
+                   FrameCounters& frame) noexcept {
+    const std::uint32_t code = front.code;
+    if (code >= detail::kChunkNonFinite) {
+      frame.rejected_non_finite += code == detail::kChunkNonFinite ? 1U : 0U;
+      frame.rejected_out_of_range += code == detail::kChunkOutOfRange ? 1U : 0U;
+      frame.too_noisy += code == detail::kChunkTooNoisy ? 1U : 0U;
+      return;
+    }
+    float weight = 1.0F;  // the constant model's weight: always valid
+    if (!unit_weights) {
+      weight = weight_in != nullptr ? *weight_in
+                                    : params_.noise.weight_at_range_sq(detail::to_range_sq_m2(front.range_units_sq, front_));
+      if (ccm_check_weight(weight) != Status::kOk) {
+        ++frame.rejected_weight;
+        return;
+      }
+    }
+    for (int layer = static_cast<int>(code); layer < kLayerCount; ++layer) {
+      const CellIndex index{front.ix0 >> layer, front.iy0 >> layer};
       if (layer_is_ccm(layer)) {
+        RingGrid<CcmCell>& layer_grid = ccm_[layer - kFineLayerCount];
+        if (!layer_grid.contains(index)) {
+          continue;
+        }
         const float width = widths_[layer];
-        CcmCell& cell = ccm_[layer - kFineLayerCount].cell_unchecked(index);
-        detail::ccm_update_unchecked(cell, p.x - grid::cell_centre(index.x, width),
-                                     p.y - grid::cell_centre(index.y, width), p.z, weight,
-                                     params_.weight_limit);
+        detail::ccm_update_unchecked(layer_grid.cell_unchecked(index), p.x - grid::cell_centre(index.x, width),
+                                     p.y - grid::cell_centre(index.y, width), p.z, weight, params_.weight_limit);
       } else {
-        update_fine(index, p.z, range_sq, weight);
+        if constexpr (kHasFine) {
+          if (!fine_.contains(index)) {
+            continue;
+          }
+        }
+        fine_point(index, p.z, front, weight);
       }
       ++frame.used;
       return;
@@ -436,25 +527,79 @@ class Stack {
     ++frame.outside_map;
   }
 
-  void update_fine(CellIndex index, float z, float range_sq, float weight) noexcept {
-    if constexpr (kHasFine) {
-      const float sigma = params_.noise.sigma_at_range_sq(range_sq);
-      float variance = sigma * sigma;
-      if (!(variance >= params_.kalman_min_variance)) {
-        variance = params_.kalman_min_variance;  // also catches NaN
+  /// Measurement variance (m^2) of the piece-wise constant layer at squared range r^2 (m^2):
+  /// sigma_m(r)^2, at least kalman_min_variance (which also catches NaN).
+  [[nodiscard]] float fine_measurement_variance(float range_sq) const noexcept {
+    // Stereo: sigma = k r^2 inline, the value sigma_at_range_sq returns for the finite
+    // positive ranges that routing lets through; other models call it.
+    const float sigma = stereo_k_ >= 0.0F ? stereo_k_ * range_sq : params_.noise.sigma_at_range_sq(range_sq);
+    const float variance = sigma * sigma;
+    return variance >= params_.kalman_min_variance ? variance : params_.kalman_min_variance;
+  }
+
+  /// One point for the piece-wise constant layer. Kalman: the frame's points of a cell are
+  /// collected in integers (count, heights and squared ranges in FixedFront units: no float
+  /// operation per point) and fused once per frame by finish_fine_frame: n measurements of the
+  /// variance at the cell's mean squared range, i.e. one update with their mean and R / n
+  /// (docs/design.md, "Frame batches"). OMG: one update per point.
+  void fine_point(CellIndex index, float z, const detail::PointFront& front, float weight) noexcept {
+    if constexpr (Config::kFineKind == FineKind::kKalman) {
+      const std::size_t slot = grid::buffer_offset(index, Config::kFineSide);
+      FineFrameSum& sum = fine_sums_[slot];
+      if (sum.count == 0U) {
+        sum.z_ref_units = front.z_units;
+        sum.sum_dz_units = 0;
+        sum.sum_range_units_sq = 0U;
+        fine_touched_[fine_touched_count_++] = static_cast<std::uint32_t>(slot);
       }
-      FineCell& cell = fine_.cell_unchecked(index);
-      if constexpr (Config::kFineKind == FineKind::kOmg) {
-        detail::omg_update_unchecked(cell, z, variance, weight, params_.weight_limit);
-      } else {
-        detail::kalman_update_unchecked(cell, z, variance, params_.kalman_min_variance);
-      }
+      ++sum.count;
+      sum.sum_dz_units += front.z_units - sum.z_ref_units;  // |each| <= 2^31: no overflow in 2^32 points
+      const auto r = static_cast<std::uint64_t>(front.range_units_sq);
+      sum.sum_range_units_sq = sum.sum_range_units_sq > UINT64_MAX - r ? UINT64_MAX : sum.sum_range_units_sq + r;
+      (void)z;
+      (void)weight;
+    } else if constexpr (Config::kFineKind == FineKind::kOmg) {
+      const float variance = fine_measurement_variance(detail::to_range_sq_m2(front.range_units_sq, front_));
+      detail::omg_update_unchecked(fine_.cell_unchecked(index), z, variance, weight, params_.weight_limit);
     } else {
       (void)index;
       (void)z;
-      (void)range_sq;
+      (void)front;
       (void)weight;
     }
+  }
+
+  /// Fuses each touched Kalman cell's batch of this frame and clears the batches.
+  void finish_fine_frame() noexcept {
+    if constexpr (Config::kFineKind == FineKind::kKalman) {
+      KalmanCell* cells = fine_.storage();
+      for (std::uint32_t t = 0; t < fine_touched_count_; ++t) {
+        const std::uint32_t slot = fine_touched_[t];
+        FineFrameSum& sum = fine_sums_[slot];
+        const float count = static_cast<float>(sum.count);
+        // Heights were floored to the unit: + 0.5 unit removes that bias (the quantisation
+        // error is uniform, sigma = unit / sqrt(12) = 0.045 mm for 4 cm cells). Exact while
+        // |z| < 2^24 units (2.6 km above the stack origin for 4 cm cells).
+        const float mean_z = (static_cast<float>(sum.z_ref_units) + static_cast<float>(sum.sum_dz_units) / count + 0.5F) *
+                             front_.range_unit_m;
+        const std::uint64_t mean_units = sum.sum_range_units_sq / sum.count;
+        const float variance = fine_measurement_variance(
+            detail::to_range_sq_m2(static_cast<std::int64_t>(mean_units > INT64_MAX ? INT64_MAX : mean_units), front_));
+        detail::kalman_update_batch_unchecked(cells[slot], mean_z, variance, sum.count, params_.kalman_min_variance);
+        sum.count = 0U;
+      }
+      fine_touched_count_ = 0U;
+    }
+  }
+
+  /// Derived at init for both update paths: the fixed-point front (scale and routing bounds),
+  /// constant weights, the stereo sigma factor.
+  [[nodiscard]] Status init_update_path() noexcept {
+    const Status status = detail::make_fixed_front(widths_[0], routing_.max_range_sq, kLayerCount, &front_);
+    constant_weight_ = params_.noise.weight_mode() == sensor::WeightMode::kConstant;
+    const bool stereo = params_.noise.kind() == sensor::SensorKind::kStereo && params_.noise.validate() == Status::kOk;
+    stereo_k_ = stereo ? params_.noise.stereo_sigma_per_range_sq() : -1.0F;
+    return status;
   }
 
   [[nodiscard]] Status move_fine(CellIndex centre) noexcept {
@@ -546,7 +691,9 @@ class Stack {
     out.cell_width_m = width;
     if (layer_is_ccm(layer)) {
       const CcmCell cell = pooled(layer, index);
-      const bool known = ccm_is_covered(cell, width, params_.coverage_tau, params_.min_weight);
+      // Known: covered (eq. 12), or an obstacle already (classify_ccm: obstacle evidence wins).
+      const CellClass cell_class = classify_ccm(cell, width, params_, thresholds_[layer]);
+      const bool known = cell_class != CellClass::kUnknown;
       if (require_known && !known) {
         return empty_result(Status::kUnknown, layer);
       }
@@ -560,7 +707,7 @@ class Stack {
       out.inclination = ccm_inclination(surface);
       out.normal_variance = surface.normal_variance;
       out.elevation_variance = ccm_elevation_variance(cell, surface, qx, qy);
-      out.cell_class = classify_ccm(cell, width, params_, thresholds_[layer]);
+      out.cell_class = cell_class;
       return out;
     }
     if constexpr (kHasFine) {
@@ -645,6 +792,22 @@ class Stack {
   std::uint32_t rejected_frames_ = 0U;
   std::uint64_t last_update_ns_ = 0U;
   bool initialised_ = false;
+  // ---- update-path scratch and derived constants (not map state: not in snapshots) ----
+  detail::FrameChunk chunk_{};
+  detail::FixedFront front_{};
+  /// Per-frame batch of a Kalman cell (all zero between frames).
+  struct FineFrameSum {
+    std::uint32_t count;
+    std::int64_t z_ref_units;          ///< first height of the frame in the cell (range units)
+    std::int64_t sum_dz_units;         ///< sum of (z - z_ref) in range units
+    std::uint64_t sum_range_units_sq;  ///< saturating sum of squared ranges (range units^2)
+  };
+  static constexpr std::size_t kFineBatchSlots = Config::kFineKind == FineKind::kKalman ? kFineCellCount : 1U;
+  FineFrameSum fine_sums_[kFineBatchSlots]{};
+  std::uint32_t fine_touched_[kFineBatchSlots]{};
+  std::uint32_t fine_touched_count_ = 0U;
+  bool constant_weight_ = true;
+  float stereo_k_ = -1.0F;  ///< stereo sigma per range^2 (1/m), -1 for other models
 };
 
 }  // namespace ccmap

@@ -118,6 +118,9 @@ class NoiseModel {
   [[nodiscard]] float reference_range_m() const noexcept { return reference_range_m_; }
   /// Stereo: k = sigma_d / (f * b) (1/m), so that sigma = k * r^2. 0 for lidar.
   [[nodiscard]] float stereo_sigma_per_range_sq() const noexcept { return stereo_k_; }
+  /// Lidar: sigma0 (m) and growth per metre (m/m) as given to lidar(). 0 for stereo.
+  [[nodiscard]] float lidar_sigma0_m() const noexcept { return lidar_sigma0_m_; }
+  [[nodiscard]] float lidar_sigma_per_m() const noexcept { return lidar_sigma_per_m_; }
 
  private:
   SensorKind kind_ = SensorKind::kStereo;

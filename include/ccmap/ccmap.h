@@ -1,0 +1,275 @@
+/* ccmap C API: the map stack for C (C99) and other-language flight software.
+ *
+ * The map lives in storage the caller owns (static, or a memory pool handed over at set-up):
+ * nothing allocates, nothing throws, every call answers with a status. Two-phase life:
+ *
+ *   static ccmap_cadre_storage storage;                      // ~430 KB, aligned for the map
+ *   ccmap_map* map = NULL;
+ *   ccmap_params params;
+ *   if (ccmap_place(&storage, sizeof storage, CCMAP_PRESET_CADRE, &map) != CCMAP_OK) ...
+ *   ccmap_default_params(CCMAP_PRESET_CADRE, &params);      // then change what you need
+ *   if (ccmap_init(map, &params) != CCMAP_OK) ...
+ *   // run phase, every control cycle:
+ *   ccmap_move_to(map, robot_x, robot_y);
+ *   ccmap_update_frame(map, xyz, NULL, n, sensor_xyz, &frame_counters);
+ *   ccmap_query(map, x, y, &result);
+ *
+ * Units and frames are those of the C++ API (include/ccmap/map/types.hpp): metres in the map
+ * frame, relative to the stack origin chosen by the integrator (never absolute world
+ * coordinates). See docs/integration.md.
+ *
+ * Errors: a NULL pointer argument, a handle that was not produced by ccmap_place, or a bad
+ * enum value is answered with CCMAP_INVALID_ARGUMENT and changes nothing. Functions that
+ * return a number answer 0 for a bad handle.
+ *
+ * Thread safety: none inside; one map must not be used by two threads at once.
+ */
+#ifndef CCMAP_CCMAP_H
+#define CCMAP_CCMAP_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- status codes (the numeric values of ccmap::Status) ------------------------------------ */
+typedef enum ccmap_status {
+  CCMAP_OK = 0,
+  CCMAP_NON_FINITE_INPUT = 1,  /* NaN or Inf in a coordinate, pose or parameter */
+  CCMAP_OUT_OF_RANGE = 2,      /* finite but beyond the documented range */
+  CCMAP_BAD_WEIGHT = 3,        /* weight <= 0, NaN, Inf or too large */
+  CCMAP_OUTSIDE_MAP = 4,       /* position not covered by the map */
+  CCMAP_UNKNOWN = 5,           /* cell not observed or not adequately covered */
+  CCMAP_INVALID_ARGUMENT = 6,  /* NULL pointer, bad handle, inconsistent sizes, bad configuration */
+  CCMAP_BUFFER_TOO_SMALL = 7,  /* the caller's buffer cannot hold the result */
+  CCMAP_NOT_INITIALISED = 8,   /* map used before a successful ccmap_init or ccmap_load_snapshot */
+  CCMAP_CORRUPT = 9,           /* snapshot failed its integrity or validity checks */
+  CCMAP_VERSION_MISMATCH = 10, /* snapshot of another format version or another preset */
+  CCMAP_STATUS_MAX_ENUM_ = 0x7FFFFFFF /* not a status: keeps the enum 32 bits wide */
+} ccmap_status;
+
+/* Short, stable, lower-case name ("ok", "corrupt", ...); never NULL. */
+const char* ccmap_status_string(ccmap_status status);
+
+/* ---- presets (compile-time shapes, include/ccmap/map/config.hpp) --------------------------- */
+typedef enum ccmap_preset {
+  CCMAP_PRESET_CADRE = 0,          /* 4 cm Kalman 64^2, CCM 8/16/32/64 cm: 64^2, 64^2, 32^2, 32^2 */
+  CCMAP_PRESET_SINGLE_CCM = 1,     /* one CCM layer, 256^2 (8 cm default) */
+  CCMAP_PRESET_SINGLE_KALMAN = 2,  /* one Kalman layer, 256^2 (baseline) */
+  CCMAP_PRESET_SINGLE_OMG = 3,     /* one OMG layer, 256^2 (baseline) */
+  CCMAP_PRESET_MAX_ENUM_ = 0x7FFFFFFF /* not a preset: keeps the enum 32 bits wide */
+} ccmap_preset;
+
+#define CCMAP_MAX_LAYERS 8
+
+/* Storage for a map placed by ccmap_place. The sizes are upper bounds with headroom for future
+ * versions (the library checks at build time that its map fits); ccmap_storage_size() gives
+ * the exact figure. The unions give every target's maximum fundamental alignment (16 on
+ * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
+#define CCMAP_CADRE_STORAGE_SIZE 614400u          /* 600 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2424832u    /* 2368 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3211264u /* 3136 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 851968u     /* 832 KiB */
+#define CCMAP_STORAGE_ALIGN 16u
+
+#define CCMAP_DEFINE_STORAGE_(name, size) \
+  typedef union name { /* NOLINT(bugprone-macro-parentheses): a type name */ \
+    unsigned char bytes[size];            \
+    long double align_long_double;        \
+    uint64_t align_u64;                   \
+    void* align_pointer;                  \
+  } name
+CCMAP_DEFINE_STORAGE_(ccmap_cadre_storage, CCMAP_CADRE_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_ccm_storage, CCMAP_SINGLE_CCM_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_kalman_storage, CCMAP_SINGLE_KALMAN_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_omg_storage, CCMAP_SINGLE_OMG_STORAGE_SIZE);
+
+/* Exact bytes and alignment a map of `preset` needs; 0 for a bad preset. */
+size_t ccmap_storage_size(ccmap_preset preset);
+size_t ccmap_storage_align(ccmap_preset preset);
+size_t ccmap_cadre_storage_size(void);
+size_t ccmap_cadre_storage_align(void);
+
+/* Bytes of a snapshot of each preset (exact, fixed by the preset). */
+#define CCMAP_CADRE_SNAPSHOT_SIZE 418016u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2359488u
+#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786624u
+#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786624u
+
+/* ---- the map handle ------------------------------------------------------------------------- */
+typedef struct ccmap_map ccmap_map; /* opaque: lives at the start of the caller's storage */
+
+/* Constructs an empty, uninitialised map of `preset` in storage[0..storage_size) and writes its
+ * handle (== storage) to *out. The storage must stay valid and untouched while the map is used;
+ * placing again over the same storage starts afresh. No clean-up call is needed.
+ * CCMAP_INVALID_ARGUMENT: NULL storage or out, bad preset, storage not aligned to
+ * ccmap_storage_align(preset). CCMAP_BUFFER_TOO_SMALL: storage_size < ccmap_storage_size(preset). */
+ccmap_status ccmap_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_map** out);
+
+/* ---- parameters ----------------------------------------------------------------------------- */
+typedef enum ccmap_sensor_kind { CCMAP_SENSOR_STEREO = 0, CCMAP_SENSOR_LIDAR = 1 } ccmap_sensor_kind;
+typedef enum ccmap_weight_mode {
+  CCMAP_WEIGHT_CONSTANT = 0,         /* every point weighs 1 (the paper's configuration) */
+  CCMAP_WEIGHT_INVERSE_VARIANCE = 1  /* sigma_ref^2 / sigma(r)^2, 1 at reference_range_m */
+} ccmap_weight_mode;
+
+/* Range-noise model of the sensor (include/ccmap/sensor/noise_model.hpp). */
+typedef struct ccmap_noise_params {
+  int32_t sensor;                  /* ccmap_sensor_kind */
+  float stereo_focal_px;           /* stereo: sigma(r) = r^2 * disparity_sigma / (focal * baseline) */
+  float stereo_baseline_m;
+  float stereo_disparity_sigma_px;
+  float lidar_sigma0_m;            /* lidar: sigma(r) = sigma0 + sigma_per_m * r */
+  float lidar_sigma_per_m;
+  int32_t weight_mode;             /* ccmap_weight_mode */
+  float reference_range_m;         /* inverse-variance weighting only, > 0 */
+} ccmap_noise_params;
+
+/* Run-time parameters (ccmap::StackParams). Start from ccmap_default_params. */
+typedef struct ccmap_params {
+  float finest_cell_width_m;  /* layer 0 width; layer k is 2^k times wider */
+  float weight_limit;         /* W_l (eqs. 6-7); INFINITY = no limit */
+  float coverage_tau;         /* tau of eq. (12), paper: 0.8 */
+  float min_weight;           /* cells with less accumulated weight are unknown */
+  float obstacle_fraction;    /* minimum obstacle height as a share of the cell width */
+  float max_inclination;      /* steeper gradients (dz/dxy) are CCMAP_CLASS_STEEP */
+  float kalman_min_variance;  /* variance floor of Kalman cells (m^2) */
+  float normal_variance_threshold[CCMAP_MAX_LAYERS]; /* m^2 per layer; <= 0: calibrate at init */
+  float finest_max_sigma_m;   /* largest range sigma the constant finest layer takes (m);
+                                 derived from the width: use ccmap_default_params_for_width
+                                 when changing finest_cell_width_m */
+  ccmap_noise_params noise;
+} ccmap_params;
+
+/* CADRE defaults for the preset's default finest width (CADRE: 4 cm, single layers: 8 cm).
+ * CCMAP_INVALID_ARGUMENT: NULL out or bad preset. */
+ccmap_status ccmap_default_params(ccmap_preset preset, ccmap_params* out);
+/* The same defaults for another finest cell width (m). */
+ccmap_status ccmap_default_params_for_width(float finest_cell_width_m, ccmap_params* out);
+
+/* Validates the parameters and (re)initialises the map: every layer centred on the origin and
+ * empty. On failure the map is uninitialised (CCMAP_NOT_INITIALISED for every other call). */
+ccmap_status ccmap_init(ccmap_map* map, const ccmap_params* params);
+
+/* ---- run phase ------------------------------------------------------------------------------ */
+/* What happened to the points of one frame (ccmap::FrameCounters). */
+typedef struct ccmap_frame_counters {
+  uint32_t received;
+  uint32_t used;
+  uint32_t rejected_non_finite;
+  uint32_t rejected_out_of_range;
+  uint32_t rejected_weight;
+  uint32_t outside_map;
+  uint32_t too_noisy;
+} ccmap_frame_counters;
+
+/* Re-centres every layer on the robot at (x, y) (m). Refused (counted): non-finite or
+ * out-of-range position. */
+ccmap_status ccmap_move_to(ccmap_map* map, float x, float y);
+
+/* Folds n points, xyz[3*i .. 3*i+2] in the map frame (m). weights may be NULL (the noise
+ * model's weight) or n weights, one per point (the w_t of eq. (1)); a weight outside
+ * (0, 1e6] refuses its point. sensor_origin_xyz: the sensor position in the map frame (3 floats).
+ * counters may be NULL. Refused as a whole: NULL xyz with n > 0 or NULL sensor_origin_xyz
+ * (CCMAP_INVALID_ARGUMENT), non-finite sensor origin (CCMAP_NON_FINITE_INPUT). */
+ccmap_status ccmap_update_frame(ccmap_map* map, const float* xyz, const float* weights, size_t n,
+                                const float* sensor_origin_xyz, ccmap_frame_counters* counters);
+
+/* Sensor pose: p_map = rotation * p_sensor + translation; rotation row-major 3 x 3. */
+typedef struct ccmap_pose {
+  float rotation[9];
+  float translation[3];
+} ccmap_pose;
+
+/* Same as ccmap_update_frame for points in the sensor frame (noise-model weights). */
+ccmap_status ccmap_update_frame_sensor(ccmap_map* map, const float* xyz, size_t n, const ccmap_pose* pose,
+                                       ccmap_frame_counters* counters);
+
+/* ---- queries -------------------------------------------------------------------------------- */
+typedef enum ccmap_cell_class {
+  CCMAP_CLASS_UNKNOWN = 0,
+  CCMAP_CLASS_TRAVERSABLE = 1,
+  CCMAP_CLASS_OBSTACLE = 2,
+  CCMAP_CLASS_STEEP = 3
+} ccmap_cell_class;
+
+/* "unknown", "traversable", "obstacle", "steep"; never NULL. */
+const char* ccmap_cell_class_string(int32_t cell_class);
+
+/* Answer of a point query (ccmap::QueryResult). On status != CCMAP_OK the numbers are 0. */
+typedef struct ccmap_query_result {
+  int32_t status;             /* ccmap_status */
+  int32_t layer;              /* layer that answered (0 = finest), -1 if none holds the point */
+  float cell_width_m;
+  float height_m;             /* sub-cell height at the point (eq. 10) */
+  float slope_x;              /* dz/dx (eq. 9) */
+  float slope_y;
+  float inclination;          /* sqrt(slope_x^2 + slope_y^2) */
+  float normal_variance;      /* sigma_s^2 (eq. 11), m^2 */
+  float elevation_variance;   /* m^2 */
+  float weight;
+  int32_t cell_class;         /* ccmap_cell_class */
+} ccmap_query_result;
+
+/* Answer of the finest layer that knows (x, y). Returns out->status (CCMAP_OK,
+ * CCMAP_UNKNOWN, CCMAP_OUTSIDE_MAP, CCMAP_NOT_INITIALISED) or CCMAP_INVALID_ARGUMENT. */
+ccmap_status ccmap_query(const ccmap_map* map, float x, float y, ccmap_query_result* out);
+/* Answer of one layer (0 = finest). */
+ccmap_status ccmap_query_layer(const ccmap_map* map, int32_t layer, float x, float y, ccmap_query_result* out);
+
+/* Layers: count (0 for a bad handle), cells per layer (0 for a bad layer), cell width (m, 0 for
+ * a bad layer or before init). */
+int32_t ccmap_layer_count(const ccmap_map* map);
+size_t ccmap_layer_capacity(const ccmap_map* map, int32_t layer);
+float ccmap_layer_cell_width(const ccmap_map* map, int32_t layer);
+
+/* One exported cell (ccmap::CellRecord). */
+typedef struct ccmap_cell_record {
+  int32_t index_x;            /* global cell index (stable across moves) */
+  int32_t index_y;
+  float centre_x;             /* cell centre, map frame (m) */
+  float centre_y;
+  float weight;
+  float height_m;             /* at the cell centre */
+  float slope_x;
+  float slope_y;
+  float normal_variance;
+  float elevation_variance;
+  uint8_t cell_class;         /* ccmap_cell_class */
+  uint8_t reserved[3];
+} ccmap_cell_record;
+
+/* Writes every observed cell of `layer` into out[0..*written). CCMAP_BUFFER_TOO_SMALL (nothing
+ * written) if capacity < ccmap_layer_capacity(map, layer). */
+ccmap_status ccmap_export_layer(const ccmap_map* map, int32_t layer, ccmap_cell_record* out, size_t capacity,
+                                size_t* written);
+
+/* ---- counters ------------------------------------------------------------------------------- */
+typedef struct ccmap_counters {
+  ccmap_frame_counters totals;  /* accumulated over the map's life (saturating) */
+  uint32_t rejected_moves;
+  uint32_t rejected_frames;
+  uint64_t last_update_ns;      /* duration of the last accepted frame update */
+} ccmap_counters;
+
+ccmap_status ccmap_get_counters(const ccmap_map* map, ccmap_counters* out);
+
+/* ---- snapshots (include/ccmap/map/snapshot.hpp has the byte format) ------------------------- */
+/* Bytes of a snapshot of this map (0 for a bad handle). */
+size_t ccmap_snapshot_size(const ccmap_map* map);
+/* CCMAP_BUFFER_TOO_SMALL if capacity < ccmap_snapshot_size(map); *written = bytes written. */
+ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t capacity, size_t* written);
+/* All-or-nothing restore (the map may be uninitialised): CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH
+ * (another format version or a snapshot of another preset), CCMAP_INVALID_ARGUMENT. */
+ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size);
+
+/* Name of the linked platform implementation ("posix", "baremetal"). */
+const char* ccmap_platform_name(void);
+
+#ifdef __cplusplus
+}  /* extern "C" */
+#endif
+
+#endif /* CCMAP_CCMAP_H */

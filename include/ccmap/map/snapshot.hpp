@@ -1,0 +1,340 @@
+// Versioned, CRC-protected binary snapshots of a map stack, for telemetry and replay.
+//
+//   std::uint8_t buffer[ccmap::snapshot_size<ccmap::CadreConfig>()];   // static storage
+//   std::size_t written = 0;
+//   ccmap::Status s = ccmap::save_snapshot(map, buffer, sizeof buffer, &written);
+//   ...
+//   s = ccmap::load_snapshot(map, buffer, written);   // all-or-nothing
+//
+// A snapshot holds the run-time parameters, each layer's window centre and raw cells and the
+// life-time counters. Loading re-initialises the stack from the stored parameters and restores
+// windows and cells, so the loaded stack answers every query and export bitwise identically to
+// the saved one (routing table and thresholds are recomputed by init(), deterministically).
+// Not stored: RingGrid::cells_cleared_by_moves() (restarts at 0 on load).
+//
+// Format (version 1). Every field is little-endian, written byte by byte (never a memcpy of a
+// struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
+//
+//   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
+//                2  format version (kSnapshotFormatVersion)
+//                2  reserved, 0
+//                4  total size of the snapshot, trailer included
+//   fingerprint  1  fine kind (FineKind), 1 layer count, 2 reserved 0,
+//               32  side of each layer, finest first (uint32 x kMaxLayers, 0 past the last layer)
+//                2  bytes per fine cell on the wire (12), 2 bytes per CCM cell (36)
+//   params      60  StackParams floats: finest_cell_width_m, weight_limit, coverage_tau,
+//                   min_weight, obstacle_fraction, max_inclination, kalman_min_variance,
+//                   normal_variance_threshold[0..7]
+//                4  finest_max_sigma_m
+//               20  noise model: kind (u8), weight mode (u8), 2 reserved 0, stereo k = sigma_d/(f b)
+//                   (1/m), lidar sigma0 (m), lidar sigma per m, reference range (m)
+//   per layer    8  window centre (int32 x, int32 y; global cell indices), then
+//                   side*side cells in window order: rows of increasing global y from the
+//                   window's lowest y, x increasing inside a row (RingGrid::for_each order).
+//                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
+//                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz.
+//   counters    28  total FrameCounters (7 x uint32, in declaration order)
+//                8  rejected moves, rejected frames (uint32 each)
+//                8  last update duration (uint64, ns)
+//   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
+//
+// Statuses of load_snapshot, checked in this order, before anything is written to the stack:
+//   kInvalidArgument  data == nullptr
+//   kCorrupt          shorter than the header, wrong magic, a non-zero reserved header field
+//   kVersionMismatch  another format version
+//   kCorrupt          size field != size (truncated or trailing bytes), CRC mismatch
+//   kVersionMismatch  fingerprint of another stack configuration (another preset): the data is
+//                     intact but describes another map shape
+//   kCorrupt          anything inside that a save could not have written: parameters that
+//                     init() would refuse, a non-finite float (weight_limit may be +inf, the
+//                     "no limit" value), a negative cell weight, an odd or out-of-range window
+//                     centre, an unknown enum value, a non-zero reserved field.
+// On any failure the stack is bitwise unchanged.
+//
+// No heap, no exceptions; save and load are O(snapshot size).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "ccmap/core/status.hpp"
+#include "ccmap/map/config.hpp"
+#include "ccmap/map/stack.hpp"
+
+namespace ccmap {
+
+/// Format version written by this library; load_snapshot accepts exactly this version.
+inline constexpr std::uint16_t kSnapshotFormatVersion = 1U;
+
+/// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
+/// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
+/// only with size 0.
+[[nodiscard]] std::uint32_t crc32_update(std::uint32_t crc, const std::uint8_t* data,
+                                         std::size_t size) noexcept;
+
+namespace detail {
+
+static_assert(kMaxLayers == 8, "snapshot format version 1 stores 8 sides and 8 thresholds");
+
+inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
+inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
+inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U) + 20U;
+inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
+inline constexpr std::size_t kSnapshotCountersBytes = 7U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
+inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
+inline constexpr std::size_t kSnapshotCcmCellBytes = std::size_t{9} * 4U;
+
+/// What a snapshot says about the shape of the stack it came from.
+struct SnapshotFingerprint {
+  std::uint8_t fine_kind;
+  std::uint8_t layer_count;
+  std::uint32_t sides[kMaxLayers];
+  std::uint16_t fine_cell_bytes;
+  std::uint16_t ccm_cell_bytes;
+};
+
+/// Little-endian byte writer over a buffer the caller sized (no bounds checks beyond the
+/// capacity given; save_snapshot checks the capacity first). Records non-finite floats.
+class SnapshotWriter {
+ public:
+  SnapshotWriter(std::uint8_t* data, std::size_t capacity) noexcept : data_(data), capacity_(capacity) {}
+  void u8(std::uint8_t v) noexcept;
+  void u16(std::uint16_t v) noexcept;
+  void u32(std::uint32_t v) noexcept;
+  void u64(std::uint64_t v) noexcept;
+  void i32(std::int32_t v) noexcept;
+  /// A float that must be finite (a non-finite one marks the writer not finite()).
+  void f32(float v) noexcept;
+  /// A float that may also be +inf (weight_limit: kNoWeightLimit).
+  void f32_or_inf(float v) noexcept;
+  [[nodiscard]] std::size_t position() const noexcept { return position_; }
+  [[nodiscard]] bool finite() const noexcept { return finite_; }
+  [[nodiscard]] bool overflowed() const noexcept { return overflowed_; }
+  [[nodiscard]] std::uint8_t* data() const noexcept { return data_; }
+
+ private:
+  std::uint8_t* data_;
+  std::size_t capacity_;
+  std::size_t position_ = 0U;
+  bool finite_ = true;
+  bool overflowed_ = false;
+};
+
+/// Little-endian byte reader; reading past the end gives 0 and marks the reader !ok().
+class SnapshotReader {
+ public:
+  SnapshotReader(const std::uint8_t* data, std::size_t size) noexcept : data_(data), size_(size) {}
+  [[nodiscard]] std::uint8_t u8() noexcept;
+  [[nodiscard]] std::uint16_t u16() noexcept;
+  [[nodiscard]] std::uint32_t u32() noexcept;
+  [[nodiscard]] std::uint64_t u64() noexcept;
+  [[nodiscard]] std::int32_t i32() noexcept;
+  [[nodiscard]] float f32() noexcept;
+  void seek(std::size_t position) noexcept;
+  [[nodiscard]] std::size_t position() const noexcept { return position_; }
+  [[nodiscard]] bool ok() const noexcept { return ok_; }
+
+ private:
+  const std::uint8_t* data_;
+  std::size_t size_;
+  std::size_t position_ = 0U;
+  bool ok_ = true;
+};
+
+// Non-template pieces of the format (src/map/snapshot.cpp).
+void snapshot_write_header(SnapshotWriter& w, std::size_t total_size, const SnapshotFingerprint& f) noexcept;
+/// Magic, version, size field and CRC of data[0..size). Reads nothing else.
+[[nodiscard]] Status snapshot_check_envelope(const std::uint8_t* data, std::size_t size) noexcept;
+/// Reads the fingerprint (reader positioned after the header): kVersionMismatch if it differs
+/// from `expected`, kCorrupt for a non-zero reserved field.
+[[nodiscard]] Status snapshot_check_fingerprint(SnapshotReader& r, const SnapshotFingerprint& expected) noexcept;
+void snapshot_write_params(SnapshotWriter& w, const StackParams& params) noexcept;
+/// Reads and validates parameters as init() of a stack with `layer_count` layers (finest
+/// layer piece-wise constant if has_fine) would: kCorrupt if init() could refuse them.
+[[nodiscard]] Status snapshot_read_params(SnapshotReader& r, int layer_count, bool has_fine,
+                                          StackParams* out) noexcept;
+void snapshot_write_centre(SnapshotWriter& w, CellIndex centre) noexcept;
+/// False for an odd or out-of-range centre (windows always start on even indices).
+[[nodiscard]] bool snapshot_read_centre(SnapshotReader& r, CellIndex* out) noexcept;
+void snapshot_write_cell(SnapshotWriter& w, const CcmCell& c) noexcept;
+void snapshot_write_cell(SnapshotWriter& w, const KalmanCell& c) noexcept;
+void snapshot_write_cell(SnapshotWriter& w, const OmgCell& c) noexcept;
+/// False for a non-finite field or a negative weight (*out is written either way).
+[[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, CcmCell* out) noexcept;
+[[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, KalmanCell* out) noexcept;
+[[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, OmgCell* out) noexcept;
+void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& totals, std::uint32_t rejected_moves,
+                             std::uint32_t rejected_frames, std::uint64_t last_update_ns) noexcept;
+void snapshot_read_counters(SnapshotReader& r, FrameCounters* totals, std::uint32_t* rejected_moves,
+                            std::uint32_t* rejected_frames, std::uint64_t* last_update_ns) noexcept;
+/// Appends the CRC-32 of data[0..w.position()).
+void snapshot_write_trailer(SnapshotWriter& w) noexcept;
+
+/// The only code with access to a Stack's private state (friend of Stack<Config>).
+template <typename Config>
+struct SnapshotAccess {
+  using StackType = Stack<Config>;
+  static constexpr int kLayers = StackType::kLayerCount;
+
+  [[nodiscard]] static constexpr std::size_t size() noexcept {
+    std::size_t total = kSnapshotHeaderBytes + kSnapshotFingerprintBytes + kSnapshotParamsBytes +
+                        kSnapshotCountersBytes + kSnapshotTrailerBytes;
+    for (int layer = 0; layer < kLayers; ++layer) {
+      const std::size_t cell_bytes = StackType::layer_is_ccm(layer) ? kSnapshotCcmCellBytes : kSnapshotFineCellBytes;
+      total += kSnapshotLayerHeaderBytes + StackType::layer_capacity(layer) * cell_bytes;
+    }
+    return total;
+  }
+
+  [[nodiscard]] static SnapshotFingerprint fingerprint() noexcept {
+    SnapshotFingerprint f{};
+    f.fine_kind = static_cast<std::uint8_t>(Config::kFineKind);
+    f.layer_count = static_cast<std::uint8_t>(kLayers);
+    for (int layer = 0; layer < kLayers; ++layer) {
+      f.sides[layer] = static_cast<std::uint32_t>(StackType::layer_side(layer));
+    }
+    f.fine_cell_bytes = static_cast<std::uint16_t>(kSnapshotFineCellBytes);
+    f.ccm_cell_bytes = static_cast<std::uint16_t>(kSnapshotCcmCellBytes);
+    return f;
+  }
+
+  [[nodiscard]] static Status save(const StackType& stack, std::uint8_t* buffer, std::size_t capacity,
+                                   std::size_t* written) noexcept {
+    if (written != nullptr) {
+      *written = 0U;
+    }
+    if (buffer == nullptr || written == nullptr) {
+      return Status::kInvalidArgument;
+    }
+    if (!stack.initialised_) {
+      return Status::kNotInitialised;
+    }
+    if (capacity < size()) {
+      return Status::kBufferTooSmall;
+    }
+    SnapshotWriter w(buffer, capacity);
+    snapshot_write_header(w, size(), fingerprint());
+    snapshot_write_params(w, stack.params_);
+    for (int layer = 0; layer < kLayers; ++layer) {
+      if (StackType::layer_is_ccm(layer)) {
+        const RingGrid<CcmCell>& grid = stack.ccm_[layer - StackType::kFineLayerCount];
+        snapshot_write_centre(w, grid.centre());
+        grid.for_each([&w](CellIndex, const CcmCell& cell) { snapshot_write_cell(w, cell); });
+      } else {
+        snapshot_write_centre(w, stack.fine_.centre());
+        stack.fine_.for_each([&w](CellIndex, const typename StackType::FineCell& cell) { snapshot_write_cell(w, cell); });
+      }
+    }
+    snapshot_write_counters(w, stack.totals_, stack.rejected_moves_, stack.rejected_frames_, stack.last_update_ns_);
+    snapshot_write_trailer(w);
+    if (w.overflowed() || w.position() != size()) {
+      return Status::kInvalidArgument;  // cannot happen: the layout and size() disagree
+    }
+    if (!w.finite()) {
+      return Status::kNonFiniteInput;  // a NaN/Inf in the state: the snapshot would not load
+    }
+    *written = w.position();
+    return Status::kOk;
+  }
+
+  [[nodiscard]] static Status load(StackType& stack, const std::uint8_t* data, std::size_t data_size) noexcept {
+    if (data == nullptr) {
+      return Status::kInvalidArgument;
+    }
+    const Status envelope = snapshot_check_envelope(data, data_size);
+    if (envelope != Status::kOk) {
+      return envelope;
+    }
+    SnapshotReader r(data, data_size - kSnapshotTrailerBytes);
+    r.seek(kSnapshotHeaderBytes);
+    const Status shape = snapshot_check_fingerprint(r, fingerprint());
+    if (shape != Status::kOk) {
+      return shape;
+    }
+    if (data_size != size()) {
+      return Status::kCorrupt;
+    }
+    // Pass 1: validate everything; the stack is not touched.
+    StackParams params{};
+    const Status params_status = snapshot_read_params(r, kLayers, StackType::kHasFine, &params);
+    if (params_status != Status::kOk) {
+      return params_status;
+    }
+    const std::size_t layers_begin = r.position();
+    bool valid = true;
+    for (int layer = 0; layer < kLayers && valid; ++layer) {
+      CellIndex centre{};
+      valid = snapshot_read_centre(r, &centre);
+      const std::size_t cells = StackType::layer_capacity(layer);
+      for (std::size_t i = 0; i < cells && valid; ++i) {
+        if (StackType::layer_is_ccm(layer)) {
+          CcmCell cell{};
+          valid = snapshot_read_cell(r, &cell);
+        } else {
+          typename StackType::FineCell cell{};
+          valid = snapshot_read_cell(r, &cell);
+        }
+      }
+    }
+    FrameCounters totals{};
+    std::uint32_t rejected_moves = 0U;
+    std::uint32_t rejected_frames = 0U;
+    std::uint64_t last_update_ns = 0U;
+    snapshot_read_counters(r, &totals, &rejected_moves, &rejected_frames, &last_update_ns);
+    if (!valid || !r.ok() || r.position() != data_size - kSnapshotTrailerBytes) {
+      return Status::kCorrupt;
+    }
+    // Pass 2: commit. init() accepts what snapshot_read_params accepted (same checks).
+    const Status init_status = stack.init(params);
+    if (init_status != Status::kOk) {
+      return init_status;  // not reachable: the parameters were validated as init() does
+    }
+    r.seek(layers_begin);
+    for (int layer = 0; layer < kLayers; ++layer) {
+      CellIndex centre{};
+      (void)snapshot_read_centre(r, &centre);
+      if (StackType::layer_is_ccm(layer)) {
+        RingGrid<CcmCell>& grid = stack.ccm_[layer - StackType::kFineLayerCount];
+        (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);
+        grid.for_each([&r](CellIndex, CcmCell& cell) { (void)snapshot_read_cell(r, &cell); });
+      } else {
+        auto& grid = stack.fine_;
+        (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);
+        grid.for_each([&r](CellIndex, typename StackType::FineCell& cell) { (void)snapshot_read_cell(r, &cell); });
+      }
+    }
+    snapshot_read_counters(r, &stack.totals_, &stack.rejected_moves_, &stack.rejected_frames_,
+                           &stack.last_update_ns_);
+    return Status::kOk;
+  }
+};
+
+}  // namespace detail
+
+/// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
+/// CadreConfig: 418,016 bytes (docs/integration.md lists every preset).
+template <typename Config>
+[[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
+  return detail::SnapshotAccess<Config>::size();
+}
+
+/// Writes a snapshot of `stack` into buffer[0..*written) (*written = snapshot_size<Config>()).
+/// kInvalidArgument: buffer or written nullptr. kNotInitialised: stack not initialised.
+/// kBufferTooSmall: capacity < snapshot_size<Config>() (nothing written).
+/// kNonFiniteInput: the state holds a NaN/Inf that load_snapshot would refuse (not produced by
+/// this library's update paths). On failure *written = 0 and the buffer content is unspecified.
+template <typename Config>
+[[nodiscard]] Status save_snapshot(const Stack<Config>& stack, std::uint8_t* buffer, std::size_t capacity,
+                                   std::size_t* written) noexcept {
+  return detail::SnapshotAccess<Config>::save(stack, buffer, capacity, written);
+}
+
+/// Restores `stack` (initialised or not) from data[0..size): all-or-nothing, see the statuses in
+/// the file comment. On kOk the stack answers every query and export bitwise as the saved one.
+template <typename Config>
+[[nodiscard]] Status load_snapshot(Stack<Config>& stack, const std::uint8_t* data, std::size_t size) noexcept {
+  return detail::SnapshotAccess<Config>::load(stack, data, size);
+}
+
+}  // namespace ccmap

@@ -1,0 +1,497 @@
+// C API (include/ccmap/ccmap.h) over Stack<Config> placed in caller-provided storage.
+//
+// Storage layout: a HandleHeader at the start of the caller's storage (the ccmap_map* handle
+// points at it), the Stack<Config> at kStackOffset. Every entry point checks the header's magic
+// and preset, then dispatches to the preset's Stack through a generic lambda.
+#include "ccmap/ccmap.h"
+
+#include <cstddef>
+#include <cstring>
+#include <new>
+#include <type_traits>
+
+#include "ccmap/map/config.hpp"
+#include "ccmap/map/snapshot.hpp"
+#include "ccmap/map/stack.hpp"
+#include "ccmap/platform/platform.hpp"
+
+namespace ccmap {
+namespace {
+
+// ---- status, class and struct compatibility ----
+#define CCMAP_SAME_STATUS(c, cpp) \
+  static_assert(static_cast<int>(c) == static_cast<int>(Status::cpp), "ccmap_status " #c " != Status::" #cpp)
+CCMAP_SAME_STATUS(CCMAP_OK, kOk);
+CCMAP_SAME_STATUS(CCMAP_NON_FINITE_INPUT, kNonFiniteInput);
+CCMAP_SAME_STATUS(CCMAP_OUT_OF_RANGE, kOutOfRange);
+CCMAP_SAME_STATUS(CCMAP_BAD_WEIGHT, kBadWeight);
+CCMAP_SAME_STATUS(CCMAP_OUTSIDE_MAP, kOutsideMap);
+CCMAP_SAME_STATUS(CCMAP_UNKNOWN, kUnknown);
+CCMAP_SAME_STATUS(CCMAP_INVALID_ARGUMENT, kInvalidArgument);
+CCMAP_SAME_STATUS(CCMAP_BUFFER_TOO_SMALL, kBufferTooSmall);
+CCMAP_SAME_STATUS(CCMAP_NOT_INITIALISED, kNotInitialised);
+CCMAP_SAME_STATUS(CCMAP_CORRUPT, kCorrupt);
+CCMAP_SAME_STATUS(CCMAP_VERSION_MISMATCH, kVersionMismatch);
+#undef CCMAP_SAME_STATUS
+static_assert(static_cast<int>(CCMAP_CLASS_UNKNOWN) == static_cast<int>(CellClass::kUnknown), "class");
+static_assert(static_cast<int>(CCMAP_CLASS_TRAVERSABLE) == static_cast<int>(CellClass::kTraversable), "class");
+static_assert(static_cast<int>(CCMAP_CLASS_OBSTACLE) == static_cast<int>(CellClass::kObstacle), "class");
+static_assert(static_cast<int>(CCMAP_CLASS_STEEP) == static_cast<int>(CellClass::kSteep), "class");
+static_assert(CCMAP_MAX_LAYERS == kMaxLayers, "CCMAP_MAX_LAYERS != kMaxLayers");
+static_assert(sizeof(ccmap_frame_counters) == sizeof(FrameCounters), "ccmap_frame_counters != FrameCounters");
+
+// Points: the caller's float[3 n] is read as PointXYZ[n]. PointXYZ is documented (types.hpp) to
+// stay three packed floats for exactly this use.
+static_assert(std::is_standard_layout<PointXYZ>::value && sizeof(PointXYZ) == 3U * sizeof(float) &&
+                  alignof(PointXYZ) == alignof(float) && offsetof(PointXYZ, x) == 0U &&
+                  offsetof(PointXYZ, y) == sizeof(float) && offsetof(PointXYZ, z) == 2U * sizeof(float),
+              "PointXYZ must be three packed floats");
+// Export: CellRecords are written into the caller's ccmap_cell_record array and converted in
+// place, record by record (same size, so record i occupies the same bytes in both forms).
+static_assert(sizeof(ccmap_cell_record) == sizeof(CellRecord) && alignof(ccmap_cell_record) >= alignof(CellRecord),
+              "ccmap_cell_record and CellRecord must have the same size");
+
+// ---- storage ----
+constexpr std::uint32_t kHandleMagic = 0x43434D48U;  // "CCMH"
+
+struct HandleHeader {
+  std::uint32_t magic;
+  std::uint32_t preset;
+};
+constexpr std::size_t kStackOffset = 16U;
+static_assert(sizeof(HandleHeader) <= kStackOffset, "header must fit before the stack");
+
+template <typename Config>
+struct Preset {
+  using StackType = Stack<Config>;
+  static_assert(kStackOffset % alignof(StackType) == 0U, "stack offset must respect the stack's alignment");
+  static_assert(alignof(StackType) <= CCMAP_STORAGE_ALIGN, "CCMAP_STORAGE_ALIGN too small");
+  static constexpr std::size_t kStorageSize = kStackOffset + sizeof(StackType);
+  static constexpr std::size_t kStorageAlign = alignof(StackType) > alignof(HandleHeader) ? alignof(StackType)
+                                                                                          : alignof(HandleHeader);
+};
+
+// F' style: the storage the header promises must hold the implementation.
+static_assert(Preset<CadreConfig>::kStorageSize <= CCMAP_CADRE_STORAGE_SIZE, "raise CCMAP_CADRE_STORAGE_SIZE");
+static_assert(Preset<SingleCcmConfig>::kStorageSize <= CCMAP_SINGLE_CCM_STORAGE_SIZE,
+              "raise CCMAP_SINGLE_CCM_STORAGE_SIZE");
+static_assert(Preset<SingleKalmanConfig>::kStorageSize <= CCMAP_SINGLE_KALMAN_STORAGE_SIZE,
+              "raise CCMAP_SINGLE_KALMAN_STORAGE_SIZE");
+static_assert(Preset<SingleOmgConfig>::kStorageSize <= CCMAP_SINGLE_OMG_STORAGE_SIZE,
+              "raise CCMAP_SINGLE_OMG_STORAGE_SIZE");
+static_assert(snapshot_size<CadreConfig>() == CCMAP_CADRE_SNAPSHOT_SIZE, "CCMAP_CADRE_SNAPSHOT_SIZE");
+static_assert(snapshot_size<SingleCcmConfig>() == CCMAP_SINGLE_CCM_SNAPSHOT_SIZE, "CCMAP_SINGLE_CCM_SNAPSHOT_SIZE");
+static_assert(snapshot_size<SingleKalmanConfig>() == CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE,
+              "CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE");
+static_assert(snapshot_size<SingleOmgConfig>() == CCMAP_SINGLE_OMG_SNAPSHOT_SIZE, "CCMAP_SINGLE_OMG_SNAPSHOT_SIZE");
+
+ccmap_status to_c(Status status) noexcept { return static_cast<ccmap_status>(status); }
+
+bool valid_preset(std::int64_t preset) noexcept {
+  return preset >= static_cast<std::int64_t>(CCMAP_PRESET_CADRE) &&
+         preset <= static_cast<std::int64_t>(CCMAP_PRESET_SINGLE_OMG);
+}
+
+std::size_t storage_size(ccmap_preset preset) noexcept {
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: return Preset<CadreConfig>::kStorageSize;
+    case CCMAP_PRESET_SINGLE_CCM: return Preset<SingleCcmConfig>::kStorageSize;
+    case CCMAP_PRESET_SINGLE_KALMAN: return Preset<SingleKalmanConfig>::kStorageSize;
+    case CCMAP_PRESET_SINGLE_OMG: return Preset<SingleOmgConfig>::kStorageSize;
+    default: break;
+  }
+  return 0U;
+}
+
+std::size_t storage_align(ccmap_preset preset) noexcept {
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: return Preset<CadreConfig>::kStorageAlign;
+    case CCMAP_PRESET_SINGLE_CCM: return Preset<SingleCcmConfig>::kStorageAlign;
+    case CCMAP_PRESET_SINGLE_KALMAN: return Preset<SingleKalmanConfig>::kStorageAlign;
+    case CCMAP_PRESET_SINGLE_OMG: return Preset<SingleOmgConfig>::kStorageAlign;
+    default: break;
+  }
+  return 0U;
+}
+
+float default_width(ccmap_preset preset) noexcept {
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: return CadreConfig::kDefaultFinestCellWidthM;
+    case CCMAP_PRESET_SINGLE_CCM: return SingleCcmConfig::kDefaultFinestCellWidthM;
+    case CCMAP_PRESET_SINGLE_KALMAN: return SingleKalmanConfig::kDefaultFinestCellWidthM;
+    case CCMAP_PRESET_SINGLE_OMG: return SingleOmgConfig::kDefaultFinestCellWidthM;
+    default: break;
+  }
+  return 0.0F;
+}
+
+const HandleHeader* header_of(const ccmap_map* map) noexcept {
+  if (map == nullptr) {
+    return nullptr;
+  }
+  const auto* header = std::launder(static_cast<const HandleHeader*>(static_cast<const void*>(map)));
+  if (header->magic != kHandleMagic || !valid_preset(static_cast<std::int64_t>(header->preset))) {
+    return nullptr;
+  }
+  return header;
+}
+
+template <typename Config>
+Stack<Config>& stack_of(const ccmap_map* map) noexcept {
+  const auto* bytes = static_cast<const unsigned char*>(static_cast<const void*>(map));
+  // The handle is the caller's (non-const) storage; the const in the C signatures is the C
+  // API's promise, kept by only calling const Stack members from const entry points.
+  auto* stack_bytes = const_cast<unsigned char*>(bytes + kStackOffset);
+  return *std::launder(static_cast<Stack<Config>*>(static_cast<void*>(stack_bytes)));
+}
+
+/// Calls fn(Stack<Config>&) for the map's preset; `bad` for a NULL or foreign handle.
+template <typename Result, typename Fn>
+Result dispatch(const ccmap_map* map, Result bad, Fn&& fn) noexcept {
+  const HandleHeader* header = header_of(map);
+  if (header == nullptr) {
+    return bad;
+  }
+  switch (static_cast<ccmap_preset>(header->preset)) {
+    case CCMAP_PRESET_CADRE: return fn(stack_of<CadreConfig>(map));
+    case CCMAP_PRESET_SINGLE_CCM: return fn(stack_of<SingleCcmConfig>(map));
+    case CCMAP_PRESET_SINGLE_KALMAN: return fn(stack_of<SingleKalmanConfig>(map));
+    case CCMAP_PRESET_SINGLE_OMG: return fn(stack_of<SingleOmgConfig>(map));
+    default: break;
+  }
+  return bad;
+}
+
+template <typename Config>
+constexpr std::size_t snapshot_bytes(const Stack<Config>&) noexcept {
+  return snapshot_size<Config>();
+}
+
+template <typename Config>
+void place(void* storage) noexcept {
+  auto* bytes = static_cast<unsigned char*>(storage);
+  new (bytes + kStackOffset) Stack<Config>();
+}
+
+// ---- parameters ----
+void params_to_c(const StackParams& p, ccmap_params* out) noexcept {
+  *out = ccmap_params{};
+  out->finest_cell_width_m = p.finest_cell_width_m;
+  out->weight_limit = p.weight_limit;
+  out->coverage_tau = p.coverage_tau;
+  out->min_weight = p.min_weight;
+  out->obstacle_fraction = p.obstacle_fraction;
+  out->max_inclination = p.max_inclination;
+  out->kalman_min_variance = p.kalman_min_variance;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(kMaxLayers); ++i) {
+    out->normal_variance_threshold[i] = p.normal_variance_threshold[i];
+  }
+  out->finest_max_sigma_m = p.finest_max_sigma_m;
+  // default_stack_params uses the CADRE stereo model (sensor::cadre_stereo()).
+  out->noise.sensor = CCMAP_SENSOR_STEREO;
+  out->noise.stereo_focal_px = sensor::kCadreStereoParams.focal_px;
+  out->noise.stereo_baseline_m = sensor::kCadreStereoParams.baseline_m;
+  out->noise.stereo_disparity_sigma_px = sensor::kCadreStereoParams.disparity_sigma_px;
+  out->noise.lidar_sigma0_m = 0.0F;
+  out->noise.lidar_sigma_per_m = 0.0F;
+  out->noise.weight_mode = CCMAP_WEIGHT_CONSTANT;
+  out->noise.reference_range_m = p.noise.reference_range_m();
+}
+
+Status params_from_c(const ccmap_params& c, StackParams* out) noexcept {
+  StackParams p{};
+  p.finest_cell_width_m = c.finest_cell_width_m;
+  p.weight_limit = c.weight_limit;
+  p.coverage_tau = c.coverage_tau;
+  p.min_weight = c.min_weight;
+  p.obstacle_fraction = c.obstacle_fraction;
+  p.max_inclination = c.max_inclination;
+  p.kalman_min_variance = c.kalman_min_variance;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(kMaxLayers); ++i) {
+    p.normal_variance_threshold[i] = c.normal_variance_threshold[i];
+  }
+  p.finest_max_sigma_m = c.finest_max_sigma_m;
+  if (c.noise.sensor == CCMAP_SENSOR_STEREO) {
+    p.noise = sensor::NoiseModel::stereo(sensor::StereoParams{
+        c.noise.stereo_focal_px, c.noise.stereo_baseline_m, c.noise.stereo_disparity_sigma_px});
+  } else if (c.noise.sensor == CCMAP_SENSOR_LIDAR) {
+    p.noise = sensor::NoiseModel::lidar(sensor::LidarParams{c.noise.lidar_sigma0_m, c.noise.lidar_sigma_per_m});
+  } else {
+    return Status::kInvalidArgument;
+  }
+  if (c.noise.weight_mode == CCMAP_WEIGHT_CONSTANT) {
+    p.noise.set_weight_mode(sensor::WeightMode::kConstant, c.noise.reference_range_m);
+  } else if (c.noise.weight_mode == CCMAP_WEIGHT_INVERSE_VARIANCE) {
+    p.noise.set_weight_mode(sensor::WeightMode::kInverseVariance, c.noise.reference_range_m);
+  } else {
+    return Status::kInvalidArgument;
+  }
+  *out = p;
+  return Status::kOk;
+}
+
+void result_to_c(const QueryResult& q, ccmap_query_result* out) noexcept {
+  out->status = static_cast<std::int32_t>(q.status);
+  out->layer = q.layer;
+  out->cell_width_m = q.cell_width_m;
+  out->height_m = q.height_m;
+  out->slope_x = q.slope_x;
+  out->slope_y = q.slope_y;
+  out->inclination = q.inclination;
+  out->normal_variance = q.normal_variance;
+  out->elevation_variance = q.elevation_variance;
+  out->weight = q.weight;
+  out->cell_class = static_cast<std::int32_t>(q.cell_class);
+}
+
+void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
+  *out = ccmap_frame_counters{f.received, f.used, f.rejected_non_finite, f.rejected_out_of_range,
+                              f.rejected_weight, f.outside_map, f.too_noisy};
+}
+
+}  // namespace
+}  // namespace ccmap
+
+using ccmap::Status;
+
+extern "C" {
+
+const char* ccmap_status_string(ccmap_status status) {
+  const int s = static_cast<int>(status);
+  if (s < static_cast<int>(CCMAP_OK) || s > static_cast<int>(CCMAP_VERSION_MISMATCH)) {
+    return "invalid_status";
+  }
+  return ccmap::to_string(static_cast<Status>(s));
+}
+
+const char* ccmap_cell_class_string(int32_t cell_class) {
+  if (cell_class < CCMAP_CLASS_UNKNOWN || cell_class > CCMAP_CLASS_STEEP) {
+    return "unknown";
+  }
+  return ccmap::to_string(static_cast<ccmap::CellClass>(cell_class));
+}
+
+size_t ccmap_storage_size(ccmap_preset preset) { return ccmap::storage_size(preset); }
+size_t ccmap_storage_align(ccmap_preset preset) { return ccmap::storage_align(preset); }
+size_t ccmap_cadre_storage_size(void) { return ccmap::storage_size(CCMAP_PRESET_CADRE); }
+size_t ccmap_cadre_storage_align(void) { return ccmap::storage_align(CCMAP_PRESET_CADRE); }
+
+ccmap_status ccmap_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_map** out) {
+  if (storage == nullptr || out == nullptr || !ccmap::valid_preset(static_cast<std::int64_t>(preset))) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  if (reinterpret_cast<std::uintptr_t>(storage) % ccmap::storage_align(preset) != 0U) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  if (storage_size < ccmap::storage_size(preset)) {
+    return CCMAP_BUFFER_TOO_SMALL;
+  }
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: ccmap::place<ccmap::CadreConfig>(storage); break;
+    case CCMAP_PRESET_SINGLE_CCM: ccmap::place<ccmap::SingleCcmConfig>(storage); break;
+    case CCMAP_PRESET_SINGLE_KALMAN: ccmap::place<ccmap::SingleKalmanConfig>(storage); break;
+    case CCMAP_PRESET_SINGLE_OMG: ccmap::place<ccmap::SingleOmgConfig>(storage); break;
+    default: return CCMAP_INVALID_ARGUMENT;
+  }
+  new (storage) ccmap::HandleHeader{ccmap::kHandleMagic, static_cast<std::uint32_t>(preset)};
+  *out = static_cast<ccmap_map*>(storage);
+  return CCMAP_OK;
+}
+
+ccmap_status ccmap_default_params(ccmap_preset preset, ccmap_params* out) {
+  if (out == nullptr || !ccmap::valid_preset(static_cast<std::int64_t>(preset))) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::params_to_c(ccmap::default_stack_params(ccmap::default_width(preset)), out);
+  return CCMAP_OK;
+}
+
+ccmap_status ccmap_default_params_for_width(float finest_cell_width_m, ccmap_params* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::params_to_c(ccmap::default_stack_params(finest_cell_width_m), out);
+  return CCMAP_OK;
+}
+
+ccmap_status ccmap_init(ccmap_map* map, const ccmap_params* params) {
+  if (params == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::StackParams p{};
+  const Status converted = ccmap::params_from_c(*params, &p);
+  if (converted != Status::kOk) {
+    return ccmap::to_c(converted);
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&p](auto& stack) { return ccmap::to_c(stack.init(p)); });
+}
+
+ccmap_status ccmap_move_to(ccmap_map* map, float x, float y) {
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [x, y](auto& stack) { return ccmap::to_c(stack.move_to(x, y)); });
+}
+
+ccmap_status ccmap_update_frame(ccmap_map* map, const float* xyz, const float* weights, size_t n,
+                                const float* sensor_origin_xyz, ccmap_frame_counters* counters) {
+  if (sensor_origin_xyz == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  // NULL xyz with n > 0 is refused (and counted) by the stack itself.
+  const auto* points = reinterpret_cast<const ccmap::PointXYZ*>(xyz);
+  const ccmap::PointXYZ origin{sensor_origin_xyz[0], sensor_origin_xyz[1], sensor_origin_xyz[2]};
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack) {
+    ccmap::FrameCounters frame{};
+    const Status status = stack.update_frame(points, weights, n, origin, &frame);
+    if (counters != nullptr) {
+      ccmap::counters_to_c(frame, counters);
+    }
+    return ccmap::to_c(status);
+  });
+}
+
+ccmap_status ccmap_update_frame_sensor(ccmap_map* map, const float* xyz, size_t n, const ccmap_pose* pose,
+                                       ccmap_frame_counters* counters) {
+  if (pose == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const auto* points = reinterpret_cast<const ccmap::PointXYZ*>(xyz);
+  ccmap::Pose p{};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      p.rotation(r, c) = pose->rotation[3 * r + c];
+    }
+    p.translation(r) = pose->translation[r];
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack) {
+    ccmap::FrameCounters frame{};
+    const Status status = stack.update_frame_sensor(points, n, p, &frame);
+    if (counters != nullptr) {
+      ccmap::counters_to_c(frame, counters);
+    }
+    return ccmap::to_c(status);
+  });
+}
+
+ccmap_status ccmap_query(const ccmap_map* map, float x, float y, ccmap_query_result* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::QueryResult q = stack.query(x, y);
+    ccmap::result_to_c(q, out);
+    return ccmap::to_c(q.status);
+  });
+}
+
+ccmap_status ccmap_query_layer(const ccmap_map* map, int32_t layer, float x, float y, ccmap_query_result* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::QueryResult q = stack.query_layer(layer, x, y);
+    ccmap::result_to_c(q, out);
+    return ccmap::to_c(q.status);
+  });
+}
+
+int32_t ccmap_layer_count(const ccmap_map* map) {
+  return ccmap::dispatch(map, std::int32_t{0}, [](const auto& stack) {
+    return static_cast<std::int32_t>(std::remove_reference_t<decltype(stack)>::kLayerCount);
+  });
+}
+
+size_t ccmap_layer_capacity(const ccmap_map* map, int32_t layer) {
+  return ccmap::dispatch(map, std::size_t{0}, [layer](const auto& stack) {
+    return std::remove_reference_t<decltype(stack)>::layer_capacity(layer);
+  });
+}
+
+float ccmap_layer_cell_width(const ccmap_map* map, int32_t layer) {
+  return ccmap::dispatch(map, 0.0F, [layer](const auto& stack) {
+    return stack.initialised() ? stack.layer_cell_width(layer) : 0.0F;
+  });
+}
+
+ccmap_status ccmap_export_layer(const ccmap_map* map, int32_t layer, ccmap_cell_record* out, size_t capacity,
+                                size_t* written) {
+  if (written != nullptr) {
+    *written = 0U;
+  }
+  if (out == nullptr || written == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    using StackType = std::remove_reference_t<decltype(stack)>;
+    if (stack.initialised() && layer >= 0 && layer < StackType::kLayerCount &&
+        capacity < StackType::layer_capacity(layer)) {
+      return CCMAP_BUFFER_TOO_SMALL;
+    }
+    // CellRecord objects in the caller's storage, then converted in place (same size).
+    auto* bytes = static_cast<unsigned char*>(static_cast<void*>(out));
+    const std::size_t records = capacity < StackType::layer_capacity(layer) ? capacity : StackType::layer_capacity(layer);
+    for (std::size_t i = 0; i < records; ++i) {
+      new (bytes + i * sizeof(ccmap::CellRecord)) ccmap::CellRecord{};
+    }
+    auto* cpp_records = std::launder(static_cast<ccmap::CellRecord*>(static_cast<void*>(bytes)));
+    std::size_t count = 0U;
+    const Status status = stack.export_layer(layer, cpp_records, records, &count);
+    for (std::size_t i = 0; i < count; ++i) {
+      ccmap::CellRecord r{};
+      std::memcpy(&r, bytes + i * sizeof r, sizeof r);
+      ccmap_cell_record c{};
+      c.index_x = r.index.x;
+      c.index_y = r.index.y;
+      c.centre_x = r.centre_x;
+      c.centre_y = r.centre_y;
+      c.weight = r.weight;
+      c.height_m = r.height_m;
+      c.slope_x = r.slope_x;
+      c.slope_y = r.slope_y;
+      c.normal_variance = r.normal_variance;
+      c.elevation_variance = r.elevation_variance;
+      c.cell_class = static_cast<std::uint8_t>(r.cell_class);
+      std::memcpy(bytes + i * sizeof c, &c, sizeof c);
+    }
+    *written = count;
+    return ccmap::to_c(status);
+  });
+}
+
+ccmap_status ccmap_get_counters(const ccmap_map* map, ccmap_counters* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [out](const auto& stack) {
+    if (!stack.initialised()) {
+      return CCMAP_NOT_INITIALISED;
+    }
+    *out = ccmap_counters{};
+    ccmap::counters_to_c(stack.total_counters(), &out->totals);
+    out->rejected_moves = stack.rejected_moves();
+    out->rejected_frames = stack.rejected_frames();
+    out->last_update_ns = stack.last_update_ns();
+    return CCMAP_OK;
+  });
+}
+
+size_t ccmap_snapshot_size(const ccmap_map* map) {
+  return ccmap::dispatch(map, std::size_t{0}, [](const auto& stack) { return ccmap::snapshot_bytes(stack); });
+}
+
+ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t capacity, size_t* written) {
+  if (written != nullptr) {
+    *written = 0U;
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    return ccmap::to_c(ccmap::save_snapshot(stack, buffer, capacity, written));
+  });
+}
+
+ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size) {
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack) {
+    return ccmap::to_c(ccmap::load_snapshot(stack, data, size));
+  });
+}
+
+const char* ccmap_platform_name(void) { return ccmap::platform::name(); }
+
+}  // extern "C"

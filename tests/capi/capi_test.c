@@ -1,0 +1,342 @@
+/* The C API from plain C99: placement in static storage, init, frames (with and without
+ * weights, map and sensor frame), queries, export, counters, snapshots, every preset and the
+ * refusal of NULL pointers, foreign handles and bad enum values. Exits non-zero on failure. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "ccmap/ccmap.h"
+
+static int g_failures = 0;
+static int g_checks = 0;
+
+#define CHECK(cond)                                                   \
+  do {                                                                \
+    ++g_checks;                                                       \
+    if (!(cond)) {                                                    \
+      ++g_failures;                                                   \
+      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
+    }                                                                 \
+  } while (0)
+
+#define CHECK_STATUS(expr, expected)                                                          \
+  do {                                                                                        \
+    const ccmap_status got_ = (expr);                                                         \
+    ++g_checks;                                                                               \
+    if (got_ != (expected)) {                                                                 \
+      ++g_failures;                                                                           \
+      fprintf(stderr, "%s:%d: %s gave %s, expected %s\n", __FILE__, __LINE__, #expr,          \
+              ccmap_status_string(got_), ccmap_status_string(expected));                     \
+    }                                                                                         \
+  } while (0)
+
+#define CHECK_NEAR(a, b, tol)                                                                 \
+  do {                                                                                        \
+    const double a_ = (a), b_ = (b);                                                          \
+    ++g_checks;                                                                               \
+    if (!(fabs(a_ - b_) <= (tol))) {                                                          \
+      ++g_failures;                                                                           \
+      fprintf(stderr, "%s:%d: %s = %g, expected %g +- %g\n", __FILE__, __LINE__, #a, a_, b_,  \
+              (double)(tol));                                                                 \
+    }                                                                                         \
+  } while (0)
+
+static ccmap_cadre_storage g_storage;
+static ccmap_cadre_storage g_storage_copy;
+static ccmap_single_ccm_storage g_ccm_storage;
+static ccmap_single_kalman_storage g_kalman_storage;
+static ccmap_single_omg_storage g_omg_storage;
+static uint8_t g_snapshot[CCMAP_CADRE_SNAPSHOT_SIZE];
+static ccmap_cell_record g_records[64 * 64];
+
+#define GRID_SIDE 100
+static float g_xyz[3 * GRID_SIDE * GRID_SIDE];
+static float g_weights[GRID_SIDE * GRID_SIDE];
+
+/* A plane z = 0.1 x + 0.05 y sampled every 2 cm over [-1, 1)^2. Returns the point count. */
+static size_t make_plane(void) {
+  size_t n = 0;
+  int i, j;
+  for (j = 0; j < GRID_SIDE; ++j) {
+    for (i = 0; i < GRID_SIDE; ++i) {
+      const float x = -1.0f + 0.02f * ((float)i + 0.5f);
+      const float y = -1.0f + 0.02f * ((float)j + 0.5f);
+      g_xyz[3 * n] = x;
+      g_xyz[3 * n + 1] = y;
+      g_xyz[3 * n + 2] = 0.1f * x + 0.05f * y;
+      g_weights[n] = 1.0f;
+      ++n;
+    }
+  }
+  return n;
+}
+
+static ccmap_params precise_lidar_params(ccmap_preset preset) {
+  ccmap_params p;
+  CHECK_STATUS(ccmap_default_params(preset, &p), CCMAP_OK);
+  p.noise.sensor = CCMAP_SENSOR_LIDAR;
+  p.noise.lidar_sigma0_m = 0.0005f;
+  p.noise.lidar_sigma_per_m = 0.0f;
+  return p;
+}
+
+static void test_storage_and_placement(void) {
+  ccmap_map* map = NULL;
+  unsigned char small[64];
+  CHECK(ccmap_cadre_storage_size() > 400000u);
+  CHECK(ccmap_cadre_storage_size() <= CCMAP_CADRE_STORAGE_SIZE);
+  CHECK(ccmap_cadre_storage_size() == ccmap_storage_size(CCMAP_PRESET_CADRE));
+  CHECK(ccmap_cadre_storage_align() >= 4u && ccmap_cadre_storage_align() <= CCMAP_STORAGE_ALIGN);
+  CHECK(ccmap_storage_size(CCMAP_PRESET_SINGLE_CCM) <= CCMAP_SINGLE_CCM_STORAGE_SIZE);
+  CHECK(ccmap_storage_size(CCMAP_PRESET_SINGLE_KALMAN) <= CCMAP_SINGLE_KALMAN_STORAGE_SIZE);
+  CHECK(ccmap_storage_size(CCMAP_PRESET_SINGLE_OMG) <= CCMAP_SINGLE_OMG_STORAGE_SIZE);
+  CHECK(ccmap_storage_size((ccmap_preset)99) == 0u);
+  CHECK(sizeof g_storage >= CCMAP_CADRE_STORAGE_SIZE);
+
+  CHECK_STATUS(ccmap_place(NULL, sizeof g_storage, CCMAP_PRESET_CADRE, &map), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_place(&g_storage, sizeof g_storage, (ccmap_preset)99, &map), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_place(g_storage.bytes + 1, sizeof g_storage - 1, CCMAP_PRESET_CADRE, &map),
+               CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_place(&g_storage, ccmap_cadre_storage_size() - 1, CCMAP_PRESET_CADRE, &map),
+               CCMAP_BUFFER_TOO_SMALL);
+  CHECK(map == NULL);
+
+  /* A handle that ccmap_place did not produce is refused, not dereferenced as a map. */
+  memset(small, 0, sizeof small);
+  {
+    ccmap_query_result r;
+    ccmap_params p;
+    CHECK_STATUS(ccmap_default_params(CCMAP_PRESET_CADRE, &p), CCMAP_OK);
+    CHECK_STATUS(ccmap_query((const ccmap_map*)(const void*)small, 0.0f, 0.0f, &r), CCMAP_INVALID_ARGUMENT);
+    CHECK_STATUS(ccmap_init((ccmap_map*)(void*)small, &p), CCMAP_INVALID_ARGUMENT);
+    CHECK_STATUS(ccmap_init(NULL, &p), CCMAP_INVALID_ARGUMENT);
+    CHECK_STATUS(ccmap_move_to(NULL, 0.0f, 0.0f), CCMAP_INVALID_ARGUMENT);
+    CHECK(ccmap_layer_count(NULL) == 0);
+    CHECK(ccmap_snapshot_size(NULL) == 0u);
+  }
+
+  CHECK_STATUS(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, &map), CCMAP_OK);
+  CHECK(map == (ccmap_map*)(void*)&g_storage);
+  CHECK(ccmap_layer_count(map) == 5);
+  CHECK(ccmap_layer_capacity(map, 0) == 64u * 64u);
+  CHECK(ccmap_layer_capacity(map, 4) == 32u * 32u);
+  CHECK(ccmap_layer_capacity(map, 5) == 0u);
+  {
+    ccmap_query_result r;
+    CHECK_STATUS(ccmap_query(map, 0.0f, 0.0f, &r), CCMAP_NOT_INITIALISED);
+    CHECK_STATUS(ccmap_move_to(map, 1.0f, 0.0f), CCMAP_NOT_INITIALISED);
+  }
+}
+
+static void test_params(ccmap_map* map) {
+  ccmap_params p;
+  ccmap_params q;
+  CHECK_STATUS(ccmap_default_params(CCMAP_PRESET_CADRE, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_default_params((ccmap_preset)7, &p), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_default_params(CCMAP_PRESET_CADRE, &p), CCMAP_OK);
+  CHECK_NEAR(p.finest_cell_width_m, 0.04, 1e-7);
+  CHECK_NEAR(p.coverage_tau, 0.8, 1e-7);
+  CHECK_NEAR(p.noise.stereo_focal_px, 600.0, 1e-9);
+  CHECK(p.noise.sensor == CCMAP_SENSOR_STEREO && p.noise.weight_mode == CCMAP_WEIGHT_CONSTANT);
+  CHECK_STATUS(ccmap_default_params_for_width(0.08f, &q), CCMAP_OK);
+  CHECK(q.finest_max_sigma_m > p.finest_max_sigma_m);
+  CHECK_STATUS(ccmap_default_params(CCMAP_PRESET_SINGLE_CCM, &q), CCMAP_OK);
+  CHECK_NEAR(q.finest_cell_width_m, 0.08, 1e-7);
+
+  CHECK_STATUS(ccmap_init(map, NULL), CCMAP_INVALID_ARGUMENT);
+  q = p;
+  q.finest_cell_width_m = 0.0f;
+  CHECK_STATUS(ccmap_init(map, &q), CCMAP_INVALID_ARGUMENT);
+  q = p;
+  q.coverage_tau = (float)NAN;
+  CHECK_STATUS(ccmap_init(map, &q), CCMAP_NON_FINITE_INPUT);
+  q = p;
+  q.noise.sensor = 5;
+  CHECK_STATUS(ccmap_init(map, &q), CCMAP_INVALID_ARGUMENT);
+  q = p;
+  q.noise.weight_mode = 9;
+  CHECK_STATUS(ccmap_init(map, &q), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
+  CHECK_NEAR(ccmap_layer_cell_width(map, 4), 0.64, 1e-7);
+}
+
+static void test_frames_queries_export(ccmap_map* map) {
+  const size_t n = make_plane();
+  const float sensor[3] = {0.0f, 0.0f, 0.5f};
+  const float nan_sensor[3] = {(float)NAN, 0.0f, 0.0f};
+  ccmap_frame_counters c;
+  ccmap_query_result r;
+  ccmap_counters totals;
+  size_t written = 0;
+  size_t i;
+  ccmap_params p = precise_lidar_params(CCMAP_PRESET_CADRE);
+  CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
+
+  CHECK_STATUS(ccmap_update_frame(map, g_xyz, NULL, n, sensor, &c), CCMAP_OK);
+  CHECK(c.received == n);
+  CHECK(c.used == n);
+  g_weights[0] = 0.0f; /* refused point */
+  CHECK_STATUS(ccmap_update_frame(map, g_xyz, g_weights, n, sensor, &c), CCMAP_OK);
+  CHECK(c.rejected_weight == 1u);
+  CHECK(c.used == n - 1u);
+  CHECK_STATUS(ccmap_update_frame(map, NULL, NULL, 3, sensor, &c), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_update_frame(map, g_xyz, NULL, n, NULL, &c), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_update_frame(map, g_xyz, NULL, n, nan_sensor, NULL), CCMAP_NON_FINITE_INPUT);
+  CHECK_STATUS(ccmap_update_frame(map, NULL, NULL, 0, sensor, NULL), CCMAP_OK);
+
+  CHECK_STATUS(ccmap_query(map, 0.31f, 0.21f, &r), CCMAP_OK);
+  CHECK(r.status == CCMAP_OK);
+  CHECK(r.layer == 0);
+  CHECK_NEAR(r.height_m, 0.1 * 0.30 + 0.05 * 0.22, 0.004); /* 4 cm cell centre (0.30, 0.22) */
+  CHECK(r.cell_class == CCMAP_CLASS_TRAVERSABLE);
+  CHECK_NEAR(r.slope_x, 0.1, 0.01);
+  CHECK_STATUS(ccmap_query_layer(map, 2, 0.4f, -0.4f, &r), CCMAP_OK);
+  CHECK_NEAR(r.slope_x, 0.1, 0.005);
+  CHECK_NEAR(r.slope_y, 0.05, 0.005);
+  CHECK_NEAR(r.height_m, 0.1 * 0.4 - 0.05 * 0.4, 0.002);
+  CHECK_STATUS(ccmap_query(map, 3.0f, 3.0f, &r), CCMAP_UNKNOWN);
+  CHECK_STATUS(ccmap_query(map, 30.0f, 3.0f, &r), CCMAP_OUTSIDE_MAP);
+  CHECK(r.layer == -1);
+  CHECK_STATUS(ccmap_query(map, 0.0f, 0.0f, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_layer(map, 9, 0.0f, 0.0f, &r), CCMAP_INVALID_ARGUMENT);
+  CHECK(strcmp(ccmap_cell_class_string(CCMAP_CLASS_OBSTACLE), "obstacle") == 0);
+  CHECK(strcmp(ccmap_cell_class_string(42), "unknown") == 0);
+
+  CHECK_STATUS(ccmap_export_layer(map, 1, g_records, ccmap_layer_capacity(map, 1) - 1, &written),
+               CCMAP_BUFFER_TOO_SMALL);
+  CHECK(written == 0u);
+  CHECK_STATUS(ccmap_export_layer(map, 1, NULL, 10, &written), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_export_layer(map, 1, g_records, sizeof g_records / sizeof g_records[0], &written), CCMAP_OK);
+  CHECK(written > 100u);
+  for (i = 0; i < written; ++i) {
+    const ccmap_cell_record* rec = &g_records[i];
+    ccmap_query_result q;
+    if (!(rec->weight > 0.0f)) {
+      CHECK(rec->weight > 0.0f);
+      break;
+    }
+    if (ccmap_query_layer(map, 1, rec->centre_x, rec->centre_y, &q) == CCMAP_OK &&
+        (q.height_m != rec->height_m || q.cell_class != rec->cell_class)) {
+      CHECK(q.height_m == rec->height_m && q.cell_class == rec->cell_class);
+      break;
+    }
+    if (fabs(rec->centre_x - 0.08 * (rec->index_x + 0.5)) > 1e-5) {
+      CHECK(fabs(rec->centre_x - 0.08 * (rec->index_x + 0.5)) <= 1e-5);
+      break;
+    }
+  }
+
+  /* Sensor-frame update: identity rotation, sensor at (0, 0, 0.5): same points as the map frame. */
+  {
+    ccmap_pose pose;
+    memset(&pose, 0, sizeof pose);
+    pose.rotation[0] = pose.rotation[4] = pose.rotation[8] = 1.0f;
+    pose.translation[2] = 0.5f;
+    CHECK_STATUS(ccmap_update_frame_sensor(map, g_xyz, n, &pose, &c), CCMAP_OK);
+    CHECK(c.used == n);
+    CHECK_STATUS(ccmap_update_frame_sensor(map, g_xyz, n, NULL, &c), CCMAP_INVALID_ARGUMENT);
+    pose.rotation[3] = (float)INFINITY;
+    CHECK_STATUS(ccmap_update_frame_sensor(map, g_xyz, n, &pose, &c), CCMAP_NON_FINITE_INPUT);
+  }
+
+  CHECK_STATUS(ccmap_move_to(map, (float)NAN, 0.0f), CCMAP_NON_FINITE_INPUT);
+  CHECK_STATUS(ccmap_move_to(map, 0.1f, 0.0f), CCMAP_OK);
+  CHECK_STATUS(ccmap_get_counters(map, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_get_counters(map, &totals), CCMAP_OK);
+  CHECK(totals.totals.received == 3u * n);
+  CHECK(totals.totals.used == 3u * n - 1u);
+  CHECK(totals.totals.rejected_weight == 1u);
+  CHECK(totals.rejected_moves == 1u);
+  /* Counted by the map: NULL points, NaN origin, Inf rotation (a NULL origin or pose is refused
+   * by the C layer before the map sees the frame). */
+  CHECK(totals.rejected_frames == 3u);
+}
+
+static void test_snapshots(ccmap_map* map) {
+  ccmap_map* copy = NULL;
+  ccmap_map* ccm = NULL;
+  size_t written = 0;
+  ccmap_query_result a;
+  ccmap_query_result b;
+  float x;
+  int same = 1;
+  CHECK(ccmap_snapshot_size(map) == CCMAP_CADRE_SNAPSHOT_SIZE);
+  CHECK_STATUS(ccmap_save_snapshot(map, g_snapshot, sizeof g_snapshot - 1, &written), CCMAP_BUFFER_TOO_SMALL);
+  CHECK(written == 0u);
+  CHECK_STATUS(ccmap_save_snapshot(map, NULL, sizeof g_snapshot, &written), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_save_snapshot(map, g_snapshot, sizeof g_snapshot, &written), CCMAP_OK);
+  CHECK(written == CCMAP_CADRE_SNAPSHOT_SIZE);
+
+  CHECK_STATUS(ccmap_place(&g_storage_copy, sizeof g_storage_copy, CCMAP_PRESET_CADRE, &copy), CCMAP_OK);
+  CHECK_STATUS(ccmap_load_snapshot(copy, g_snapshot, written - 1), CCMAP_CORRUPT);
+  g_snapshot[1000] ^= 0x10u;
+  CHECK_STATUS(ccmap_load_snapshot(copy, g_snapshot, written), CCMAP_CORRUPT);
+  g_snapshot[1000] ^= 0x10u;
+  CHECK_STATUS(ccmap_query(copy, 0.0f, 0.0f, &a), CCMAP_NOT_INITIALISED); /* failed loads left it alone */
+  CHECK_STATUS(ccmap_load_snapshot(copy, NULL, written), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_load_snapshot(copy, g_snapshot, written), CCMAP_OK);
+  for (x = -1.2f; x < 1.2f; x += 0.013f) {
+    const ccmap_status sa = ccmap_query(map, x, 0.37f * x, &a);
+    const ccmap_status sb = ccmap_query(copy, x, 0.37f * x, &b);
+    if (sa != sb || memcmp(&a, &b, sizeof a) != 0) {
+      same = 0;
+    }
+  }
+  CHECK(same); /* bitwise identical answers */
+
+  /* A CADRE snapshot does not load into a single-layer map. */
+  CHECK_STATUS(ccmap_place(&g_ccm_storage, sizeof g_ccm_storage, CCMAP_PRESET_SINGLE_CCM, &ccm), CCMAP_OK);
+  CHECK_STATUS(ccmap_load_snapshot(ccm, g_snapshot, written), CCMAP_VERSION_MISMATCH);
+}
+
+static void test_single_layer_presets(void) {
+  void* storages[3];
+  size_t sizes[3];
+  const ccmap_preset presets[3] = {CCMAP_PRESET_SINGLE_CCM, CCMAP_PRESET_SINGLE_KALMAN, CCMAP_PRESET_SINGLE_OMG};
+  const float sensor[3] = {0.0f, 0.0f, 0.5f};
+  size_t n = make_plane();
+  int k;
+  storages[0] = &g_ccm_storage;
+  storages[1] = &g_kalman_storage;
+  storages[2] = &g_omg_storage;
+  sizes[0] = sizeof g_ccm_storage;
+  sizes[1] = sizeof g_kalman_storage;
+  sizes[2] = sizeof g_omg_storage;
+  for (k = 0; k < 3; ++k) {
+    ccmap_map* map = NULL;
+    ccmap_query_result r;
+    ccmap_frame_counters c;
+    ccmap_params p = precise_lidar_params(presets[k]);
+    CHECK_STATUS(ccmap_place(storages[k], sizes[k], presets[k], &map), CCMAP_OK);
+    CHECK(ccmap_layer_count(map) == 1);
+    CHECK(ccmap_layer_capacity(map, 0) == 256u * 256u);
+    CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
+    CHECK_STATUS(ccmap_update_frame(map, g_xyz, NULL, n, sensor, &c), CCMAP_OK);
+    CHECK(c.used == n);
+    CHECK_STATUS(ccmap_query(map, 0.3f, -0.2f, &r), CCMAP_OK);
+    CHECK(r.layer == 0);
+    CHECK_NEAR(r.cell_width_m, 0.08, 1e-7);
+    CHECK_NEAR(r.height_m, 0.1 * 0.3 - 0.05 * 0.2, 0.006);
+  }
+}
+
+int main(void) {
+  ccmap_map* map = NULL;
+  CHECK(strcmp(ccmap_status_string(CCMAP_OK), "ok") == 0);
+  CHECK(strcmp(ccmap_status_string(CCMAP_CORRUPT), "corrupt") == 0);
+  CHECK(strcmp(ccmap_status_string(CCMAP_VERSION_MISMATCH), "version_mismatch") == 0);
+  CHECK(strcmp(ccmap_status_string((ccmap_status)99), "invalid_status") == 0);
+  CHECK(strcmp(ccmap_platform_name(), "posix") == 0);
+
+  test_storage_and_placement();
+  CHECK_STATUS(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, &map), CCMAP_OK);
+  test_params(map);
+  test_frames_queries_export(map);
+  test_snapshots(map);
+  test_single_layer_presets();
+
+  printf("ccmap C API: %d checks, %d failed\n", g_checks, g_failures);
+  return g_failures == 0 ? 0 : 1;
+}

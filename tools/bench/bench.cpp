@@ -1,0 +1,136 @@
+// ccmap_bench: host benchmarks (Google Benchmark) of the update path, the cells, queries,
+// moves, and the static memory of each preset. docs/performance.md lists the results and the
+// command; tools/bench/run runs this and the self-timed program (host and QEMU).
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <vector>
+
+#include "ccmap/map/stack.hpp"
+#include "support/cadre_frames.hpp"
+
+namespace {
+
+using ccmap::test::CadreFrame;
+
+const std::vector<CadreFrame>& frames(int width, int height) {
+  static std::vector<std::vector<CadreFrame>> cache;
+  static std::vector<std::pair<int, int>> keys;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (keys[i] == std::make_pair(width, height)) {
+      return cache[i];
+    }
+  }
+  std::vector<CadreFrame> made;
+  for (int k = 0; k < 3; ++k) {
+    made.push_back(ccmap::test::make_cadre_frame(ccmap::test::cadre_sequence_spec(k, width, height)));
+  }
+  keys.emplace_back(width, height);
+  cache.push_back(std::move(made));
+  return cache.back();
+}
+
+template <typename Config>
+std::unique_ptr<ccmap::Stack<Config>> make_stack(float width) {
+  auto stack = std::make_unique<ccmap::Stack<Config>>();
+  if (stack->init(ccmap::default_stack_params(width)) != ccmap::Status::kOk) {
+    std::abort();
+  }
+  return stack;
+}
+
+enum class Path { kMapFrame, kSensorFrame, kSequential };
+
+template <typename Config>
+void frame_update(benchmark::State& state, int width, int height, float cell, Path path) {
+  const auto& fs = frames(width, height);
+  auto stack = make_stack<Config>(cell);
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const CadreFrame& f = fs[k++ % fs.size()];
+    ccmap::Status s = ccmap::Status::kOk;
+    switch (path) {
+      case Path::kMapFrame: s = stack->update_frame(f.map_points.data(), f.map_points.size(), f.sensor_origin, nullptr); break;
+      case Path::kSensorFrame: s = stack->update_frame_sensor(f.sensor_points.data(), f.sensor_points.size(), f.pose, nullptr); break;
+      case Path::kSequential:
+        s = stack->update_frame_sequential(f.map_points.data(), nullptr, f.map_points.size(), f.sensor_origin, nullptr);
+        break;
+    }
+    benchmark::DoNotOptimize(s);
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * width * height);
+  state.counters["ns_per_point"] = benchmark::Counter(static_cast<double>(state.iterations()) * width * height,
+                                                      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void BM_CadreFrame(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 850, 650, 0.04F, Path::kMapFrame); }
+void BM_CadreFrameSensor(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 850, 650, 0.04F, Path::kSensorFrame); }
+void BM_CadreFrameSequential(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 850, 650, 0.04F, Path::kSequential); }
+void BM_CadreFrame10k(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 125, 80, 0.04F, Path::kMapFrame); }
+void BM_CadreFrame100k(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 400, 250, 0.04F, Path::kMapFrame); }
+void BM_CellCcm(benchmark::State& s) { frame_update<ccmap::SingleCcmConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
+void BM_CellKalman(benchmark::State& s) { frame_update<ccmap::SingleKalmanConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
+void BM_CellOmg(benchmark::State& s) { frame_update<ccmap::SingleOmgConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
+BENCHMARK(BM_CadreFrame)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CadreFrameSensor)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CadreFrameSequential)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CadreFrame10k)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CadreFrame100k)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CellCcm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CellKalman)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CellOmg)->Unit(benchmark::kMicrosecond);
+
+ccmap::Stack<ccmap::CadreConfig>& mapped_cadre() {
+  static std::unique_ptr<ccmap::Stack<ccmap::CadreConfig>> stack = [] {
+    auto s = make_stack<ccmap::CadreConfig>(0.04F);
+    for (const CadreFrame& f : frames(850, 650)) {
+      (void)s->update_frame(f.map_points.data(), f.map_points.size(), f.sensor_origin, nullptr);
+    }
+    return s;
+  }();
+  return *stack;
+}
+
+void BM_QueryFinest(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  int q = 0;
+  for (auto _ : state) {
+    const float t = static_cast<float>(q++ & 16383);
+    benchmark::DoNotOptimize(stack.query(0.3F + 0.00004F * t, 0.2F - 0.00002F * t));
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+void BM_QueryCoarsePooled(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  int q = 0;
+  for (auto _ : state) {
+    const float t = static_cast<float>(q++ & 16383);
+    benchmark::DoNotOptimize(stack.query_layer(4, 0.5F + 0.0001F * t, 0.1F));
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()));
+}
+BENCHMARK(BM_QueryFinest);
+BENCHMARK(BM_QueryCoarsePooled);
+
+void BM_Move1m(benchmark::State& state) {
+  auto& stack = mapped_cadre();
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(stack.move_to((k++ & 1) != 0 ? 1.0F : 0.0F, 0.0F));
+  }
+}
+BENCHMARK(BM_Move1m)->Unit(benchmark::kMicrosecond);
+
+void BM_StaticMemory(benchmark::State& state) {
+  for (auto _ : state) {
+  }
+  state.counters["CadreConfig_bytes"] = static_cast<double>(sizeof(ccmap::Stack<ccmap::CadreConfig>));
+  state.counters["SingleCcmConfig_bytes"] = static_cast<double>(sizeof(ccmap::Stack<ccmap::SingleCcmConfig>));
+  state.counters["SingleKalmanConfig_bytes"] = static_cast<double>(sizeof(ccmap::Stack<ccmap::SingleKalmanConfig>));
+  state.counters["SingleOmgConfig_bytes"] = static_cast<double>(sizeof(ccmap::Stack<ccmap::SingleOmgConfig>));
+}
+BENCHMARK(BM_StaticMemory)->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();
