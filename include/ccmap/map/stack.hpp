@@ -196,14 +196,11 @@ class Stack {
   [[nodiscard]] Status update_frame(const PointXYZ* points, const float* weights, std::size_t n,
                                     const PointXYZ& sensor_origin, FrameCounters* counters) noexcept {
     FrameCounters frame{};
-    const Status status = check_frame(points, n, sensor_origin);
+    std::uint64_t start = 0U;
+    const Status status = begin_frame(points, n, sensor_origin, true, frame, counters, &start);
     if (status != Status::kOk) {
-      ++rejected_frames_;
-      write_counters(frame, counters);
       return status;
     }
-    const std::uint64_t start = platform::monotonic_ns();
-    frame.received = static_cast<std::uint32_t>(n);
     run_frame(points, weights, n, sensor_origin, nullptr, frame);
     finish_frame(frame, start, counters);
     return Status::kOk;
@@ -214,17 +211,11 @@ class Stack {
                                            FrameCounters* counters) noexcept {
     FrameCounters frame{};
     const PointXYZ origin{sensor_pose.translation.x(), sensor_pose.translation.y(), sensor_pose.translation.z()};
-    Status status = check_frame(points, n, origin);
-    if (status == Status::kOk && !sensor_pose.rotation.allFinite()) {
-      status = Status::kNonFiniteInput;
-    }
+    std::uint64_t start = 0U;
+    const Status status = begin_frame(points, n, origin, sensor_pose.rotation.allFinite(), frame, counters, &start);
     if (status != Status::kOk) {
-      ++rejected_frames_;
-      write_counters(frame, counters);
       return status;
     }
-    const std::uint64_t start = platform::monotonic_ns();
-    frame.received = static_cast<std::uint32_t>(n);
     const Eigen::Matrix3f& r = sensor_pose.rotation;
     const detail::ChunkTransform transform{{r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)},
                                            {origin.x, origin.y, origin.z}};
@@ -234,19 +225,16 @@ class Stack {
   }
 
   /// The reference update: the same contract as update_frame (weights may be nullptr), one
-  /// point after the other through routing and one cell update, without chunking. Slower; kept
-  /// as the definition the fast path is tested against (tests/map/update_path_test.cpp).
+  /// point after the other through the same front and cell functions, without the chunked
+  /// sensor-frame scratch; tests/map/update_path_test.cpp holds the two paths bitwise equal.
   [[nodiscard]] Status update_frame_sequential(const PointXYZ* points, const float* weights, std::size_t n,
                                                const PointXYZ& sensor_origin, FrameCounters* counters) noexcept {
     FrameCounters frame{};
-    const Status status = check_frame(points, n, sensor_origin);
+    std::uint64_t start = 0U;
+    const Status status = begin_frame(points, n, sensor_origin, true, frame, counters, &start);
     if (status != Status::kOk) {
-      ++rejected_frames_;
-      write_counters(frame, counters);
       return status;
     }
-    const std::uint64_t start = platform::monotonic_ns();
-    frame.received = static_cast<std::uint32_t>(n);
     detail::set_front_origin(front_, sensor_origin);
     for (std::size_t i = 0; i < n; ++i) {
       insert_point(points[i], weights != nullptr ? weights + i : nullptr, frame);
@@ -428,6 +416,24 @@ class Stack {
       return Status::kInvalidArgument;
     }
     return ccm_check_point(origin.x, origin.y, origin.z);
+  }
+
+  /// Prologue of every frame update: a refused frame (bad arguments, non-finite origin or
+  /// rotation) is counted and answered; an accepted one starts its clock and counters.
+  [[nodiscard]] Status begin_frame(const PointXYZ* points, std::size_t n, const PointXYZ& origin, bool rotation_finite,
+                                   FrameCounters& frame, FrameCounters* counters, std::uint64_t* start) noexcept {
+    Status status = check_frame(points, n, origin);
+    if (status == Status::kOk && !rotation_finite) {
+      status = Status::kNonFiniteInput;
+    }
+    if (status != Status::kOk) {
+      ++rejected_frames_;
+      write_counters(frame, counters);
+      return status;
+    }
+    *start = platform::monotonic_ns();
+    frame.received = static_cast<std::uint32_t>(n);
+    return Status::kOk;
   }
 
   void finish_frame(const FrameCounters& frame, std::uint64_t start, FrameCounters* counters) noexcept {
