@@ -1,0 +1,87 @@
+// CI check of the simulated CADRE traverse (tools/traverse) at its --quick size, in-process:
+// 8 CADRE stereo frames (stride 4) along the start of the path, Stack<CadreConfig> updated in
+// the sensor frame, final map judged against the hazard ground truth.
+#include <gtest/gtest.h>
+
+#include "traverse/traverse.hpp"
+
+namespace tr = ccmap::traverse;
+
+namespace {
+
+const tr::TraverseResult& quick_run() {
+  static const tr::TraverseResult result = tr::run_traverse(tr::TraverseConfig::quick());
+  return result;
+}
+
+void every_frame_updates_the_stack() {
+  const tr::TraverseResult& r = quick_run();
+  ASSERT_TRUE(r.ok()) << r.error;
+  ASSERT_EQ(r.frames.size(), 8U);
+  for (const tr::FrameRecord& f : r.frames) {
+    EXPECT_TRUE(f.updated) << "frame " << f.index << " refused by update_frame_sensor";
+    EXPECT_GT(f.points, 10000U) << "frame " << f.index << ": the camera saw almost nothing";
+    EXPECT_GT(f.counters.used, f.points / 2) << "frame " << f.index << ": fewer than half the points were used";
+    EXPECT_EQ(f.counters.rejected_non_finite + f.counters.rejected_out_of_range, 0U) << "frame " << f.index;
+  }
+  EXPECT_GT(r.update_ms_max, 0.0);
+}
+
+void exports_are_finite() {
+  const tr::TraverseResult& r = quick_run();
+  ASSERT_EQ(r.layers.size(), 5U);
+  for (const tr::LayerReport& l : r.layers) {
+    EXPECT_GT(l.exported, 0U) << "layer " << l.layer << " exported no cell";
+    EXPECT_EQ(l.non_finite, 0U) << "layer " << l.layer << " exported " << l.non_finite << " cells with NaN/Inf";
+  }
+}
+
+void large_obstacles_in_the_observed_area_are_detected() {
+  const tr::TraverseResult& r = quick_run();
+  // Objects at least 0.75 x the cell width of the layer that classifies them (the size each
+  // layer is calibrated for), and the 48 cm class (the paper's 5 m-range minimum).
+  ASSERT_GE(r.design_size.observed, 1) << "no obstacle of design size was observed: the scene is wrong";
+  EXPECT_GE(r.design_size.rate(), 0.75) << r.design_size.detected << " of " << r.design_size.observed
+                                        << " observed design-size obstacles detected";
+  const tr::ObjectBin& large = r.large_objects();
+  ASSERT_GE(large.observed, 1) << "no >= 48 cm rock observed";
+  EXPECT_GE(large.rate(), 0.75) << large.detected << " of " << large.observed << " observed >= 48 cm rocks detected";
+  // Area view: of the known ground-truth hazard area, the stack marks most as obstacle/steep.
+  ASSERT_GT(r.stack.truth_hazard_known, 0.0);
+  EXPECT_GE(r.stack.hit_share(), 0.75) << "stack marks only " << 100.0 * r.stack.hit_share()
+                                       << " % of the known hazard area";
+}
+
+void few_false_obstacles_on_free_ground() {
+  const tr::TraverseResult& r = quick_run();
+  ASSERT_GT(r.stack.truth_free_known, 5.0) << "less than 5 m^2 of known free ground";
+  EXPECT_LT(r.stack.false_share(), 0.05) << 100.0 * r.stack.false_share()
+                                         << " % of the known free ground is marked obstacle/steep";
+  for (const tr::LayerReport& l : r.layers) {
+    EXPECT_LT(l.areas.false_share(), 0.05) << "layer " << l.layer << ": " << 100.0 * l.areas.false_share()
+                                           << " % false obstacles on free ground";
+  }
+}
+
+}  // namespace
+
+// One test, four checks: ctest runs every TEST in its own process, and the quick traverse
+// (~9 s) would otherwise be simulated once per check.
+TEST(ToolsTraverse, QuickTraverseUpdatesEveryFrameAndFindsTheHazards) {
+  {
+    SCOPED_TRACE("every frame updates the stack");
+    every_frame_updates_the_stack();
+  }
+  {
+    SCOPED_TRACE("exports are finite");
+    exports_are_finite();
+  }
+  {
+    SCOPED_TRACE("large obstacles in the observed area are detected");
+    large_obstacles_in_the_observed_area_are_detected();
+  }
+  {
+    SCOPED_TRACE("few false obstacles on free ground");
+    few_false_obstacles_on_free_ground();
+  }
+}
