@@ -305,6 +305,30 @@ TEST(CliMap, NonFinitePointsAreSkippedAndCounted) {
   EXPECT_EQ(used, 1600);
 }
 
+TEST(CliMap, PerPointWeightsFromTheFileReplaceTheSensorModel) {
+  // One 32 cm cell, a checkerboard of heights 1 (weight 9) and 0 (weight 1): the weighted mean
+  // is 0.9 (unweighted it would be 0.5); one point with weight -1 is refused as a bad weight.
+  const fs::path dir = temp_dir();
+  {
+    std::ofstream out(dir / "weighted.xyz");
+    for (int j = 0; j < 32; ++j) {
+      for (int i = 0; i < 32; ++i) {
+        const bool high = (i + j) % 2 == 0;
+        out << 0.005 + 0.01 * i << ' ' << 0.005 + 0.01 * j << ' ' << (high ? 1.0 : 0.0) << ' ' << (high ? 9 : 1) << "\n";
+      }
+    }
+    out << "0.1 0.1 5.0 -1\n";
+  }
+  const CliRun r = run({"map", "--preset", "ccm", "--res", "0.32", "--wl", "1e6", "--cloud",
+                        (dir / "weighted.xyz").string(), "--out", (dir / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("bad weight 1"), std::string::npos) << r.out;
+  const auto rows = read_rows(dir / "out" / "layer_0.csv");
+  ASSERT_EQ(rows.size(), 1U);
+  EXPECT_NEAR(rows[0].weight, 512.0 * 9.0 + 512.0, 1e-3) << "the file's weights must be summed";
+  EXPECT_NEAR(rows[0].height, 0.9, 0.01) << "height must be the weighted mean";
+}
+
 // =============================================================================================
 // Query
 // =============================================================================================

@@ -44,8 +44,9 @@ constexpr const char* kMapHelp =
     "  --wl W_L        weight limit W_l of CCM and OMG cells (default 1000)\n"
     "  --cloud FILE    one frame, map-frame coordinates: .ply (ascii/binary), .las (1.0-1.4,\n"
     "                  uncompressed) or text 'x y z [w]' per line; repeat for more frames,\n"
-    "                  applied in order. Per-point weights are read but not used: the library\n"
-    "                  weights points by its sensor model.\n"
+    "                  applied in order. A per-point weight (PLY property, 4th text column)\n"
+    "                  replaces the sensor model's weight for CCM and OMG cells (Kalman cells\n"
+    "                  weigh by range variance); weights <= 0 or non-finite are counted as bad.\n"
     "  --poses FILE    one line 'x y z yaw' per frame: the sensor position in the map frame; the\n"
     "                  map is re-centred on (x, y) before the frame. Without it the map stays\n"
     "                  centred on the first cloud's centroid.\n"
@@ -223,6 +224,8 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
   }
 
   std::vector<float> xyz;
+
+  std::vector<float> weights;
   for (std::size_t f = 0; f < o.clouds.size(); ++f) {
     const Cloud cloud = read_cloud(o.clouds[f]);
     if (!cloud.ok()) fail(cloud.error);
@@ -275,9 +278,14 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
       xyz[3 * i + 1] = static_cast<float>(cloud.y[i] - m.origin[1]);
       xyz[3 * i + 2] = static_cast<float>(cloud.z[i] - m.origin[2]);
     }
+    weights.clear();
+    if (cloud.has_weight) {
+      weights.reserve(cloud.size());
+      for (std::size_t i = 0; i < cloud.size(); ++i) weights.push_back(static_cast<float>(cloud.w[i]));
+    }
     FrameStats stats;
     const auto t0 = std::chrono::steady_clock::now();
-    if (!m.runner->update_frame(xyz, sensor, &stats, &error)) fail(o.clouds[f] + ": " + error);
+    if (!m.runner->update_frame(xyz, weights, sensor, &stats, &error)) fail(o.clouds[f] + ": " + error);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     stats.rejected_non_finite += cloud.skipped_non_finite;
     stats.received += cloud.skipped_non_finite;
@@ -289,8 +297,7 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
           << ", outside map " << stats.outside_map << ", too noisy " << stats.too_noisy << "; "
           << fmt("%.1f", ms) << " ms\n";
       if (cloud.has_weight) {
-        out << "note: " << base_name(o.clouds[f])
-            << ": per-point weights ignored (the library weights points by its sensor model)\n";
+        out << "note: " << base_name(o.clouds[f]) << ": per-point weights from the file replace the sensor model's\n";
       }
     }
   }

@@ -51,15 +51,16 @@ class StackRunner final : public MapRunner {
     return true;
   }
 
-  bool update_frame(const std::vector<float>& xyz, const float sensor_origin[3], FrameStats* stats,
-                    std::string* error) override {
+  bool update_frame(const std::vector<float>& xyz, const std::vector<float>& weights, const float sensor_origin[3],
+                    FrameStats* stats, std::string* error) override {
     points_.resize(xyz.size() / 3U);
     for (std::size_t i = 0; i < points_.size(); ++i) {
       points_[i] = PointXYZ{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
     }
     FrameCounters counters{};
     const PointXYZ origin{sensor_origin[0], sensor_origin[1], sensor_origin[2]};
-    const Status status = stack_->update_frame(points_.data(), points_.size(), origin, &counters);
+    const float* w = weights.size() == points_.size() && !weights.empty() ? weights.data() : nullptr;
+    const Status status = stack_->update_frame(points_.data(), w, points_.size(), origin, &counters);
     if (status != Status::kOk) {
       *error = std::string("the map refused the frame (") + to_string(status) + ")";
       return false;

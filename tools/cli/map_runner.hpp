@@ -58,9 +58,10 @@ class MapRunner {
   virtual bool init(const RunnerOptions& options, std::string* error) = 0;
   /// Re-centres the stack on (x, y), local metres.
   virtual bool move_to(float x, float y, std::string* error) = 0;
-  /// Folds one frame (xyz interleaved, local metres); sensor origin in local metres.
-  virtual bool update_frame(const std::vector<float>& xyz, const float sensor_origin[3], FrameStats* stats,
-                            std::string* error) = 0;
+  /// Folds one frame (xyz interleaved, local metres); sensor origin in local metres. `weights`
+  /// is empty (the sensor model weighs the points) or one weight per point.
+  virtual bool update_frame(const std::vector<float>& xyz, const std::vector<float>& weights,
+                            const float sensor_origin[3], FrameStats* stats, std::string* error) = 0;
   virtual int layer_count() const = 0;
   virtual float layer_cell_width(int layer) const = 0;
   virtual int layer_side(int layer) const = 0;                 ///< cells per axis
