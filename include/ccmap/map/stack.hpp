@@ -473,8 +473,11 @@ class Stack {
       }
     } else {
       for (std::size_t begin = 0; begin < n; begin += detail::kFrameChunkPoints) {
-        const std::size_t count = n - begin < detail::kFrameChunkPoints ? n - begin : detail::kFrameChunkPoints;
+        const std::size_t remaining = n - begin;
+        const std::size_t count = remaining < detail::kFrameChunkPoints ? remaining : detail::kFrameChunkPoints;
         detail::prepare_chunk(points + begin, count, transform, front_, chunk_);
+        // begin < n, so count >= 1; cppcheck 2.10 loses that through the loop bound.
+        // cppcheck-suppress knownConditionTrueFalse
         for (std::size_t i = 0; i < count; ++i) {
           const detail::PointFront front{chunk_.code[i], chunk_.ix[i], chunk_.iy[i], chunk_.range_units_sq[i],
                                          chunk_.z_units[i]};
