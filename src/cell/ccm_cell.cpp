@@ -1,5 +1,7 @@
 #include "ccmap/cell/ccm_cell.hpp"
 
+#include <limits>
+
 namespace ccmap {
 
 Status ccm_merge(CcmCell& cell, const CcmCell& other, float weight_limit) noexcept {
@@ -126,7 +128,14 @@ float ccm_elevation_variance(const CcmCell& cell, const CcmSurface& surface, flo
     const float oy = qy - cell.mean_y;
     leverage += oy * oy / var_yy;
   }
-  return surface.normal_variance * (1.0F + leverage / cell.weight);
+  // A tiny W (subnormal weights or weight limit) can overflow leverage / W: the plane is then
+  // unconstrained, so the variance saturates at FLT_MAX instead of becoming Inf (or NaN as
+  // 0 * Inf when the residual is 0).
+  constexpr float kMax = std::numeric_limits<float>::max();
+  float factor = 1.0F + leverage / cell.weight;
+  factor = factor <= kMax ? factor : kMax;
+  const float variance = surface.normal_variance * factor;
+  return variance <= kMax ? variance : kMax;
 }
 
 CcmCell ccm_pool4(const CcmCell children[4], float child_width_m, float weight_limit) noexcept {

@@ -458,6 +458,22 @@ TEST(CcmCellDegenerate, DenormalCoordinatesAndTinyWeightsStayFinite) {
   expect_all_finite(cell);
 }
 
+TEST(CcmCellDegenerate, SubnormalWeightLimitKeepsQueriesFinite) {
+  // Found by the stack fuzzer: W limited to 5.5e-41 made leverage / W overflow, and the
+  // elevation variance of a flat cell became 0 * Inf = NaN.
+  const float limit = 5.52447907e-41F;
+  CcmCell flat{};
+  CcmCell rough{};
+  for (int i = 0; i < 10; ++i) {
+    const float x = 0.001F * static_cast<float>(i);
+    ASSERT_EQ(ccm_update(flat, x, -x, 0.5F, 1.0F, limit), Status::kOk);
+    ASSERT_EQ(ccm_update(rough, x, -x, 0.5F + 0.01F * static_cast<float>(i % 2), 1.0F, limit), Status::kOk);
+  }
+  expect_all_finite(flat);
+  expect_all_finite(rough);
+  EXPECT_EQ(ccm_elevation_variance(flat, ccm_surface(flat), 0.01F, 0.01F), 0.0F);
+}
+
 TEST(CcmCellDegenerate, EmptyCellQueriesAreZeroAndFinite) {
   const CcmCell empty{};
   expect_all_finite(empty);
