@@ -458,20 +458,26 @@ TEST(CcmCellDegenerate, DenormalCoordinatesAndTinyWeightsStayFinite) {
   expect_all_finite(cell);
 }
 
-TEST(CcmCellDegenerate, SubnormalWeightLimitKeepsQueriesFinite) {
-  // Found by the stack fuzzer: W limited to 5.5e-41 made leverage / W overflow, and the
-  // elevation variance of a flat cell became 0 * Inf = NaN.
-  const float limit = 5.52447907e-41F;
+TEST(CcmCellDegenerate, SubnormalWeightLimitIsRefusedAndTinyWeightsStayFinite) {
+  // Found by the stack fuzzer: W limited to 5.5e-41 made S / W overflow (normal variance Inf)
+  // and leverage / W overflow (elevation variance 0 * Inf = NaN). Such limits are refused; tiny
+  // measurement weights stay legal and the queries stay finite.
+  CcmCell cell{};
+  const CcmCell before = cell;
+  EXPECT_EQ(ccm_update(cell, 0.0F, 0.0F, 0.5F, 1.0F, 5.52447907e-41F), Status::kInvalidArgument);
+  EXPECT_EQ(ccm_update(cell, 0.0F, 0.0F, 0.5F, 1.0F, 0.5F * kMinWeightLimit), Status::kInvalidArgument);
+  EXPECT_EQ(std::memcmp(&cell, &before, sizeof cell), 0);
   CcmCell flat{};
   CcmCell rough{};
   for (int i = 0; i < 10; ++i) {
     const float x = 0.001F * static_cast<float>(i);
-    ASSERT_EQ(ccm_update(flat, x, -x, 0.5F, 1.0F, limit), Status::kOk);
-    ASSERT_EQ(ccm_update(rough, x, -x, 0.5F + 0.01F * static_cast<float>(i % 2), 1.0F, limit), Status::kOk);
+    ASSERT_EQ(ccm_update(flat, x, -x, 0.5F, 1e-40F, kMinWeightLimit), Status::kOk);
+    ASSERT_EQ(ccm_update(rough, x, -x, 0.5F + 0.01F * static_cast<float>(i % 2), 1e-40F, kNoLimit), Status::kOk);
   }
   expect_all_finite(flat);
   expect_all_finite(rough);
-  EXPECT_EQ(ccm_elevation_variance(flat, ccm_surface(flat), 0.01F, 0.01F), 0.0F);
+  // The elevation variance saturates rather than overflowing when W is tiny.
+  EXPECT_LE(ccm_elevation_variance(rough, ccm_surface(rough), 0.01F, 0.01F), std::numeric_limits<float>::max());
 }
 
 TEST(CcmCellDegenerate, EmptyCellQueriesAreZeroAndFinite) {

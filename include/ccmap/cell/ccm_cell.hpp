@@ -76,9 +76,14 @@ struct CcmBatchCounts {
   return (w > 0.0F && w <= kMaxMeasurementWeight) ? Status::kOk : Status::kBadWeight;
 }
 
-/// kOk if the limit is > 0 (kNoWeightLimit allowed), else kInvalidArgument (NaN fails).
+/// Smallest accepted weight limit W_l. Below it the limiter scales W and S towards the
+/// subnormal range, where their ratio (the variances) loses every digit and can overflow
+/// (found by the stack fuzzer with W_l = 5.5e-41).
+inline constexpr float kMinWeightLimit = 1.0e-3F;
+
+/// kOk if W_l >= kMinWeightLimit (kNoWeightLimit allowed), else kInvalidArgument (NaN fails).
 [[nodiscard]] inline Status ccm_check_weight_limit(float weight_limit) noexcept {
-  return weight_limit > 0.0F ? Status::kOk : Status::kInvalidArgument;
+  return weight_limit >= kMinWeightLimit ? Status::kOk : Status::kInvalidArgument;
 }
 
 // ---------------------------------------------------------------------------------------------
