@@ -27,22 +27,14 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/hash_unit.hpp"
 #include "support/map_state.hpp"
 
 namespace {
 
 using S = ccmap::Stack<ccmap::CadreConfig>;
 
-/// Integer hash -> [0, 1), 24 bits, exact in float.
-float unit(std::uint32_t i, std::uint32_t salt) {
-  std::uint32_t h = i * 0x9E3779B1U ^ salt * 0x85EBCA77U;
-  h ^= h >> 15;
-  h *= 0x2C1B3C6DU;
-  h ^= h >> 12;
-  h *= 0x297A2D39U;
-  h ^= h >> 15;
-  return static_cast<float>(h >> 8) * (1.0F / 16777216.0F);
-}
+using ccmap::test::hash_unit;
 
 /// Terrain: a rational bump field plus a 12 cm step, + - * / only.
 float terrain(float x, float y) {
@@ -90,9 +82,9 @@ Result run() {
     const ccmap::Pose pose = pose_from(rx, ry, yaw_t);
     for (std::uint32_t i = 0; i < kPoints; ++i) {
       const std::uint32_t id = static_cast<std::uint32_t>(f) * kPoints + i;
-      const float ahead = 0.2F + 5.5F * unit(id, 1U);
-      const float side = (6.0F * unit(id, 2U) - 3.0F) * (0.2F + ahead / 5.7F);
-      const float noise = 0.004F * (unit(id, 3U) - 0.5F);
+      const float ahead = 0.2F + 5.5F * hash_unit(id, 1U);
+      const float side = (6.0F * hash_unit(id, 2U) - 3.0F) * (0.2F + ahead / 5.7F);
+      const float noise = 0.004F * (hash_unit(id, 3U) - 0.5F);
       if (sensor_frame) {
         // Sensor frame: the map point through the inverse pose (R^T (p - t)).
         const float mx = rx + pose.rotation(0, 0) * ahead + pose.rotation(0, 1) * side;

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/hash_unit.hpp"
 #include "support/map_state.hpp"
 
 namespace ccmap {
@@ -32,16 +33,7 @@ constexpr float kFloatMax = std::numeric_limits<float>::max();
 // finest layer whose window holds it (routing by window only: border tests need that).
 sensor::NoiseModel precise_lidar() { return sensor::NoiseModel::lidar(sensor::LidarParams{0.0005F, 0.0F}); }
 
-/// Integer hash -> [0, 1) with 24 bits: exact in float, no libm.
-float unit(std::uint32_t i, std::uint32_t salt) {
-  std::uint32_t h = i * 0x9E3779B1U ^ salt * 0x85EBCA77U;
-  h ^= h >> 15;
-  h *= 0x2C1B3C6DU;
-  h ^= h >> 12;
-  h *= 0x297A2D39U;
-  h ^= h >> 15;
-  return static_cast<float>(h >> 8) * (1.0F / 16777216.0F);
-}
+using ccmap::test::hash_unit;
 
 std::unique_ptr<S> make_stack(const StackParams& params) {
   auto stack = std::make_unique<S>();
@@ -57,7 +49,7 @@ std::unique_ptr<S> filled_stack(StackParams params = default_stack_params(0.04F)
   std::vector<PointXYZ> pts;
   for (float y = -6.0F; y < 6.0F; y += 0.031F) {
     for (float x = -6.0F; x < 6.0F; x += 0.029F) {
-      pts.push_back(PointXYZ{x, y, -0.5F + 0.05F * x + 0.01F * unit(static_cast<std::uint32_t>(pts.size()), 1U)});
+      pts.push_back(PointXYZ{x, y, -0.5F + 0.05F * x + 0.01F * hash_unit(static_cast<std::uint32_t>(pts.size()), 1U)});
     }
   }
   FrameCounters c{};
@@ -296,9 +288,9 @@ TEST(StackHostile, MillionPointsInOneCellSaturateAtTheWeightLimitAndTouchNothing
   std::vector<PointXYZ> pts(kPoints);
   for (std::uint32_t i = 0; i < kPoints; ++i) {
     // Strictly inside the cell: u in [1/64, 63/64).
-    const float u = (1.0F + 62.0F * unit(i, 11U)) * (1.0F / 64.0F);
-    const float v = (1.0F + 62.0F * unit(i, 12U)) * (1.0F / 64.0F);
-    pts[i] = PointXYZ{x0 + w * u, y0 + w * v, -0.5F + 0.02F * unit(i, 13U)};
+    const float u = (1.0F + 62.0F * hash_unit(i, 11U)) * (1.0F / 64.0F);
+    const float v = (1.0F + 62.0F * hash_unit(i, 12U)) * (1.0F / 64.0F);
+    pts[i] = PointXYZ{x0 + w * u, y0 + w * v, -0.5F + 0.02F * hash_unit(i, 13U)};
   }
   auto expected = raw_map_state(*stack);
   FrameCounters c{};

@@ -33,6 +33,7 @@
 
 #include "ccmap/map/stack.hpp"
 #include "support/ccm_double.hpp"
+#include "support/hash_unit.hpp"
 #include "support/map_state.hpp"
 
 namespace ccmap {
@@ -40,15 +41,7 @@ namespace {
 
 using S = Stack<CadreConfig>;
 
-float unit(std::uint32_t i, std::uint32_t salt) {
-  std::uint32_t h = i * 0x9E3779B1U ^ salt * 0x85EBCA77U;
-  h ^= h >> 15;
-  h *= 0x2C1B3C6DU;
-  h ^= h >> 12;
-  h *= 0x297A2D39U;
-  h ^= h >> 15;
-  return static_cast<float>(h >> 8) * (1.0F / 16777216.0F);
-}
+using ccmap::test::hash_unit;
 
 std::uint64_t key(CellIndex i) {
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i.x)) << 32) | static_cast<std::uint32_t>(i.y);
@@ -262,15 +255,15 @@ TEST(StackSoak, TenThousandFrameTraverseMatchesABruteForceRebuild) {
     for (std::uint32_t i = 0; i < kPointsPerFrame; ++i) {
       const std::uint32_t id = static_cast<std::uint32_t>(f) * kPointsPerFrame + i;
       // Ahead of the robot out to 6 m (some points beyond every IV-G bound), +-3 m sideways.
-      const float ahead = 0.2F + 5.8F * unit(id, 1U);
-      const float side = 6.0F * unit(id, 2U) - 3.0F;
+      const float ahead = 0.2F + 5.8F * hash_unit(id, 1U);
+      const float side = 6.0F * hash_unit(id, 2U) - 3.0F;
       const float norm = 1.0F / std::sqrt(hx * hx + hy * hy + 1e-6F);
       const float x = rx + (hx * ahead - hy * side) * norm;
       const float y = ry + (hy * ahead + hx * side) * norm;
       // 10 % of the finest width away from every cell edge (coarser edges are finer edges).
-      const float x_safe = (std::floor(x / w0) + 0.1F + 0.8F * unit(id, 4U)) * w0;
-      const float y_safe = (std::floor(y / w0) + 0.1F + 0.8F * unit(id, 5U)) * w0;
-      const float z = 0.05F * std::sin(0.7F * x_safe) + 0.03F * std::cos(1.3F * y_safe) + 0.004F * unit(id, 3U);
+      const float x_safe = (std::floor(x / w0) + 0.1F + 0.8F * hash_unit(id, 4U)) * w0;
+      const float y_safe = (std::floor(y / w0) + 0.1F + 0.8F * hash_unit(id, 5U)) * w0;
+      const float z = 0.05F * std::sin(0.7F * x_safe) + 0.03F * std::cos(1.3F * y_safe) + 0.004F * hash_unit(id, 3U);
       const float dx = x_safe - origin.x, dy = y_safe - origin.y, dz = z - origin.z;
       const float range_sq = dx * dx + dy * dy + dz * dz;
       bool near_bound = false;
