@@ -28,3 +28,4 @@ endif()
 # Tests and host tools: a lighter wall (they compute references in double on purpose).
 add_library(ccmap_host_flags INTERFACE)
 target_compile_options(ccmap_host_flags INTERFACE -Wall -Wextra -Wshadow -Werror)
+target_link_libraries(ccmap_host_flags INTERFACE ccmap_eigen)  # tests and host tools may use Eigen

@@ -14,8 +14,7 @@ include(GoogleTest)
 function(ccmap_add_gtest name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
-  target_link_libraries(${name} PRIVATE ccmap::core ccmap_host_flags GTest::gtest_main ${ARG_LIBS})
-  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  target_link_libraries(${name} PRIVATE ccmap::core ccmap_host_flags ccmap_test_support GTest::gtest_main ${ARG_LIBS})
   set(_labels library ${ARG_LABELS})
   gtest_discover_tests(${name}
     DISCOVERY_MODE PRE_TEST

@@ -1,7 +1,8 @@
 # Installable package: `cmake --install` gives the public headers (include/ccmap/**, the platform
 # header), the static libraries (ccmap_core and the platform library chosen by CCMAP_PLATFORM),
-# a CMake package (find_package(ccmap) -> ccmap::core, with the platform and the Eigen
-# interface target resolved; no find_package(Eigen3) needed) and a pkg-config file ccmap.pc.
+# a CMake package (find_package(ccmap) -> ccmap::core, with the platform resolved) and a
+# pkg-config file ccmap.pc. The flight core has no third-party dependency (Eigen serves the
+# tests' double-precision references and the host tools only).
 # examples/consumer builds against it; tools/check-install proves it for host and aarch64.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
@@ -10,19 +11,18 @@ set(CCMAP_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/ccmap" CACHE STRING
     "Where ccmapConfig.cmake is installed (relative to the prefix)")
 set(_ccmap_platform_target ccmap_platform_${CCMAP_PLATFORM})
 
-# Exported names (namespace ccmap::): core, platform_<name>, platform_interface, eigen,
+# Exported names (namespace ccmap::): core, platform_<name>, platform_interface,
 # core_build_flags (the warning wall; a link-only dependency of the static libraries, never
 # applied to consumers).
 set_target_properties(ccmap_core PROPERTIES EXPORT_NAME core)
 set_target_properties(${_ccmap_platform_target} PROPERTIES EXPORT_NAME platform_${CCMAP_PLATFORM})
 set_target_properties(ccmap_platform_interface PROPERTIES EXPORT_NAME platform_interface)
-set_target_properties(ccmap_eigen PROPERTIES EXPORT_NAME eigen)
 set_target_properties(ccmap_core_flags PROPERTIES EXPORT_NAME core_build_flags)
 # Most of the core is templates compiled in the consumer's translation units: give consumers
 # the same rounding as the library's own build (no FMA contraction; docs/design.md).
 target_compile_options(ccmap_core INTERFACE $<INSTALL_INTERFACE:-ffp-contract=off>)
 
-install(TARGETS ccmap_core ${_ccmap_platform_target} ccmap_platform_interface ccmap_eigen ccmap_core_flags
+install(TARGETS ccmap_core ${_ccmap_platform_target} ccmap_platform_interface ccmap_core_flags
         EXPORT ccmapTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/ ${PROJECT_SOURCE_DIR}/platform/include/

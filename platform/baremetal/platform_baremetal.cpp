@@ -17,6 +17,9 @@ namespace ccmap::platform {
 
 std::uint64_t monotonic_ns() noexcept { return ccmap_bm_monotonic_ns(); }
 
+// One thread of execution, no CPU-time clock: the monotonic clock (interrupts included).
+std::uint64_t thread_cpu_ns() noexcept { return ccmap_bm_monotonic_ns(); }
+
 void log_write(LogLevel level, const char* message) noexcept {
   ccmap_bm_log_write(static_cast<int>(level), message);
 }

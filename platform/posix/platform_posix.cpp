@@ -6,13 +6,19 @@
 
 namespace ccmap::platform {
 
-std::uint64_t monotonic_ns() noexcept {
+namespace {
+std::uint64_t clock_ns(clockid_t clock) noexcept {
   timespec ts{};
-  if (clock_gettime(CLOCK_MONOTONIC, &ts) != 0) {
+  if (clock_gettime(clock, &ts) != 0) {
     return 0U;
   }
   return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ULL + static_cast<std::uint64_t>(ts.tv_nsec);
 }
+}  // namespace
+
+std::uint64_t monotonic_ns() noexcept { return clock_ns(CLOCK_MONOTONIC); }
+
+std::uint64_t thread_cpu_ns() noexcept { return clock_ns(CLOCK_THREAD_CPUTIME_ID); }
 
 void log_write(LogLevel level, const char* message) noexcept {
   if (message == nullptr) {

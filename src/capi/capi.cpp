@@ -357,10 +357,10 @@ ccmap_status ccmap_update_frame_sensor(ccmap_map* map, const float* xyz, size_t 
   ccmap::Pose p{};
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
-      p.rotation(r, c) = pose->rotation[3 * r + c];
+      p.rotation[r][c] = pose->rotation[3 * r + c];
     }
-    p.translation(r) = pose->translation[r];
   }
+  p.translation = ccmap::PointXYZ{pose->translation[0], pose->translation[1], pose->translation[2]};
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack) {
     ccmap::FrameCounters frame{};
     const Status status = stack.update_frame_sensor(points, n, p, &frame);

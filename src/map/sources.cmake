@@ -1,3 +1,4 @@
 target_sources(ccmap_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/calibration.cpp)
 target_sources(ccmap_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/stack_support.cpp)
 target_sources(ccmap_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/snapshot.cpp)
+target_sources(ccmap_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/front.cpp)

@@ -169,14 +169,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         break;
       }
       case 2: {  // frame in the sensor frame
-        ccmap::Pose pose;
+        ccmap::Pose pose{};
         const bool wild = in.u8() < 32;
+        // Mostly rotations (a yaw from a normalised byte pair); sometimes any 9 floats, which
+        // the stack must refuse unless they happen to form a rotation.
+        const float yc = static_cast<float>(static_cast<std::int8_t>(in.u8())) + 0.5F;
+        const float ys = static_cast<float>(static_cast<std::int8_t>(in.u8()));
+        const float norm = std::sqrt(yc * yc + ys * ys);
         for (int r = 0; r < 3; ++r) {
           for (int c = 0; c < 3; ++c) {
-            pose.rotation(r, c) = wild ? in.coord() : (r == c ? 1.0F : 0.0F) + static_cast<float>(static_cast<std::int8_t>(in.u8())) * (1.0F / 256.0F);
+            const float yaw_entry = (r == 2 || c == 2) ? (r == c ? 1.0F : 0.0F)
+                                    : (r == c) ? yc / norm : (r == 0 ? -ys / norm : ys / norm);
+            pose.rotation[r][c] = wild ? in.coord() : yaw_entry;
           }
         }
-        pose.translation << in.near(robot_x), in.near(robot_y), in.near(0.5F);
+        pose.translation = ccmap::PointXYZ{in.near(robot_x), in.near(robot_y), in.near(0.5F)};
         const std::size_t n = in.u8() % 48U;
         for (std::size_t i = 0; i < n; ++i) g_points[i] = ccmap::PointXYZ{in.near(1.0F), in.near(0.0F), in.near(-0.5F)};
         ccmap::FrameCounters c{};

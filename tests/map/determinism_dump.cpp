@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/poses.hpp"
 #include "support/hash_unit.hpp"
 #include "support/map_state.hpp"
 
@@ -47,12 +48,9 @@ float terrain(float x, float y) {
 /// Rotation about z from t = tan(yaw / 2) (Cayley): cos = (1 - t^2) / (1 + t^2),
 /// sin = 2t / (1 + t^2). No trigonometric function.
 ccmap::Pose pose_from(float x, float y, float t) {
-  ccmap::Pose p;
   const float d = 1.0F / (1.0F + t * t);
   const float c = (1.0F - t * t) * d, s = 2.0F * t * d;
-  p.rotation << c, -s, 0.0F, s, c, 0.0F, 0.0F, 0.0F, 1.0F;
-  p.translation << x, y, 0.5F;
-  return p;
+  return ccmap::test::yaw_pose(c, s, ccmap::PointXYZ{x, y, 0.5F});
 }
 
 struct Result {
@@ -87,8 +85,8 @@ Result run() {
       const float noise = 0.004F * (hash_unit(id, 3U) - 0.5F);
       if (sensor_frame) {
         // Sensor frame: the map point through the inverse pose (R^T (p - t)).
-        const float mx = rx + pose.rotation(0, 0) * ahead + pose.rotation(0, 1) * side;
-        const float my = ry + pose.rotation(1, 0) * ahead + pose.rotation(1, 1) * side;
+        const float mx = rx + pose.rotation[0][0] * ahead + pose.rotation[0][1] * side;
+        const float my = ry + pose.rotation[1][0] * ahead + pose.rotation[1][1] * side;
         pts[i] = ccmap::PointXYZ{ahead, side, terrain(mx, my) + noise - 0.5F};
       } else {
         const float mx = rx + ahead;

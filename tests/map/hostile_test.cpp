@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/poses.hpp"
 #include "support/hash_unit.hpp"
 #include "support/map_state.hpp"
 
@@ -261,9 +262,7 @@ TEST(StackHostile, EmptyFramesAreAcceptedAndChangeNothing) {
   ASSERT_EQ(stack->update_frame(nullptr, 0U, PointXYZ{0.0F, 0.0F, 0.0F}, &c), Status::kOk);
   EXPECT_TRUE(counters_equal(c, FrameCounters{})) << "an empty frame reported counts";
   ASSERT_EQ(stack->update_frame(&one, 0U, PointXYZ{0.0F, 0.0F, 0.0F}, &c), Status::kOk);
-  Pose pose;
-  pose.rotation.setIdentity();
-  pose.translation.setZero();
+  const Pose pose = test::identity_pose();
   ASSERT_EQ(stack->update_frame_sensor(nullptr, 0U, pose, &c), Status::kOk);
   EXPECT_TRUE(raw_map_state(*stack) == before) << "an empty frame changed the map";
   EXPECT_TRUE(counters_equal(stack->total_counters(), totals)) << "an empty frame changed the totals";
@@ -451,13 +450,11 @@ TEST(StackHostile, NaNOrInfinitePosesAreRefusedCountedAndLeaveTheMapUnchanged) {
       ++frames;
     }
     for (int i = 0; i < 12; ++i) {
-      Pose pose;
-      pose.rotation.setIdentity();
-      pose.translation.setZero();
+      Pose pose = test::identity_pose();
       if (i < 9) {
-        pose.rotation(i / 3, i % 3) = bad;
+        pose.rotation[i / 3][i % 3] = bad;
       } else {
-        pose.translation(i - 9) = bad;
+        (i == 9 ? pose.translation.x : i == 10 ? pose.translation.y : pose.translation.z) = bad;
       }
       FrameCounters c{};
       EXPECT_EQ(stack->update_frame_sensor(pts.data(), pts.size(), pose, &c), Status::kNonFiniteInput)

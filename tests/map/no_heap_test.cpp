@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/poses.hpp"
 
 extern "C" {
 void* __libc_malloc(std::size_t size);
@@ -91,9 +92,7 @@ TEST(NoHeap, CadreStackRunsWithoutAllocatingAfterInit) {
     frame.push_back(PointXYZ{x, y, 0.1F * x + ((i % 37) == 0 ? 0.2F : 0.0F)});
   }
   frame[5].x = std::numeric_limits<float>::quiet_NaN();
-  Pose pose;
-  pose.rotation.setIdentity();
-  pose.translation << 0.1F, 0.0F, 0.175F;
+  const Pose pose = test::identity_pose(PointXYZ{0.1F, 0.0F, 0.175F});
 
   g_allocations = 0;
   g_counting = true;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/poses.hpp"
 #include "support/reference.hpp"
 
 namespace ccmap {
@@ -356,35 +357,6 @@ TEST(StackQuery, SingleLayerBaselinesUseTheRoughnessFilter) {
 // Sensor frame, export, bad input
 // ---------------------------------------------------------------------------------------------
 
-TEST(StackUpdate, SensorFrameEqualsPreAlignedPoints) {
-  StackParams params = default_stack_params(0.04F);
-  params.noise = test_stereo();
-  auto a = make_stack<CadreConfig>(params);
-  auto b = make_stack<CadreConfig>(params);
-  Pose pose;
-  pose.rotation << 0.0F, -1.0F, 0.0F, 1.0F, 0.0F, 0.0F, 0.0F, 0.0F, 1.0F;  // yaw 90 deg, exact
-  pose.translation << 0.5F, -0.25F, 0.175F;
-  Rng rng(8);
-  std::vector<PointXYZ> sensor_pts, map_pts;
-  for (int i = 0; i < 20000; ++i) {
-    const PointXYZ s{static_cast<float>(rng.uniform(0.2, 4.0)), static_cast<float>(rng.uniform(-2.0, 2.0)),
-                     static_cast<float>(rng.uniform(-0.3, 0.0))};
-    sensor_pts.push_back(s);
-    map_pts.push_back(PointXYZ{0.0F * s.x + -1.0F * s.y + 0.0F * s.z + 0.5F, 1.0F * s.x + 0.0F * s.y + 0.0F * s.z + -0.25F,
-                               0.0F * s.x + 0.0F * s.y + 1.0F * s.z + 0.175F});
-  }
-  FrameCounters ca{}, cb{};
-  ASSERT_EQ(a->update_frame_sensor(sensor_pts.data(), sensor_pts.size(), pose, &ca), Status::kOk);
-  ASSERT_EQ(b->update_frame(map_pts.data(), map_pts.size(), PointXYZ{0.5F, -0.25F, 0.175F}, &cb), Status::kOk);
-  EXPECT_EQ(std::memcmp(&ca, &cb, sizeof ca), 0);
-  for (int k = 0; k < Stack<CadreConfig>::kLayerCount - 1; ++k) {
-    const auto& la = a->ccm_layer(k);
-    const auto& lb = b->ccm_layer(k);
-    EXPECT_EQ(std::memcmp(la.storage(), lb.storage(), Stack<CadreConfig>::layer_capacity(k + 1) * sizeof(CcmCell)), 0)
-        << "CCM layer " << k + 1 << " differs between sensor-frame and pre-aligned input";
-  }
-}
-
 TEST(StackExport, RecordsMatchLayerQueries) {
   StackParams params = default_stack_params(0.04F);
   params.noise = precise_lidar();
@@ -440,10 +412,8 @@ TEST(StackHostile, BadInputIsCountedAndLeavesTheMapUnchanged) {
   EXPECT_EQ(stack->move_to(nan, 0.0F), Status::kNonFiniteInput);
   EXPECT_EQ(stack->move_to(0.0F, 1e9F), Status::kOutOfRange);
   EXPECT_EQ(stack->rejected_moves(), 2U);
-  Pose pose;
-  pose.rotation.setIdentity();
-  pose.rotation(1, 1) = nan;
-  pose.translation.setZero();
+  Pose pose = test::identity_pose();
+  pose.rotation[1][1] = nan;
   EXPECT_EQ(stack->update_frame_sensor(pts.data(), pts.size(), pose, &c), Status::kNonFiniteInput);
   EXPECT_EQ(stack->rejected_frames(), 3U);
   const QueryResult after = stack->query(0.3F, 0.3F);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/poses.hpp"
 
 extern template class ccmap::Stack<ccmap::CadreConfig>;  // tests/map/stack_instances.cpp
 
@@ -106,8 +107,7 @@ struct Fixture {
       for (float x = -5.0F; x < 5.0F; x += 0.05F) points.push_back(PointXYZ{x, y, -0.5F + 0.02F * x});
     }
     EXPECT_EQ(stack->update_frame(points.data(), points.size(), PointXYZ{0.0F, 0.0F, 0.0F}, nullptr), Status::kOk);
-    pose.rotation.setIdentity();
-    pose.translation << 0.0F, 0.0F, 0.5F;
+    pose = test::identity_pose(PointXYZ{0.0F, 0.0F, 0.5F});
   }
 };
 

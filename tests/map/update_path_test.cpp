@@ -1,20 +1,27 @@
-// The chunked update path (update_frame, update_frame_sensor) against the per-point reference
-// (update_frame_sequential) on the same frames: every cell of every layer (Kalman, OMG, CCM)
-// and every counter must be bitwise equal. The tolerance is 0 ulp by design: the chunked path
-// performs the same float operations in the same order (see map/frame_chunk.hpp), so any
-// difference is a bug, not rounding.
+// The stack's update paths (update_frame with map-frame points, with per-point weights, and
+// update_frame_sensor with sensor-frame points and a pose) against the independent brute-force
+// model of tests/support/model_stack.hpp, for every preset: counters, windows, cell presence and
+// weight exactly; statistics within float rounding plus the fixed-point front's position error.
+// Frames: the deterministic CADRE frames (tests/support/cadre_frames.hpp), a few moves, hostile
+// points mixed in. Points within a margin of a cell edge or a routing bound are left out: there a
+// correct arithmetic may decide either way (the front's own tests hold those cases).
 #include <gtest/gtest.h>
 
-#include <cstring>
+#include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/model_stack.hpp"
 
 namespace ccmap {
 namespace {
+
+constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInf = std::numeric_limits<float>::infinity();
 
 template <typename Config>
 std::unique_ptr<Stack<Config>> make_stack(const StackParams& params) {
@@ -23,181 +30,150 @@ std::unique_ptr<Stack<Config>> make_stack(const StackParams& params) {
   return stack;
 }
 
-bool same_counters(const FrameCounters& a, const FrameCounters& b) {
-  return a.received == b.received && a.used == b.used && a.rejected_non_finite == b.rejected_non_finite &&
-         a.rejected_out_of_range == b.rejected_out_of_range && a.rejected_weight == b.rejected_weight &&
-         a.outside_map == b.outside_map && a.too_noisy == b.too_noisy;
-}
-
-/// Number of cells (over all layers) whose bits differ; also checks the windows.
-template <typename Config>
-int differing_cells(const Stack<Config>& a, const Stack<Config>& b) {
-  using S = Stack<Config>;
-  int differ = 0;
-  if constexpr (S::kHasFine) {
-    const auto& fa = a.fine_layer();
-    const auto& fb = b.fine_layer();
-    for (std::size_t i = 0; i < fa.cell_count(); ++i) {
-      differ += std::memcmp(&fa.storage()[i], &fb.storage()[i], sizeof(typename S::FineCell)) != 0;
-    }
+/// Three small CADRE frames along a short drive (heading turning), 0.3 m apart.
+std::vector<test::CadreFrame> drive_frames() {
+  std::vector<test::CadreFrame> frames;
+  for (int k = 0; k < 3; ++k) {
+    test::CadreFrameSpec spec;
+    spec.width_px = 170;
+    spec.height_px = 130;
+    spec.sensor_x = 0.3F * static_cast<float>(k);
+    spec.sensor_y = 0.05F * static_cast<float>(k);
+    const float c = 1.0F - 0.02F * static_cast<float>(k);
+    const float s = 0.2F * static_cast<float>(k);
+    const float norm = 1.0F / std::sqrt(c * c + s * s);
+    spec.heading_cos = c * norm;
+    spec.heading_sin = s * norm;
+    spec.seed = 11U + static_cast<std::uint32_t>(k);
+    frames.push_back(test::make_cadre_frame(spec));
   }
-  for (int c = 0; c < S::kCcmLayerCount; ++c) {
-    const auto& ca = a.ccm_layer(c);
-    const auto& cb = b.ccm_layer(c);
-    for (std::size_t i = 0; i < ca.cell_count(); ++i) {
-      differ += std::memcmp(&ca.storage()[i], &cb.storage()[i], sizeof(CcmCell)) != 0;
-    }
-  }
-  return differ;
-}
-
-/// A CADRE frame with hostile points mixed in: NaN, Inf, out-of-range, the sensor origin
-/// itself (range 0), too far for every layer, outside every window (lidar-like).
-std::vector<PointXYZ> hostile_frame(const test::CadreFrame& frame) {
-  std::vector<PointXYZ> pts = frame.map_points;
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  const float inf = std::numeric_limits<float>::infinity();
-  for (std::size_t i = 0; i < pts.size(); i += 997) {
-    switch ((i / 997) % 7) {
-      case 0: pts[i].x = nan; break;
-      case 1: pts[i].z = -inf; break;
-      case 2: pts[i].y = 2.0e5F; break;
-      case 3: pts[i] = frame.sensor_origin; break;
-      case 4: pts[i].x = 7.0F; break;                     // beyond the 64 cm layer's range
-      case 5: pts[i].x = -1.0e-39F; pts[i].y = -0.0F; break;  // subnormal / negative zero
-      default: pts[i].x = 1.0e4F; break;                  // far outside every window
-    }
-  }
-  return pts;
+  return frames;
 }
 
 template <typename Config>
-void expect_fast_equals_sequential(const StackParams& params, const std::vector<PointXYZ>& pts,
-                                   const float* weights, const PointXYZ& origin, const char* what) {
-  auto fast = make_stack<Config>(params);
-  auto reference = make_stack<Config>(params);
-  for (int frame = 0; frame < 2; ++frame) {  // the second frame folds into observed cells
-    FrameCounters cf{};
-    FrameCounters cr{};
-    ASSERT_EQ(fast->update_frame(pts.data(), weights, pts.size(), origin, &cf), Status::kOk);
-    ASSERT_EQ(reference->update_frame_sequential(pts.data(), weights, pts.size(), origin, &cr), Status::kOk);
-    EXPECT_TRUE(same_counters(cf, cr)) << what << ": counters differ (used " << cf.used << " vs " << cr.used
-                                       << ", too noisy " << cf.too_noisy << " vs " << cr.too_noisy << ")";
-    EXPECT_TRUE(pts.empty() || cf.used > 0U) << what;
+void map_frame_matches_the_model(const StackParams& params, bool with_weights) {
+  auto stack = make_stack<Config>(params);
+  test::ModelStack<Config> model(*stack);
+  const auto frames = drive_frames();
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const test::CadreFrame& frame = frames[f];
+    ASSERT_EQ(stack->move_to(frame.sensor_origin.x, frame.sensor_origin.y), Status::kOk);
+    model.move_to(frame.sensor_origin.x, frame.sensor_origin.y);
+    std::vector<PointXYZ> pts;
+    const PointXYZ o = frame.sensor_origin;
+    for (const PointXYZ& p : frame.map_points) {
+      const double dx = double{p.x} - o.x, dy = double{p.y} - o.y, dz = double{p.z} - o.z;
+      if (model.safe_point(p.x, p.y, dx * dx + dy * dy + dz * dz, 1e-5)) pts.push_back(p);
+    }
+    const PointXYZ hostile[] = {{kNan, 0.5F, 0.0F}, {0.5F, kInf, 0.0F}, {0.5F, 0.5F, -kInf}, {2.0e5F, 0.0F, 0.0F},
+                                {0.5F, -1.5e5F, 0.0F}, o, {o.x + 7.05F, o.y + 0.01F, 0.0F},
+                                {o.x + 1.0e4F, o.y + 0.01F, 0.0F}};
+    for (std::size_t i = 0; i < sizeof hostile / sizeof hostile[0]; ++i) {
+      pts.insert(pts.begin() + static_cast<std::ptrdiff_t>((i * 7919U) % pts.size()), hostile[i]);
+    }
+    std::vector<float> weights;
+    if (with_weights) {
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const float bad[] = {kNan, 0.0F, -1.0F, 2.0e6F, kInf};
+        weights.push_back(i % 101U == 3U ? bad[(i / 101U) % 5U] : 0.5F + static_cast<float>(i % 7U) * 0.25F);
+      }
+    }
+    FrameCounters c{};
+    ASSERT_EQ(stack->update_frame(pts.data(), with_weights ? weights.data() : nullptr, pts.size(), o, &c),
+              Status::kOk);
+    const auto m = model.frame_map(pts, with_weights ? weights.data() : nullptr, o);
+    model.expect_matches(c, m, "map frame " + std::to_string(f));
+    ASSERT_FALSE(::testing::Test::HasFailure());
   }
-  EXPECT_EQ(differing_cells(*fast, *reference), 0) << what << ": the chunked update changed cells differently";
 }
 
-TEST(UpdatePath, CadreFrameEqualsSequentialBitwise) {
-  const test::CadreFrame frame = test::make_cadre_frame(test::cadre_sequence_spec(0));
-  expect_fast_equals_sequential<CadreConfig>(default_stack_params(0.04F), frame.map_points, nullptr,
-                                             frame.sensor_origin, "cadre");
-}
-
-TEST(UpdatePath, HostilePointsAreCountedAsTheSequentialPathCountsThem) {
-  const test::CadreFrame frame = test::make_cadre_frame(test::cadre_sequence_spec(1, 400, 250));
-  const std::vector<PointXYZ> pts = hostile_frame(frame);
-  expect_fast_equals_sequential<CadreConfig>(default_stack_params(0.04F), pts, nullptr, frame.sensor_origin,
-                                             "cadre hostile");
-  auto stack = make_stack<CadreConfig>(default_stack_params(0.04F));
-  FrameCounters counters{};
-  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), frame.sensor_origin, &counters), Status::kOk);
-  EXPECT_GT(counters.rejected_non_finite, 0U);
-  EXPECT_GT(counters.rejected_out_of_range, 0U);
-  EXPECT_GT(counters.too_noisy, 0U);
-  EXPECT_EQ(counters.used + counters.rejected_non_finite + counters.rejected_out_of_range + counters.too_noisy +
-                counters.outside_map + counters.rejected_weight,
-            counters.received);
-}
-
-TEST(UpdatePath, OmgKalmanAndSingleCcmStacksEqualSequentialBitwise) {
-  const test::CadreFrame frame = test::make_cadre_frame(test::cadre_sequence_spec(2, 400, 250));
-  StackParams params = default_stack_params(0.08F);
-  expect_fast_equals_sequential<SingleOmgConfig>(params, frame.map_points, nullptr, frame.sensor_origin, "omg");
-  expect_fast_equals_sequential<SingleKalmanConfig>(params, frame.map_points, nullptr, frame.sensor_origin, "kalman");
-  expect_fast_equals_sequential<SingleCcmConfig>(params, frame.map_points, nullptr, frame.sensor_origin, "ccm");
-  // A small weight limit makes the CCM and OMG limiters act on most cells.
-  params.weight_limit = 20.0F;
-  expect_fast_equals_sequential<SingleOmgConfig>(params, frame.map_points, nullptr, frame.sensor_origin, "omg, W_l 20");
-  expect_fast_equals_sequential<SingleCcmConfig>(params, frame.map_points, nullptr, frame.sensor_origin, "ccm, W_l 20");
-}
-
-TEST(UpdatePath, PerPointWeightsAndInverseVarianceWeightsEqualSequential) {
-  const test::CadreFrame frame = test::make_cadre_frame(test::cadre_sequence_spec(3, 400, 250));
-  std::vector<float> weights(frame.map_points.size());
-  for (std::size_t i = 0; i < weights.size(); ++i) {
-    weights[i] = 0.25F + 0.001F * static_cast<float>(i % 1000);
+/// The CADRE frame's pose with an extra pitch, so that every rotation entry is non-trivial, and
+/// its sensor points expressed for that pose.
+Pose pitched(const test::CadreFrame& frame, std::vector<PointXYZ>* sensor) {
+  const float cp = 0.96F, sp = 0.28F;  // 16.3 deg; cp^2 + sp^2 = 1 to float rounding
+  const Pose& r = frame.pose;
+  Pose out = r;
+  // R' = R P with P the pitch about y; s' = P^T s, so R' s' = R s.
+  for (int i = 0; i < 3; ++i) {
+    out.rotation[i][0] = r.rotation[i][0] * cp - r.rotation[i][2] * sp;
+    out.rotation[i][1] = r.rotation[i][1];
+    out.rotation[i][2] = r.rotation[i][0] * sp + r.rotation[i][2] * cp;
   }
-  // Bad weights: refused and counted, as the sequential path does.
-  weights[10] = 0.0F;
-  weights[11] = -1.0F;
-  weights[12] = std::numeric_limits<float>::quiet_NaN();
-  weights[13] = 2.0e6F;
-  weights[14] = std::numeric_limits<float>::infinity();
-  expect_fast_equals_sequential<CadreConfig>(default_stack_params(0.04F), frame.map_points, weights.data(),
-                                             frame.sensor_origin, "cadre, per-point weights");
-  expect_fast_equals_sequential<SingleOmgConfig>(default_stack_params(0.08F), frame.map_points, weights.data(),
-                                                 frame.sensor_origin, "omg, per-point weights");
-  auto stack = make_stack<CadreConfig>(default_stack_params(0.04F));
-  FrameCounters counters{};
-  ASSERT_EQ(stack->update_frame(frame.map_points.data(), weights.data(), weights.size(), frame.sensor_origin, &counters),
-            Status::kOk);
-  EXPECT_EQ(counters.rejected_weight, 5U) << "every bad per-point weight must be refused and counted";
-
-  StackParams inverse = default_stack_params(0.04F);
-  inverse.noise.set_weight_mode(sensor::WeightMode::kInverseVariance, 1.0F);
-  expect_fast_equals_sequential<CadreConfig>(inverse, frame.map_points, nullptr, frame.sensor_origin,
-                                             "cadre, inverse-variance weights");
-}
-
-TEST(UpdatePath, PerPointWeightsChangeTheCcmMean) {
-  // Two points in one CCM cell, weights 3 and 1: the mean sits at 1/4 of the way.
-  StackParams params = default_stack_params(0.08F);
-  params.noise = sensor::NoiseModel::lidar(sensor::LidarParams{0.0005F, 0.0F});
-  auto stack = make_stack<SingleCcmConfig>(params);
-  const PointXYZ pts[2] = {{0.01F, 0.01F, 0.0F}, {0.05F, 0.01F, 0.4F}};
-  const float weights[2] = {3.0F, 1.0F};
-  ASSERT_EQ(stack->update_frame(pts, weights, 2U, PointXYZ{0.0F, 0.0F, 1.0F}, nullptr), Status::kOk);
-  const CcmCell* cell = stack->ccm_layer(0).cell(CellIndex{0, 0});
-  ASSERT_NE(cell, nullptr);
-  EXPECT_FLOAT_EQ(cell->weight, 4.0F);
-  EXPECT_NEAR(cell->mean_z, 0.1F, 1e-6F) << "weighted mean ignores the per-point weights";
-}
-
-TEST(UpdatePath, SensorFrameEqualsTransformedPointsSequentially) {
-  const test::CadreFrame frame = test::make_cadre_frame(test::cadre_sequence_spec(4, 400, 250));
-  auto fast = make_stack<CadreConfig>(default_stack_params(0.04F));
-  auto reference = make_stack<CadreConfig>(default_stack_params(0.04F));
-  FrameCounters cf{};
-  FrameCounters cr{};
-  ASSERT_EQ(fast->update_frame_sensor(frame.sensor_points.data(), frame.sensor_points.size(), frame.pose, &cf),
-            Status::kOk);
-  // The transform as the stack documents it, p_map = R p + t, evaluated in the same order.
-  const Eigen::Matrix3f& r = frame.pose.rotation;
-  const Eigen::Vector3f& t = frame.pose.translation;
-  std::vector<PointXYZ> mapped(frame.sensor_points.size());
-  for (std::size_t i = 0; i < mapped.size(); ++i) {
-    const PointXYZ& p = frame.sensor_points[i];
-    mapped[i] = PointXYZ{r(0, 0) * p.x + r(0, 1) * p.y + r(0, 2) * p.z + t.x(),
-                         r(1, 0) * p.x + r(1, 1) * p.y + r(1, 2) * p.z + t.y(),
-                         r(2, 0) * p.x + r(2, 1) * p.y + r(2, 2) * p.z + t.z()};
+  sensor->clear();
+  for (const PointXYZ& s : frame.sensor_points) {
+    sensor->push_back(PointXYZ{cp * s.x + sp * s.z, s.y, -sp * s.x + cp * s.z});
   }
-  ASSERT_EQ(reference->update_frame_sequential(mapped.data(), nullptr, mapped.size(),
-                                               PointXYZ{t.x(), t.y(), t.z()}, &cr),
-            Status::kOk);
-  EXPECT_TRUE(same_counters(cf, cr));
-  EXPECT_EQ(cf.used, cf.received) << "every synthetic CADRE point must land in the stack";
-  EXPECT_EQ(differing_cells(*fast, *reference), 0) << "sensor-frame update differs from the sequential update";
+  return out;
 }
 
-TEST(UpdatePath, ChunkBoundariesAndTinyFrames) {
-  const test::CadreFrame frame = test::make_cadre_frame(test::cadre_sequence_spec(5, 125, 80));
-  for (const std::size_t n : {std::size_t{0}, std::size_t{1}, detail::kFrameChunkPoints - 1U, detail::kFrameChunkPoints,
-                              detail::kFrameChunkPoints + 1U, std::size_t{3} * detail::kFrameChunkPoints + 7U}) {
-    const std::vector<PointXYZ> pts(frame.map_points.begin(), frame.map_points.begin() + static_cast<std::ptrdiff_t>(n));
-    expect_fast_equals_sequential<CadreConfig>(default_stack_params(0.04F), pts, nullptr, frame.sensor_origin,
-                                               "chunk boundary");
+template <typename Config>
+void sensor_frame_matches_the_model(const StackParams& params) {
+  auto stack = make_stack<Config>(params);
+  test::ModelStack<Config> model(*stack);
+  const auto frames = drive_frames();
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const test::CadreFrame& frame = frames[f];
+    ASSERT_EQ(stack->move_to(frame.sensor_origin.x, frame.sensor_origin.y), Status::kOk);
+    model.move_to(frame.sensor_origin.x, frame.sensor_origin.y);
+    std::vector<PointXYZ> all;
+    const Pose pose = pitched(frame, &all);
+    std::vector<PointXYZ> pts;
+    for (const PointXYZ& s : all) {
+      double m[3];
+      test::ModelStack<Config>::transform(pose, s, m);
+      // 20 um from every edge: beyond the front's documented 8 um position error.
+      if (model.safe_point(m[0], m[1], double{s.x} * s.x + double{s.y} * s.y + double{s.z} * s.z, 2e-5)) {
+        pts.push_back(s);
+      }
+    }
+    const PointXYZ hostile[] = {{kNan, 0.5F, 0.0F}, {0.5F, -kInf, 0.0F}, {2048.0F, 0.0F, 0.0F}, {0.0F, 0.0F, -3.0e4F},
+                                {0.0F, 0.0F, 0.0F}, {7.05F, 0.01F, 0.0F}};
+    for (std::size_t i = 0; i < sizeof hostile / sizeof hostile[0]; ++i) {
+      pts.insert(pts.begin() + static_cast<std::ptrdiff_t>((i * 7919U) % pts.size()), hostile[i]);
+    }
+    FrameCounters c{};
+    ASSERT_EQ(stack->update_frame_sensor(pts.data(), pts.size(), pose, &c), Status::kOk);
+    const auto m = model.frame_sensor(pts, pose);
+    model.expect_matches(c, m, "sensor frame " + std::to_string(f), 8e-6);
+    ASSERT_FALSE(::testing::Test::HasFailure());
   }
+}
+
+StackParams lidar_params(float width) {
+  StackParams p = default_stack_params(width);
+  p.noise = sensor::NoiseModel::lidar(sensor::LidarParams{0.002F, 0.0F});
+  return p;
+}
+
+StackParams inverse_variance_params(float width) {
+  StackParams p = default_stack_params(width);
+  p.noise.set_weight_mode(sensor::WeightMode::kInverseVariance, 1.0F);
+  return p;
+}
+
+TEST(UpdatePath, CadreMapFrameMatchesTheModel) { map_frame_matches_the_model<CadreConfig>(default_stack_params(0.04F), false); }
+TEST(UpdatePath, CadreMapFrameWithWeightsMatchesTheModel) {
+  map_frame_matches_the_model<CadreConfig>(default_stack_params(0.04F), true);
+}
+TEST(UpdatePath, CadreInverseVarianceWeightsMatchTheModel) {
+  map_frame_matches_the_model<CadreConfig>(inverse_variance_params(0.04F), false);
+}
+TEST(UpdatePath, CadreSensorFrameMatchesTheModel) { sensor_frame_matches_the_model<CadreConfig>(default_stack_params(0.04F)); }
+TEST(UpdatePath, SingleCcmMatchesTheModel) {
+  map_frame_matches_the_model<SingleCcmConfig>(default_stack_params(0.08F), true);
+  sensor_frame_matches_the_model<SingleCcmConfig>(default_stack_params(0.08F));
+}
+TEST(UpdatePath, SingleKalmanMatchesTheModel) {
+  map_frame_matches_the_model<SingleKalmanConfig>(default_stack_params(0.08F), false);
+  sensor_frame_matches_the_model<SingleKalmanConfig>(default_stack_params(0.08F));
+}
+TEST(UpdatePath, SingleOmgMatchesTheModel) {
+  map_frame_matches_the_model<SingleOmgConfig>(default_stack_params(0.08F), true);
+  sensor_frame_matches_the_model<SingleOmgConfig>(default_stack_params(0.08F));
+}
+TEST(UpdatePath, LidarCadreMatchesTheModel) {
+  map_frame_matches_the_model<CadreConfig>(lidar_params(0.04F), false);
+  sensor_frame_matches_the_model<CadreConfig>(lidar_params(0.04F));
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "ccmap/map/types.hpp"
+#include "support/poses.hpp"
 
 namespace ccmap::test {
 
@@ -109,8 +110,7 @@ inline CadreFrame make_cadre_frame(const CadreFrameSpec& spec) {
   const float c = spec.heading_cos;
   const float s = spec.heading_sin;
   frame.sensor_origin = PointXYZ{spec.sensor_x, spec.sensor_y, h};
-  frame.pose.rotation << c, -s, 0.0F, s, c, 0.0F, 0.0F, 0.0F, 1.0F;
-  frame.pose.translation << spec.sensor_x, spec.sensor_y, h;
+  frame.pose = yaw_pose(c, s, PointXYZ{spec.sensor_x, spec.sensor_y, h});
   XorShift rng{0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(spec.seed) * 0x2545F4914F6CDD1DULL)};
   // Rows linear in t = h / d, the tangent of the depression angle (a pinhole's row spacing).
   const float t_far = h / spec.far_m;

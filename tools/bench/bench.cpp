@@ -39,7 +39,7 @@ std::unique_ptr<ccmap::Stack<Config>> make_stack(float width) {
   return stack;
 }
 
-enum class Path { kMapFrame, kSensorFrame, kSequential };
+enum class Path { kMapFrame, kSensorFrame };
 
 template <typename Config>
 void frame_update(benchmark::State& state, int width, int height, float cell, Path path) {
@@ -52,9 +52,6 @@ void frame_update(benchmark::State& state, int width, int height, float cell, Pa
     switch (path) {
       case Path::kMapFrame: s = stack->update_frame(f.map_points.data(), f.map_points.size(), f.sensor_origin, nullptr); break;
       case Path::kSensorFrame: s = stack->update_frame_sensor(f.sensor_points.data(), f.sensor_points.size(), f.pose, nullptr); break;
-      case Path::kSequential:
-        s = stack->update_frame_sequential(f.map_points.data(), nullptr, f.map_points.size(), f.sensor_origin, nullptr);
-        break;
     }
     benchmark::DoNotOptimize(s);
   }
@@ -65,7 +62,6 @@ void frame_update(benchmark::State& state, int width, int height, float cell, Pa
 
 void BM_CadreFrame(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 850, 650, 0.04F, Path::kMapFrame); }
 void BM_CadreFrameSensor(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 850, 650, 0.04F, Path::kSensorFrame); }
-void BM_CadreFrameSequential(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 850, 650, 0.04F, Path::kSequential); }
 void BM_CadreFrame10k(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 125, 80, 0.04F, Path::kMapFrame); }
 void BM_CadreFrame100k(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s, 400, 250, 0.04F, Path::kMapFrame); }
 void BM_CellCcm(benchmark::State& s) { frame_update<ccmap::SingleCcmConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
@@ -73,7 +69,6 @@ void BM_CellKalman(benchmark::State& s) { frame_update<ccmap::SingleKalmanConfig
 void BM_CellOmg(benchmark::State& s) { frame_update<ccmap::SingleOmgConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
 BENCHMARK(BM_CadreFrame)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CadreFrameSensor)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_CadreFrameSequential)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CadreFrame10k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CadreFrame100k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CellCcm)->Unit(benchmark::kMicrosecond);

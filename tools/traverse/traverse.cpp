@@ -67,12 +67,12 @@ Pose camera_pose(const sim::StereoCamera& camera, const sim::Point3& position, d
                                camera.sensor_to_world(sim::Point3{0.0, 1.0, 0.0}, zero, yaw),
                                camera.sensor_to_world(sim::Point3{0.0, 0.0, 1.0}, zero, yaw)};
   for (int c = 0; c < 3; ++c) {
-    pose.rotation(0, c) = static_cast<float>(axes[c].x);
-    pose.rotation(1, c) = static_cast<float>(axes[c].y);
-    pose.rotation(2, c) = static_cast<float>(axes[c].z);
+    pose.rotation[0][c] = static_cast<float>(axes[c].x);
+    pose.rotation[1][c] = static_cast<float>(axes[c].y);
+    pose.rotation[2][c] = static_cast<float>(axes[c].z);
   }
-  pose.translation = Eigen::Vector3f(static_cast<float>(position.x), static_cast<float>(position.y),
-                                     static_cast<float>(position.z));
+  pose.translation = PointXYZ{static_cast<float>(position.x), static_cast<float>(position.y),
+                              static_cast<float>(position.z)};
   return pose;
 }
 

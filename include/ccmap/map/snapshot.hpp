@@ -218,12 +218,12 @@ struct SnapshotAccess {
     snapshot_write_params(w, stack.params_);
     for (int layer = 0; layer < kLayers; ++layer) {
       if (StackType::layer_is_ccm(layer)) {
-        const RingGrid<CcmCell>& grid = stack.ccm_[layer - StackType::kFineLayerCount];
+        const RingGrid<CcmCell>& grid = stack.layers_.ccm_grid(layer);
         snapshot_write_centre(w, grid.centre());
         grid.for_each([&w](CellIndex, const CcmCell& cell) { snapshot_write_cell(w, cell); });
       } else {
-        snapshot_write_centre(w, stack.fine_.centre());
-        stack.fine_.for_each([&w](CellIndex, const typename StackType::FineCell& cell) { snapshot_write_cell(w, cell); });
+        snapshot_write_centre(w, stack.layers_.fine.centre());
+        stack.layers_.fine.for_each([&w](CellIndex, const typename StackType::FineCell& cell) { snapshot_write_cell(w, cell); });
       }
     }
     snapshot_write_counters(w, stack.totals_, stack.rejected_moves_, stack.rejected_frames_, stack.last_update_ns_);
@@ -295,11 +295,11 @@ struct SnapshotAccess {
       CellIndex centre{};
       (void)snapshot_read_centre(r, &centre);
       if (StackType::layer_is_ccm(layer)) {
-        RingGrid<CcmCell>& grid = stack.ccm_[layer - StackType::kFineLayerCount];
+        RingGrid<CcmCell>& grid = stack.layers_.ccm_grid(layer);
         (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);
         grid.for_each([&r](CellIndex, CcmCell& cell) { (void)snapshot_read_cell(r, &cell); });
       } else {
-        auto& grid = stack.fine_;
+        auto& grid = stack.layers_.fine;
         (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);
         grid.for_each([&r](CellIndex, typename StackType::FineCell& cell) { (void)snapshot_read_cell(r, &cell); });
       }

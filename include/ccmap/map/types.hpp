@@ -8,8 +8,6 @@
 
 #include <cstdint>
 
-#include <Eigen/Core>
-
 #include "ccmap/core/status.hpp"
 #include "ccmap/grid/ring_grid.hpp"
 
@@ -23,13 +21,16 @@ struct PointXYZ {
 };
 static_assert(sizeof(PointXYZ) == 12U, "PointXYZ must stay 3 packed floats (caller buffers)");
 
-/// Rigid transform sensor -> map: p_map = rotation * p_sensor + translation (metres).
+/// Rigid transform sensor -> map: p_map = rotation * p_sensor + translation (metres), plain
+/// floats (no matrix library in the interface). rotation[row][col], row-major: the map-frame x
+/// of a point is rotation[0][0] * x_s + rotation[0][1] * y_s + rotation[0][2] * z_s + translation.x.
 /// The caller builds the rotation (from its estimator's quaternion or matrix); the core does
 /// not evaluate trigonometric functions, so results are bitwise reproducible across targets.
 struct Pose {
-  Eigen::Matrix3f rotation;
-  Eigen::Vector3f translation;
+  float rotation[3][3];
+  PointXYZ translation;  ///< the sensor's position in the map frame (m)
 };
+static_assert(sizeof(Pose) == 48U, "Pose must stay 12 packed floats (C API: ccmap_pose)");
 
 /// Hazard class of a cell (paper Section IV-E, IV-D).
 enum class CellClass : std::uint8_t {

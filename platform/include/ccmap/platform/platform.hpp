@@ -19,6 +19,12 @@ enum class LogLevel : std::uint8_t { kDebug = 0, kInfo = 1, kWarning = 2, kError
 /// Monotonic time in nanoseconds since an arbitrary epoch.
 [[nodiscard]] std::uint64_t monotonic_ns() noexcept;
 
+/// CPU time consumed by the calling thread, nanoseconds since an arbitrary epoch; never goes
+/// backwards within a thread. Unlike monotonic_ns() it does not count time the thread was
+/// preempted or waiting, so a cycle budget measured with it is not charged for other load.
+/// Without threads or a CPU-time clock (bare metal) it equals monotonic_ns().
+[[nodiscard]] std::uint64_t thread_cpu_ns() noexcept;
+
 /// Writes one log line (no trailing newline needed). `message` may be nullptr (ignored).
 void log_write(LogLevel level, const char* message) noexcept;
 

@@ -110,15 +110,6 @@ int main(int argc, char** argv) {
     auto stack = make_stack<CadreConfig>(0.04F);
     report("cadre frame 552500 pts, map frame", time_frames(*stack, cadre, reps, false), "ms");
     report("cadre frame 552500 pts, sensor frame", time_frames(*stack, cadre, reps, true), "ms");
-    auto reference = make_stack<CadreConfig>(0.04F);
-    std::vector<double> seq;
-    for (int r = 0; r < reps; ++r) {
-      const test::CadreFrame& f = cadre[static_cast<std::size_t>(r) % cadre.size()];
-      const std::uint64_t t0 = monotonic_ns();
-      (void)reference->update_frame_sequential(f.map_points.data(), nullptr, f.map_points.size(), f.sensor_origin, nullptr);
-      seq.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-6);
-    }
-    report("cadre frame 552500 pts, sequential reference", seq, "ms");
   }
   {
     const auto small = frames_of(3, 125, 80);

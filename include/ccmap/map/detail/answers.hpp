@@ -1,0 +1,148 @@
+// Answers of a stack's layers to point queries: the (pooled) CCM cell's surface at the query
+// point, the piece-wise constant cell's height, classes (paper Sections IV-D, IV-E), the
+// roughness filter baseline of the constant layer. A QueryView is a read-only view (three
+// references) that Stack's queries and exports use; integrators need not read it.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/map/classify.hpp"
+#include "ccmap/map/config.hpp"
+#include "ccmap/map/detail/layers.hpp"
+#include "ccmap/map/detail/pooling.hpp"
+#include "ccmap/map/types.hpp"
+
+namespace ccmap::detail {
+
+[[nodiscard]] inline QueryResult empty_result(Status status, int layer) noexcept {
+  return QueryResult{status, layer, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, CellClass::kUnknown};
+}
+
+template <typename Config>
+class QueryView {
+ public:
+  using Layers = LayerSet<Config>;
+  using FineCell = typename Layers::FineCell;
+
+  QueryView(const Layers& layers, const StackParams& params, const float* thresholds) noexcept
+      : layers_(layers), params_(params), thresholds_(thresholds) {}
+
+  /// Answer from the finest layer that knows (x, y); see Stack::query for the contract.
+  [[nodiscard]] QueryResult query(float x, float y) const noexcept {
+    QueryResult result = empty_result(Status::kOutsideMap, -1);
+    for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
+      CellIndex index{};
+      if (!layers_.locate(layer, x, y, &index)) {
+        continue;
+      }
+      if (result.status == Status::kOutsideMap) {
+        result = empty_result(Status::kUnknown, layer);
+      }
+      QueryResult answer = answer_at(layer, index, x, y, true);
+      if (answer.status != Status::kOk) {
+        continue;
+      }
+      if (!Layers::is_ccm(layer) && Layers::kCcmLayerCount > 0) {
+        refine_with_ccm(x, y, answer);
+      }
+      return answer;
+    }
+    return result;
+  }
+
+  /// The answer of `layer` at `index` for the point (x, y) inside that cell. With
+  /// require_known, a cell that is not known gives kUnknown. Precondition: the layer's window
+  /// contains `index`.
+  [[nodiscard]] QueryResult answer_at(int layer, CellIndex index, float x, float y, bool require_known) const noexcept {
+    const float width = layers_.widths[layer];
+    QueryResult out = empty_result(Status::kOk, layer);
+    out.cell_width_m = width;
+    if (Layers::is_ccm(layer)) {
+      const CcmCell cell = pooled(layers_, params_.weight_limit, layer, index);
+      // Known: covered (eq. 12), or an obstacle already (classify_ccm: obstacle evidence wins).
+      const CellClass cell_class = classify_ccm(cell, width, params_, thresholds_[layer]);
+      if (require_known && cell_class == CellClass::kUnknown) {
+        return empty_result(Status::kUnknown, layer);
+      }
+      const float qx = x - grid::cell_centre(index.x, width);
+      const float qy = y - grid::cell_centre(index.y, width);
+      const CcmSurface surface = ccm_surface(cell);
+      out.weight = cell.weight;
+      out.height_m = ccm_height_at(cell, surface, qx, qy);
+      out.slope_x = surface.slope_x;
+      out.slope_y = surface.slope_y;
+      out.inclination = ccm_inclination(surface);
+      out.normal_variance = surface.normal_variance;
+      out.elevation_variance = ccm_elevation_variance(cell, surface, qx, qy);
+      out.cell_class = cell_class;
+      return out;
+    }
+    if constexpr (Layers::kHasFine) {
+      const FineCell& cell = layers_.fine.cell_unchecked(index);
+      const bool known = cell.weight >= params_.min_weight && cell.weight > 0.0F;
+      if (require_known && !known) {
+        return empty_result(Status::kUnknown, layer);
+      }
+      out.weight = cell.weight;
+      out.height_m = cell.height;
+      out.normal_variance = fine_variance(cell);
+      out.elevation_variance = out.normal_variance;
+      out.cell_class = known ? roughness_class(index) : CellClass::kUnknown;
+    }
+    return out;
+  }
+
+ private:
+  /// Roughness filter of the piece-wise constant layer (the baseline of Section V-B): the
+  /// cell is an obstacle if any known neighbour differs in height by more than the maximum
+  /// inclination times their distance. It cannot tell slopes from steps.
+  [[nodiscard]] CellClass roughness_class(CellIndex index) const noexcept {
+    if constexpr (Layers::kHasFine) {
+      const FineCell& centre = layers_.fine.cell_unchecked(index);
+      const float step = params_.max_inclination * layers_.widths[0];
+      for (std::int32_t dy = -1; dy <= 1; ++dy) {
+        for (std::int32_t dx = -1; dx <= 1; ++dx) {
+          const FineCell* n = layers_.fine.cell(CellIndex{index.x + dx, index.y + dy});
+          if (n == nullptr || (dx == 0 && dy == 0) || !(n->weight >= params_.min_weight)) {
+            continue;
+          }
+          const float limit = (dx != 0 && dy != 0) ? step * 1.41421356F : step;
+          if (std::fabs(n->height - centre.height) > limit) {
+            return CellClass::kObstacle;
+          }
+        }
+      }
+      return CellClass::kTraversable;
+    } else {
+      (void)index;
+      return CellClass::kUnknown;
+    }
+  }
+
+  /// Replaces slope, normal variance and class of a constant-layer answer with those of the
+  /// first CCM layer's pooled cell at (x, y), when that cell is known.
+  void refine_with_ccm(float x, float y, QueryResult& answer) const noexcept {
+    const int layer = Layers::kFineLayerCount;
+    CellIndex index{};
+    if (!layers_.locate(layer, x, y, &index)) {
+      return;
+    }
+    const QueryResult ccm = answer_at(layer, index, x, y, true);
+    if (ccm.status != Status::kOk) {
+      return;
+    }
+    answer.slope_x = ccm.slope_x;
+    answer.slope_y = ccm.slope_y;
+    answer.inclination = ccm.inclination;
+    answer.normal_variance = ccm.normal_variance;
+    answer.cell_class = ccm.cell_class;
+  }
+
+  const Layers& layers_;
+  const StackParams& params_;
+  const float* thresholds_;
+};
+
+}  // namespace ccmap::detail

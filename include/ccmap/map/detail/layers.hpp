@@ -1,0 +1,166 @@
+// The layers of a stack (paper Fig. 2) as one statically sized object: an optional piece-wise
+// constant finest layer (Kalman or OMG cells) and the CCM layers, cell widths doubling, every
+// window a ring buffer over storage inside this object. Owned by Stack<Config>; the update path,
+// pooling and queries read and write cells through it. Integrators need not read it.
+//
+// Layer numbering: 0 is the finest layer; with a constant finest layer, CCM layer c is stack
+// layer c + 1. Cell width of layer k: w_0 * 2^k (exact in float).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/grid/ring_grid.hpp"
+#include "ccmap/map/config.hpp"
+
+namespace ccmap::detail {
+
+template <std::size_t N>
+constexpr std::size_t sum_of_squares(const std::array<std::int32_t, N>& sides) noexcept {
+  std::size_t total = 0U;
+  for (std::size_t i = 0; i < N; ++i) {
+    total += static_cast<std::size_t>(sides[i]) * static_cast<std::size_t>(sides[i]);
+  }
+  return total;
+}
+
+template <std::size_t N>
+constexpr bool all_valid_sides(const std::array<std::int32_t, N>& sides) noexcept {
+  for (std::size_t i = 0; i < N; ++i) {
+    // Power of two, >= 4 so that half a side is even: windows then start on even indices
+    // and every coarse cell covers exactly 2 x 2 cells of the next finer layer.
+    if (!grid::is_power_of_two(sides[i]) || sides[i] < 4) {
+      return false;
+    }
+  }
+  return true;
+}
+
+template <typename Config>
+struct LayerSet {
+  static constexpr bool kHasFine = Config::kFineKind != FineKind::kNone;
+  static constexpr int kFineLayerCount = kHasFine ? 1 : 0;
+  static constexpr int kCcmLayerCount = static_cast<int>(Config::kCcmSides.size());
+  static constexpr int kLayerCount = kFineLayerCount + kCcmLayerCount;
+  using FineCell = std::conditional_t<Config::kFineKind == FineKind::kOmg, OmgCell, KalmanCell>;
+
+  static_assert(kLayerCount >= 1 && kLayerCount <= kMaxLayers, "1..kMaxLayers layers");
+  static_assert(!kHasFine || (grid::is_power_of_two(Config::kFineSide) && Config::kFineSide >= 4),
+                "fine side must be a power of two >= 4");
+  static_assert(kHasFine || Config::kFineSide == 0, "no fine layer: kFineSide must be 0");
+  static_assert(all_valid_sides(Config::kCcmSides), "CCM sides must be powers of two >= 4");
+
+  static constexpr std::size_t kFineCellCount =
+      kHasFine ? static_cast<std::size_t>(Config::kFineSide) * static_cast<std::size_t>(Config::kFineSide) : 1U;
+  static constexpr std::size_t kCcmCellCount = kCcmLayerCount > 0 ? sum_of_squares(Config::kCcmSides) : 1U;
+  static constexpr std::size_t kLayerSlots = static_cast<std::size_t>(kLayerCount);
+  static constexpr std::size_t kCcmSlots = kCcmLayerCount > 0 ? static_cast<std::size_t>(kCcmLayerCount) : 1U;
+
+  [[nodiscard]] static constexpr std::int32_t side(int layer) noexcept {
+    if (layer < 0 || layer >= kLayerCount) {
+      return 0;
+    }
+    if (kHasFine && layer == 0) {
+      return Config::kFineSide;
+    }
+    return Config::kCcmSides[static_cast<std::size_t>(layer - kFineLayerCount)];
+  }
+  [[nodiscard]] static constexpr std::size_t capacity(int layer) noexcept {
+    return static_cast<std::size_t>(side(layer)) * static_cast<std::size_t>(side(layer));
+  }
+  [[nodiscard]] static constexpr bool is_ccm(int layer) noexcept {
+    return layer >= kFineLayerCount && layer < kLayerCount;
+  }
+
+  /// Binds every layer (centred on the origin, all cells empty) with widths w_0 * 2^k.
+  /// kInvalidArgument if a grid refuses its width (validate_stack_params prevents it).
+  [[nodiscard]] Status init(float finest_width_m) noexcept {
+    float width = finest_width_m;
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      widths[layer] = width;
+      width *= 2.0F;
+    }
+    const CellIndex origin{0, 0};
+    if constexpr (kHasFine) {
+      if (fine.init(fine_storage, Config::kFineSide, widths[0], origin) != Status::kOk) {
+        return Status::kInvalidArgument;
+      }
+    }
+    std::size_t offset = 0U;
+    for (int c = 0; c < kCcmLayerCount; ++c) {
+      const std::int32_t s = Config::kCcmSides[static_cast<std::size_t>(c)];
+      if (ccm[c].init(ccm_storage + offset, s, widths[c + kFineLayerCount], origin) != Status::kOk) {
+        return Status::kInvalidArgument;
+      }
+      offset += static_cast<std::size_t>(s) * static_cast<std::size_t>(s);
+    }
+    return Status::kOk;
+  }
+
+  /// The CCM grid of stack layer `layer`. Precondition: is_ccm(layer).
+  [[nodiscard]] RingGrid<CcmCell>& ccm_grid(int layer) noexcept { return ccm[layer - kFineLayerCount]; }
+  [[nodiscard]] const RingGrid<CcmCell>& ccm_grid(int layer) const noexcept { return ccm[layer - kFineLayerCount]; }
+
+  /// Global index of (x, y) in `layer` if its window holds it.
+  [[nodiscard]] bool locate(int layer, float x, float y, CellIndex* index) const noexcept {
+    if (is_ccm(layer)) {
+      return ccm_grid(layer).locate(x, y, index);
+    }
+    if constexpr (kHasFine) {
+      return layer == 0 && fine.locate(x, y, index);
+    } else {
+      return false;
+    }
+  }
+
+  [[nodiscard]] bool contains(int layer, CellIndex index) const noexcept {
+    if (is_ccm(layer)) {
+      return ccm_grid(layer).contains(index);
+    }
+    if constexpr (kHasFine) {
+      return layer == 0 && fine.contains(index);
+    } else {
+      return false;
+    }
+  }
+
+  /// Window centre of a layer (global cell index); {0, 0} for a bad layer.
+  [[nodiscard]] CellIndex centre(int layer) const noexcept {
+    if (is_ccm(layer)) {
+      return ccm_grid(layer).centre();
+    }
+    if constexpr (kHasFine) {
+      if (layer == 0) {
+        return fine.centre();
+      }
+    }
+    return CellIndex{0, 0};
+  }
+
+  /// Re-centres layer `layer` on the global index `centre`.
+  [[nodiscard]] Status move_layer(int layer, CellIndex new_centre) noexcept {
+    if (is_ccm(layer)) {
+      return ccm_grid(layer).move_to(new_centre);
+    }
+    if constexpr (kHasFine) {
+      return fine.move_to(new_centre);
+    } else {
+      (void)new_centre;
+      return Status::kOk;
+    }
+  }
+
+  // ---- state (zero-initialised: a static LayerSet lives in .bss) ----
+  FineCell fine_storage[kFineCellCount]{};
+  CcmCell ccm_storage[kCcmCellCount]{};
+  RingGrid<FineCell> fine{};
+  RingGrid<CcmCell> ccm[kCcmSlots]{};
+  float widths[kLayerSlots]{};
+};
+
+}  // namespace ccmap::detail

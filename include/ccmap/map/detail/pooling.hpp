@@ -1,0 +1,66 @@
+// Pooling at query time (paper Section IV-F): a CCM cell's answer is its own statistics merged
+// (Chan) with the pool of its four children when they lie inside the next finer layer,
+// recursively down to the finest layer. Points are written once, to one layer; coarse cells are
+// formed from fine ones only when asked. Integrators need not read it.
+//
+// Cost: at most 4^(layer) cell reads for a cell of stack layer `layer` (341 for the coarsest
+// CADRE layer), independent of map size and point count. Recursion depth <= the layer count.
+#pragma once
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/map/detail/layers.hpp"
+
+namespace ccmap::detail {
+
+/// Height and height variance of a piece-wise constant cell.
+template <typename FineCell>
+[[nodiscard]] float fine_height(const FineCell& cell) noexcept {
+  return cell.height;
+}
+[[nodiscard]] inline float fine_variance(const KalmanCell& cell) noexcept { return cell.variance; }
+[[nodiscard]] inline float fine_variance(const OmgCell& cell) noexcept { return omg_variance(cell); }
+
+/// The statistics of CCM stack layer `layer`'s cell `index` as a query sees them.
+/// Preconditions: LayerSet<Config>::is_ccm(layer) and the layer's window contains `index`
+/// (so 2 * index fits int32: windows stay within +-2^30).
+template <typename Config>
+[[nodiscard]] CcmCell pooled(const LayerSet<Config>& layers, float weight_limit, int layer, CellIndex index) noexcept {
+  using Layers = LayerSet<Config>;
+  const CcmCell* own = layers.ccm_grid(layer).cell(index);
+  CcmCell result = own != nullptr ? *own : CcmCell{};
+  if (layer == 0) {
+    return result;
+  }
+  const int child_layer = layer - 1;
+  const CellIndex first{index.x * 2, index.y * 2};
+  // Windows are aligned (every window starts on an even index): either all four children lie
+  // inside the finer window or none does.
+  if (!layers.contains(child_layer, first)) {
+    return result;
+  }
+  CcmCell children[4] = {};
+  bool any = false;
+  for (int i = 0; i < 4; ++i) {
+    const CellIndex child{first.x + (i & 1), first.y + (i >> 1)};
+    if (Layers::is_ccm(child_layer)) {
+      children[i] = pooled(layers, weight_limit, child_layer, child);
+    } else {
+      if constexpr (Layers::kHasFine) {
+        const typename Layers::FineCell& c = layers.fine.cell_unchecked(child);
+        children[i] = ccm_from_constant(fine_height(c), fine_variance(c), c.weight, layers.widths[child_layer]);
+      }
+    }
+    any = any || children[i].weight > 0.0F;
+  }
+  if (!any) {
+    return result;
+  }
+  CcmCell merged = ccm_pool4(children, layers.widths[child_layer], weight_limit);
+  if (result.weight > 0.0F) {
+    (void)ccm_merge(merged, result, weight_limit);
+  }
+  return merged;
+}
+
+}  // namespace ccmap::detail
