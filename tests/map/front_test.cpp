@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "ccmap/grid/ring_index.hpp"
@@ -20,6 +21,25 @@
 
 namespace ccmap::detail {
 namespace {
+
+/// One point through a chunk function (the chunk is 18 KB: heap, not the test's stack).
+struct One {
+  std::int32_t code;
+  std::int32_t ix0, iy0;
+  std::int64_t range_sq;
+  std::int64_t q18[3];  ///< sensor-frame input only
+};
+One front_one(bool sensor, const PointXYZ& p, const FramePose& pose, const FrontConfig& config) {
+  static std::unique_ptr<FrontChunk> chunk = std::make_unique<FrontChunk>();
+  if (sensor) {
+    front_sensor_chunk(&p, 1, pose, config, *chunk);
+  } else {
+    front_map_chunk(&p, 1, pose, config, *chunk);
+  }
+  One o{chunk->code[0], chunk->ix0[0], chunk->iy0[0], chunk->range_sq[0], {0, 0, 0}};
+  for (int a = 0; a < 3; ++a) o.q18[a] = chunk->q18[a][0];
+  return o;
+}
 
 float from_bits(std::uint32_t u) {
   float v = 0.0F;
@@ -101,8 +121,8 @@ void transform_error(double radius, double translation_range, double* worst, dou
     for (int i = 0; i < 2000; ++i) {
       const PointXYZ s{static_cast<float>(rng.uniform(-radius, radius)), static_cast<float>(rng.uniform(-radius, radius)),
                        static_cast<float>(rng.uniform(-radius, radius))};
-      const PointFront f = front_sensor_point(s.x, s.y, s.z, fixed, config);
-      ASSERT_LT(f.code, 1U) << "a point within " << radius << " m must be routed";
+      const One f = front_one(true, s, fixed, config);
+      ASSERT_EQ(f.code, 0) << "a point within " << radius << " m must be routed";
       const double t[3] = {pose.translation.x, pose.translation.y, pose.translation.z};
       for (int r = 0; r < 3; ++r) {
         const double m = double{pose.rotation[r][0]} * s.x + double{pose.rotation[r][1]} * s.y +
@@ -156,8 +176,8 @@ TEST(Front, FinestIndexEqualsWhatQueriesLocateAtEveryEdge) {
       for (int s = 0; s < 7; ++s, x = std::nextafter(x, std::numeric_limits<float>::infinity())) {
         CellIndex located{};
         ASSERT_TRUE(grid::index_of_position(x, -x, inv, &located)) << x;
-        const PointFront f = front_map_point(x, -x, 0.0F, pose, config);
-        ASSERT_EQ(f.code, 0U);
+        const One f = front_one(false, PointXYZ{x, -x, 0.0F}, pose, config);
+        ASSERT_EQ(f.code, 0);
         ASSERT_EQ(f.ix0, located.x) << "x = " << x << " m, width " << width;
         ASSERT_EQ(f.iy0, located.y) << "y = " << -x << " m, width " << width;
         ++checked;
@@ -187,7 +207,7 @@ TEST(Front, RangeAndRoutingAgreeWithTheFloatTableOnDoubleRanges) {
                      static_cast<float>(rng.uniform(-1.0, 1.0))};
     const double dx = double{p.x} - origin.x, dy = double{p.y} - origin.y, dz = double{p.z} - origin.z;
     const double r2 = dx * dx + dy * dy + dz * dz;
-    const PointFront f = front_map_point(p.x, p.y, p.z, pose, config);
+    const One f = front_one(false, p, pose, config);
     // Q16 range: |error of each offset| < 2^-16 + 2 * 2^-18 m (the floors of the Q16 shift and of
     // both Q18 conversions), so |error of r^2| < 2 sqrt(3) r (2^-16 + 2^-17) + 3 (...)^2.
     const double e = 2.0 * std::sqrt(3.0 * r2) * 2.3e-5 + 1e-8;
@@ -199,7 +219,7 @@ TEST(Front, RangeAndRoutingAgreeWithTheFloatTableOnDoubleRanges) {
       continue;
     }
     const int expected = table.select(static_cast<float>(r2));
-    ASSERT_EQ(static_cast<int>(f.code == kFrontTooNoisy ? -1 : static_cast<int>(f.code)), expected) << "r^2 = " << r2;
+    ASSERT_EQ(f.code == std::int32_t{kFrontTooNoisy} ? -1 : f.code, expected) << "r^2 = " << r2;
     ++compared;
   }
   EXPECT_GT(compared, 290000);
@@ -233,12 +253,34 @@ TEST(Front, RefusalCodesOfSensorPoints) {
   FramePose pose{};
   const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   ASSERT_EQ(make_frame_pose(PointXYZ{99990.0F, 0, 0}, identity, &pose), Status::kOk);
-  EXPECT_EQ(front_sensor_point(std::numeric_limits<float>::quiet_NaN(), 0, 0, pose, config).code, kFrontNonFinite);
-  EXPECT_EQ(front_sensor_point(0, 0, -std::numeric_limits<float>::infinity(), pose, config).code, kFrontNonFinite);
-  EXPECT_EQ(front_sensor_point(2048.0F, 0, 0, pose, config).code, kFrontOutOfRange);
-  EXPECT_EQ(front_sensor_point(2047.9F, 0, 0, pose, config).code, kFrontOutOfRange) << "beyond 1e5 m in the map frame";
-  EXPECT_EQ(front_sensor_point(-2047.9F, 0, 0, pose, config).code, 0U);
-  EXPECT_EQ(front_sensor_point(0, 0, 0, pose, config).code, kFrontTooNoisy) << "the sensor itself has no range";
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(front_one(true, PointXYZ{nan, 0, 0}, pose, config).code, std::int32_t{kFrontNonFinite});
+  EXPECT_EQ(front_one(true, PointXYZ{0, 0, -inf}, pose, config).code, std::int32_t{kFrontNonFinite});
+  EXPECT_EQ(front_one(true, PointXYZ{2048.0F, 0, 0}, pose, config).code, std::int32_t{kFrontOutOfRange});
+  EXPECT_EQ(front_one(true, PointXYZ{2047.9F, 0, 0}, pose, config).code, std::int32_t{kFrontOutOfRange})
+      << "beyond 1e5 m in the map frame";
+  EXPECT_EQ(front_one(true, PointXYZ{-2047.9F, 0, 0}, pose, config).code, 0);
+  EXPECT_EQ(front_one(true, PointXYZ{0, 0, 0}, pose, config).code, std::int32_t{kFrontTooNoisy})
+      << "the sensor itself has no range";
+}
+
+TEST(Front, RefusalCodesOfMapPointsAndFarPoints) {
+  const FrontConfig config = unbounded_front(0.04F);
+  FramePose pose{};
+  ASSERT_EQ(make_frame_pose(PointXYZ{-3000.0F, 0, 0}, nullptr, &pose), Status::kOk);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(front_one(false, PointXYZ{0, nan, 0}, pose, config).code, std::int32_t{kFrontNonFinite});
+  EXPECT_EQ(front_one(false, PointXYZ{0, 0, 1.0001e5F}, pose, config).code, std::int32_t{kFrontOutOfRange});
+  EXPECT_EQ(front_one(false, PointXYZ{-3000.0F, 0, 0}, pose, config).code, std::int32_t{kFrontTooNoisy});
+  // 3 km from the sensor: a saturated range, taken by an unbounded layer, indexed exactly.
+  const One far = front_one(false, PointXYZ{1.0e5F, -12.34F, 0}, pose, config);
+  EXPECT_EQ(far.code, 0);
+  EXPECT_EQ(far.range_sq, INT64_MAX);
+  CellIndex located{};
+  ASSERT_TRUE(grid::index_of_position(1.0e5F, -12.34F, 1.0F / 0.04F, &located));
+  EXPECT_EQ(far.ix0, located.x);
+  EXPECT_EQ(far.iy0, located.y);
 }
 
 }  // namespace

@@ -353,12 +353,14 @@ int feed_and_check_one(S& stack, PointXYZ p, const char* what) {
       << what << ": the cell locate() names did not change";
   EXPECT_TRUE(patched == after) << what << ": a cell other than the one locate() names changed";
   if (S::layer_is_ccm(expected_layer)) {
-    // The stored offset from the cell centre is at most half a cell (plus rounding: a point
-    // within an ulp of the edge may sit in the neighbour, see grid::index_of_position).
+    // The stored offset from the cell centre is at most half a cell plus half the Q18 quantum
+    // (positions are floored to 2^-18 m and centred by half a unit: map/detail/update_path.hpp,
+    // relative_to_centre), plus float rounding.
     const CcmCell* cell = stack.ccm_layer(expected_layer - 1).cell(expected_index);
     const float half = 0.5F * stack.layer_cell_width(expected_layer);
-    EXPECT_LE(std::fabs(cell->mean_x), half * (1.0F + 1e-5F)) << what;
-    EXPECT_LE(std::fabs(cell->mean_y), half * (1.0F + 1e-5F)) << what;
+    const float limit = half * (1.0F + 1e-5F) + 1.9073486e-6F;  // 2^-19 m
+    EXPECT_LE(std::fabs(cell->mean_x), limit) << what;
+    EXPECT_LE(std::fabs(cell->mean_y), limit) << what;
   }
   return expected_layer;
 }

@@ -20,7 +20,9 @@
 // same quantisation for queries, so a point lands in the cell that locate() names, edges
 // included (tests/map/front_test.cpp).
 //
-// No heap, no exceptions, no float instruction on the map-frame path; O(1) per point.
+// The front works on chunks of points, structure of arrays, in plain loops of integer operations
+// that the compiler vectorises (src/map/front.cpp). No heap, no exceptions, no float instruction;
+// O(1) per point.
 #pragma once
 
 #include <cstddef>
@@ -63,43 +65,58 @@ enum : std::uint32_t {
 }
 
 /// floor(v * 2^18) for the float with bit pattern `bits`, exact, in integer operations.
-/// Precondition: v finite and |v| < 2^17 m (the caller compared |bits| with kMaxAbsCoordinateM
-/// = 1e5 m first; a larger v would need a negative shift).
+/// Meaningful for finite |v| < 2^17 m (callers compare |bits| with kMaxAbsCoordinateM = 1e5 m);
+/// for other bit patterns the result is some value (the shift is clamped: no undefined
+/// behaviour, so vectorised lanes of refused points are harmless).
 /// v = s * 2^(e - 150) with s the 24-bit significand and e the biased exponent, so
 /// v * 2^18 = (s * 2^11) * 2^(e - 143): a left shift by 11 (at most 2^35), then an arithmetic
 /// right shift by 143 - e >= 0 of the signed value, which floors negative values.
 [[nodiscard]] inline std::int64_t q18_floor(std::uint32_t bits) noexcept {
-  const std::uint32_t biased = (bits >> 23) & 0xFFU;
-  const std::uint32_t significand = (bits & 0x7FFFFFU) | (biased != 0U ? 0x800000U : 0U);
-  const std::int32_t exponent = static_cast<std::int32_t>(biased) + (biased == 0U ? 1 : 0);
-  const std::int32_t shift = 143 - exponent;
+  const auto biased = static_cast<std::int32_t>((bits >> 23) & 0xFFU);
+  const std::int64_t significand = static_cast<std::int64_t>(bits & 0x7FFFFFU) | (biased != 0 ? 0x800000 : 0);
+  const std::int32_t exponent = biased + (biased == 0 ? 1 : 0);
+  std::int64_t shift = 143 - exponent;
+  shift = shift < 0 ? 0 : (shift > 63 ? 63 : shift);
   const std::int64_t sign = -static_cast<std::int64_t>(bits >> 31);  // 0 or -1
-  const std::int64_t value = ((static_cast<std::int64_t>(significand) << 11) ^ sign) - sign;
-  return value >> (shift > 63 ? 63 : shift);  // arithmetic shift: gcc/clang, standard in C++20
+  const std::int64_t value = ((significand << 11) ^ sign) - sign;
+  return value >> shift;  // arithmetic shift: gcc/clang, standard in C++20
 }
 
 /// floor(v * 2^18) for |v| < 2^11 m as int32 (the sensor-frame conversion): the same value as
-/// q18_floor, in 32-bit operations (v * 2^18 = (s * 2^5) * 2^(e - 137)).
-/// Precondition: |bits| < bits_of(2048.0F) (checked by the caller).
+/// q18_floor, in 32-bit operations (v * 2^18 = (s * 2^5) * 2^(e - 137)). Meaningful for
+/// |bits| < bits_of(2048.0F); the shift is clamped for other bit patterns.
 [[nodiscard]] inline std::int32_t q18_floor_small(std::uint32_t bits) noexcept {
-  const std::uint32_t biased = (bits >> 23) & 0xFFU;
-  const std::uint32_t significand = (bits & 0x7FFFFFU) | (biased != 0U ? 0x800000U : 0U);
-  const std::int32_t exponent = static_cast<std::int32_t>(biased) + (biased == 0U ? 1 : 0);
-  const std::int32_t shift = 137 - exponent;
+  const auto biased = static_cast<std::int32_t>((bits >> 23) & 0xFFU);
+  const std::int32_t significand = static_cast<std::int32_t>(bits & 0x7FFFFFU) | (biased != 0 ? 0x800000 : 0);
+  const std::int32_t exponent = biased + (biased == 0 ? 1 : 0);
+  std::int32_t shift = 137 - exponent;
+  shift = shift < 0 ? 0 : (shift > 31 ? 31 : shift);
   const std::int32_t sign = -static_cast<std::int32_t>(bits >> 31);
-  const std::int32_t value = (static_cast<std::int32_t>(significand << 5) ^ sign) - sign;
-  return value >> (shift > 31 ? 31 : shift);
+  const std::int32_t value = ((significand << 5) ^ sign) - sign;
+  return value >> shift;
 }
 
 /// Constants of the front, derived at init from the finest cell width and the routing table.
 struct FrontConfig {
-  std::int64_t index_mult;   ///< 24-bit significand of fl(1 / w_0)
+  std::int32_t index_mult;   ///< 24-bit significand of fl(1 / w_0)
   std::int32_t index_shift;  ///< index_0 = (q18 * index_mult) >> index_shift = floor(q * fl(1/w_0))
   std::uint32_t layers;      ///< routed layers
   /// Squared IV-G range bound of each layer (units of 2^-32 m^2), non-decreasing;
   /// INT64_MAX for an unbounded layer (and for unused slots).
   std::int64_t max_range_sq[kFrontMaxLayers];
+  /// The same bounds as routing keys (route_key_of): routing compares keys, 32-bit lanes.
+  std::uint32_t max_range_key[kFrontMaxLayers];
 };
+
+/// Routing key of a squared range (2^-32 m^2 units): floor(r^2 / 2^-12 m^2), saturated at
+/// 2^32 - 1 (r^2 >= 2^20 m^2, a range of 1024 m or more). A layer holds a point iff the point's
+/// key <= the layer's bound key: bounds act as if rounded up to the next 2^-12 m^2
+/// (2.4e-4 m^2; at the CADRE 4 cm bound of 1.32 m that is 0.09 mm of range), and ranges beyond
+/// 1024 m compare as 1024 m (only a layer whose own bound is beyond 1024 m is affected).
+[[nodiscard]] inline std::uint32_t route_key_of(std::int64_t range_sq) noexcept {
+  const std::uint64_t key = static_cast<std::uint64_t>(range_sq) >> 20;
+  return key > 0xFFFFFFFFULL ? 0xFFFFFFFFU : static_cast<std::uint32_t>(key);
+}
 
 /// The sensor pose of one frame in fixed point.
 struct FramePose {
@@ -109,15 +126,21 @@ struct FramePose {
   std::int64_t translation_q18[3];  ///< sensor position, map frame (Q18, rounded); sensor frame only
 };
 
-/// One point after the front: routed layer (or refusal code), finest index, squared range,
-/// Q18 map position (for sensor-frame input, where no float position exists) and Q14 height.
-struct PointFront {
-  std::uint32_t code;
-  std::int32_t ix0;
-  std::int32_t iy0;
-  std::int64_t range_sq;   ///< units of 2^-32 m^2; to_range_sq_m2() for m^2
-  std::int64_t q18[3];     ///< map frame position (Q18)
-  std::int64_t height_q14; ///< floor(z * 2^14)
+/// Points per front chunk: the chunk is 11 KB (fits a 32 KB L1 data cache beside the cells).
+inline constexpr std::size_t kFrontChunkPoints = 128U;
+
+/// The front's answer for a chunk of points, structure of arrays (vectorisable), owned by the
+/// stack's update path. Entry i is valid for i < the count passed to the chunk function.
+struct FrontChunk {
+  std::int32_t code[kFrontChunkPoints];        ///< routed layer, or kFrontNonFinite/OutOfRange/TooNoisy
+  std::int32_t ix0[kFrontChunkPoints];         ///< finest-layer global index (valid if routed)
+  std::int32_t iy0[kFrontChunkPoints];
+  std::int32_t height_q14[kFrontChunkPoints];  ///< floor(z * 2^14), map frame (valid if routed)
+  std::int64_t range_sq[kFrontChunkPoints];    ///< 2^-32 m^2; INT64_MAX beyond kMaxSensorOffsetM
+  std::uint32_t range_key[kFrontChunkPoints];  ///< route_key_of(range_sq)
+  std::int64_t q18[3][kFrontChunkPoints];      ///< map-frame position, Q18 (valid if routed)
+  // Scratch of the chunk functions (not results).
+  std::int32_t scratch_i32[3][kFrontChunkPoints];
 };
 
 /// A squared range of the front (2^-32 m^2 units) in m^2 (two float operations: only the cells
@@ -144,110 +167,24 @@ struct PointFront {
 /// Rotation error: each Q30 entry is within 2^-31 of the float, i.e. < 1.5 nm per metre.
 [[nodiscard]] Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, FramePose* out) noexcept;
 
-/// Squared range (2^-32 m^2) of a Q18 offset from the sensor; INT64_MAX when an axis is at or
-/// beyond kMaxSensorOffsetM (saturated: only unbounded layers take the point).
-[[nodiscard]] inline std::int64_t range_sq_of_offset(std::int64_t dx, std::int64_t dy, std::int64_t dz) noexcept {
-  constexpr auto kSpan = static_cast<std::uint64_t>(2 * kMaxSensorOffsetQ18);
-  if ((static_cast<std::uint64_t>(dx + kMaxSensorOffsetQ18) | static_cast<std::uint64_t>(dy + kMaxSensorOffsetQ18) |
-       static_cast<std::uint64_t>(dz + kMaxSensorOffsetQ18)) >= kSpan) {
-    return INT64_MAX;
-  }
-  const std::int64_t rx = dx >> 2;  // Q18 -> Q16 (floor); |r| < 2^27, so the sum stays < 2^56
-  const std::int64_t ry = dy >> 2;
-  const std::int64_t rz = dz >> 2;
-  return rx * rx + ry * ry + rz * rz;
-}
+/// The front of n <= kFrontChunkPoints map-frame points: validation on the bit patterns (one
+/// compare of the largest |bits| with bits(1e5) catches NaN, Inf and out-of-range), exact Q18
+/// conversion, the squared range from the sensor (the frame pose's origin, saturated beyond
+/// kMaxSensorOffsetM), routing (the first layer whose squared bound holds the range; the sensor
+/// itself is too noisy), the finest index floor(q * fl(1/w_0)) and the Q14 height. Integer
+/// operations only, in loops the compiler vectorises (NEON on aarch64; AVX2 on x86-64 where the
+/// CPU has it, chosen at load time).
+void front_map_chunk(const PointXYZ* points, std::size_t n, const FramePose& pose, const FrontConfig& config,
+                     FrontChunk& out) noexcept;
 
-/// Routing and indexing of a Q18 map position with squared range `range_sq`; fills `out`.
-inline void route_and_index(const std::int64_t q[3], std::int64_t range_sq, const FrontConfig& config,
-                            PointFront& out) noexcept {
-  std::uint32_t layer = 0U;  // bounds are non-decreasing: the first that holds the range
-  while (layer < config.layers && range_sq > config.max_range_sq[layer]) {
-    ++layer;
-  }
-  out.range_sq = range_sq;
-  if (range_sq == 0 || layer >= config.layers) {
-    out.code = kFrontTooNoisy;  // at the sensor itself, or too noisy for every layer
-    return;
-  }
-  out.code = layer;
-  // |q| < 2^35 and index_mult < 2^24: the product fits int64; >> floors.
-  out.ix0 = static_cast<std::int32_t>((q[0] * config.index_mult) >> config.index_shift);
-  out.iy0 = static_cast<std::int32_t>((q[1] * config.index_mult) >> config.index_shift);
-  out.q18[0] = q[0];
-  out.q18[1] = q[1];
-  out.q18[2] = q[2];
-  out.height_q14 = q[2] >> (kPositionFracBits - kHeightFracBits);
-}
-
-/// Front of a map-frame point: validation on the bit patterns (one compare of the largest |bits|
-/// with bits(1e5) catches NaN, Inf and out-of-range), Q18 conversion, range from the sensor,
-/// routing, index. Integer operations only.
-[[nodiscard]] inline PointFront front_map_point(float x, float y, float z, const FramePose& pose,
-                                                const FrontConfig& config) noexcept {
-  constexpr std::uint32_t kAbsMask = 0x7FFFFFFFU;
-  constexpr std::uint32_t kInfBits = 0x7F800000U;
-  const std::uint32_t bx = bits_of(x);
-  const std::uint32_t by = bits_of(y);
-  const std::uint32_t bz = bits_of(z);
-  const std::uint32_t ax = bx & kAbsMask;
-  const std::uint32_t ay = by & kAbsMask;
-  const std::uint32_t az = bz & kAbsMask;
-  PointFront out{kFrontTooNoisy, 0, 0, 0, {0, 0, 0}, 0};
-  const std::uint32_t largest = ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az);
-  if (largest > bits_of(kMaxAbsCoordinateM)) {
-    out.code = largest >= kInfBits ? kFrontNonFinite : kFrontOutOfRange;
-    return out;
-  }
-  const std::int64_t q[3] = {q18_floor(bx), q18_floor(by), q18_floor(bz)};
-  const std::int64_t range_sq =
-      range_sq_of_offset(q[0] - pose.origin_q18[0], q[1] - pose.origin_q18[1], q[2] - pose.origin_q18[2]);
-  route_and_index(q, range_sq, config, out);
-  return out;
-}
-
-/// Front of a sensor-frame point: validation (|s| < 2^11 m on every axis), Q18 conversion,
-/// the squared range from the sensor-frame coordinates themselves (exact: no rotation error),
-/// the rotation and translation in integers (m = (R_q30 s_q18 + bias + 2^29) >> 30 + t_q18),
-/// routing, index. Integer operations only. Position error against the double-precision
-/// transform of the same float inputs: below 8 um per axis within 10 m of the sensor
-/// (docs/design.md, "The sensor-frame transform"; tests/map/front_test.cpp asserts it).
-[[nodiscard]] inline PointFront front_sensor_point(float x, float y, float z, const FramePose& pose,
-                                                   const FrontConfig& config) noexcept {
-  constexpr std::uint32_t kAbsMask = 0x7FFFFFFFU;
-  constexpr std::uint32_t kInfBits = 0x7F800000U;
-  constexpr std::uint32_t kLimitBits = 0x45000000U;  // bits_of(2048.0F)
-  const std::uint32_t bx = bits_of(x);
-  const std::uint32_t by = bits_of(y);
-  const std::uint32_t bz = bits_of(z);
-  const std::uint32_t ax = bx & kAbsMask;
-  const std::uint32_t ay = by & kAbsMask;
-  const std::uint32_t az = bz & kAbsMask;
-  PointFront out{kFrontTooNoisy, 0, 0, 0, {0, 0, 0}, 0};
-  const std::uint32_t largest = ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az);
-  if (largest >= kLimitBits) {
-    out.code = largest >= kInfBits ? kFrontNonFinite : kFrontOutOfRange;
-    return out;
-  }
-  const std::int64_t sx = q18_floor_small(bx);
-  const std::int64_t sy = q18_floor_small(by);
-  const std::int64_t sz = q18_floor_small(bz);
-  const std::int32_t* r = pose.rotation_q30;
-  // |r| <= 2^30 * 1.001 and |s| < 2^29: each product < 2^59.01, the sum of three < 2^60.6.
-  std::int64_t q[3];
-  for (int row = 0; row < 3; ++row) {
-    const std::int64_t acc = r[3 * row] * sx + r[3 * row + 1] * sy + r[3 * row + 2] * sz + pose.rotation_bias_q48[row];
-    q[row] = (acc >> kRotationFracBits) + pose.translation_q18[row];
-  }
-  // The map position must stay inside the map frame's range, as for map-frame input.
-  constexpr std::int64_t kMaxQ18 = std::int64_t{100000} << kPositionFracBits;
-  if (q[0] > kMaxQ18 || q[0] < -kMaxQ18 || q[1] > kMaxQ18 || q[1] < -kMaxQ18 || q[2] > kMaxQ18 || q[2] < -kMaxQ18) {
-    out.code = kFrontOutOfRange;
-    return out;
-  }
-  const std::int64_t range_sq = range_sq_of_offset(sx, sy, sz);
-  route_and_index(q, range_sq, config, out);
-  return out;
-}
+/// The front of n <= kFrontChunkPoints sensor-frame points: validation (|s| < 2^11 m on every
+/// axis), exact Q18 conversion, the squared range from the sensor-frame coordinates themselves
+/// (no rotation error), the rotation and translation in integers
+/// (m = (R_q30 s_q18 + bias + 2^29) >> 30 + t_q18), the map-frame range check (|m| <= 1e5 m),
+/// routing, index and height. Position error against the double-precision transform of the same
+/// float inputs: below 8 um per axis within 10 m of the sensor (docs/design.md, "The
+/// sensor-frame transform"; tests/map/front_test.cpp). Integer operations only, vectorised.
+void front_sensor_chunk(const PointXYZ* points, std::size_t n, const FramePose& pose, const FrontConfig& config,
+                        FrontChunk& out) noexcept;
 
 }  // namespace ccmap::detail
