@@ -6,9 +6,9 @@
  * the instruction is an architectural no-op with no flags or memory effect):
  *   begin of region id: hw = 0   0xD280001F | id << 5
  *   end   of region id: hw = 1   0xD2A0001F | id << 5
- * id is 0 .. 65535. Compilers never write a constant to the zero register, and none of the
- * aarch64 libc, libm, libstdc++, libgcc_s or ccmap objects contains either encoding
- * (tests/tools/icount_classify_test.cpp checks those files). */
+ * id is 0 .. 65535. Compilers never write a constant to the zero register: none of the
+ * aarch64 libc, libm, libstdc++, libgcc_s (tests/tools/icount_classify_test.cpp) or ccmap core
+ * and platform libraries (ctest ccmap_icount_no_stray_markers) contains either encoding. */
 #ifndef CCMAP_ICOUNT_MARKER_ENCODING_H
 #define CCMAP_ICOUNT_MARKER_ENCODING_H
 
