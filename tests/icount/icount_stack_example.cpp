@@ -1,0 +1,67 @@
+// The integration pattern for instruction budgets: bracket the cycle, and nothing else, with
+// icount markers (tests/support/icount_marker.hpp). CADRE frames (tests/support/cadre_frames.hpp,
+// the sequence of the timing test) update a Stack<CadreConfig>; only the update_frame calls lie
+// in region 1, frame generation does not. Under qemu-aarch64 with the plugin
+// (ccmap_add_icount_test in tests/icount/CMakeLists.txt) the ctest prints instructions and
+// float instructions per point; on other targets the markers are empty and this program just
+// checks that the updates succeed.
+//
+//   icount_stack_example [frames width_px height_px]     default: 3 frames of 80 x 50 points
+//   (10 850 650: the timing test's ten full frames, docs/performance.md section 1.1)
+//
+// The markers bracket the call, so the call's argument set-up (a handful of instructions) may
+// be counted too; against thousands of points per frame that is noise.
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "ccmap/map/stack.hpp"
+#include "support/cadre_frames.hpp"
+#include "support/icount_marker.hpp"
+
+namespace {
+bool parse(const char* text, int max, int* value) {
+  char* end = nullptr;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || v < 1 || v > max) {
+    return false;
+  }
+  *value = static_cast<int>(v);
+  return true;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  int frames = 3;
+  int width_px = 80;
+  int height_px = 50;
+  if (argc != 1 && (argc != 4 || !parse(argv[1], 1000, &frames) || !parse(argv[2], 4000, &width_px) ||
+                    !parse(argv[3], 4000, &height_px))) {
+    std::fprintf(stderr, "usage: icount_stack_example [frames (1..1000) width_px height_px (1..4000)]\n");
+    return 2;
+  }
+  const std::size_t points = static_cast<std::size_t>(width_px) * static_cast<std::size_t>(height_px);
+  // On the heap (585 KB), as in tests/map/timing_test.cpp, so that both count the same code: a
+  // count is of a binary, and where the stack lives can change the code emitted for it.
+  const auto stack = std::make_unique<ccmap::Stack<ccmap::CadreConfig>>();
+  if (stack->init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) {
+    std::fprintf(stderr, "icount_stack_example: Stack<CadreConfig> init failed\n");
+    return 1;
+  }
+  for (int k = 0; k < frames; ++k) {
+    const ccmap::test::CadreFrame frame =
+        ccmap::test::make_cadre_frame(ccmap::test::cadre_sequence_spec(k, width_px, height_px));
+    ccmap::FrameCounters counters{};
+    ccmap::test::icount_begin<1>();
+    const ccmap::Status status =
+        stack->update_frame(frame.map_points.data(), frame.map_points.size(), frame.sensor_origin, &counters);
+    ccmap::test::icount_end<1>();
+    if (status != ccmap::Status::kOk || counters.used != points) {
+      std::fprintf(stderr, "icount_stack_example: frame %d: status %d, %u of %zu points used\n", k,
+                   static_cast<int>(status), counters.used, points);
+      return 1;
+    }
+  }
+  std::printf("icount_stack_example: %d frames of %zu points updated (region 1)\n", frames, points);
+  return 0;
+}
