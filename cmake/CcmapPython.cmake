@@ -28,11 +28,24 @@ if(CMAKE_CROSSCOMPILING OR NOT CCMAP_BUILD_TOOLS)
   endif()
   return()
 endif()
-# Under AddressSanitizer the module could only be loaded with libasan preloaded into the
-# interpreter; the sanitizer build leaves it out unless asked for.
-if(CCMAP_SANITIZE AND NOT _ccmap_python_required)
-  message(STATUS "ccmap: Python module not built under CCMAP_SANITIZE (set CCMAP_BUILD_PYTHON=ON to force)")
-  return()
+# Under CCMAP_SANITIZE the module is instrumented too; an uninstrumented interpreter can load it
+# only with the sanitizer runtimes preloaded: CCMAP_PYTHON_PRELOAD (the tests set LD_PRELOAD to
+# it). gcc's runtimes are found with -print-file-name; other compilers leave the module out.
+set(CCMAP_PYTHON_PRELOAD "")
+if(CCMAP_SANITIZE)
+  foreach(_runtime libasan.so libubsan.so)
+    execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=${_runtime}
+                    OUTPUT_VARIABLE _path OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
+    if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "GNU" OR NOT IS_ABSOLUTE "${_path}" OR NOT EXISTS "${_path}")
+      if(_ccmap_python_required)
+        message(FATAL_ERROR "CCMAP_BUILD_PYTHON=ON with CCMAP_SANITIZE: ${_runtime} of gcc not found")
+      endif()
+      message(STATUS "ccmap: Python module not built (CCMAP_SANITIZE needs gcc's ${_runtime} to preload)")
+      return()
+    endif()
+    string(APPEND CCMAP_PYTHON_PRELOAD "${_path} ")
+  endforeach()
+  string(STRIP "${CCMAP_PYTHON_PRELOAD}" CCMAP_PYTHON_PRELOAD)
 endif()
 
 if(NOT DEFINED Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
