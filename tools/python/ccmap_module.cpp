@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <iterator>
 #include <limits>
@@ -509,9 +510,10 @@ StackParams build_params(const Preset& preset, py::handle cell_width, const py::
     }
     if (known) continue;
     if (key == "normal_variance_threshold") {
-      if (PyUnicode_Check(item.second.ptr())) throw py::type_error(key + " must be a sequence of numbers");
-      const py::sequence values = py::reinterpret_borrow<py::sequence>(item.second);
-      if (!PySequence_Check(item.second.ptr())) throw py::type_error(key + " must be a sequence of numbers");
+      if (PyUnicode_Check(item.second.ptr()) || !PySequence_Check(item.second.ptr())) {
+        throw py::type_error(key + " must be a sequence of numbers");
+      }
+      const auto values = py::reinterpret_borrow<py::sequence>(item.second);
       if (values.size() > params.normal_variance_threshold.size()) {
         throw StatusError(Status::kInvalidArgument, key + " holds at most " +
                                                         std::to_string(params.normal_variance_threshold.size()) +
@@ -551,8 +553,10 @@ class Map {
 
   /// Loads a snapshot into a new map of `preset`, or of the first of the four presets that
   /// accepts it (another preset's snapshot answers kVersionMismatch: try the next).
-  static Map from_snapshot(const py::bytes& data, py::handle preset) {
-    const std::string bytes = data;
+  static Map from_snapshot(py::handle data, py::handle preset) {
+    PyObject* as_bytes = PyBytes_FromObject(data.ptr());  // bytes, bytearray, memoryview, ...
+    if (as_bytes == nullptr) throw py::error_already_set();
+    const std::string bytes = py::reinterpret_steal<py::bytes>(as_bytes);
     const auto* p = reinterpret_cast<const std::uint8_t*>(bytes.data());
     std::vector<const Preset*> candidates;
     if (preset.is_none()) {
@@ -727,7 +731,11 @@ class Map {
 
   std::string repr() const {
     std::string widths;
-    for (const float w : cell_widths()) widths += (widths.empty() ? "" : ", ") + std::string(py::str(py::float_(w)));
+    for (const float w : cell_widths()) {
+      char text[32];
+      std::snprintf(text, sizeof text, "%g", static_cast<double>(w));  // float32 shown to 6 digits
+      widths += (widths.empty() ? "" : ", ") + std::string(text);
+    }
     return "<ccmap.Map preset='" + std::string(preset_->name) + "' layers=" + std::to_string(layer_count()) +
            " cell_widths=[" + widths + "]>";
   }

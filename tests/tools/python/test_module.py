@@ -206,6 +206,9 @@ class Refusals(unittest.TestCase):
             ccmap.Map.from_snapshot(good, preset="ccm")
         self.assertEqual(refusal.exception.status, "version_mismatch")
         self.assertEqual(ccmap.Map.from_snapshot(good, preset="cadre").preset, "cadre")
+        self.assertEqual(ccmap.Map.from_snapshot(bytearray(good)).preset, "cadre")
+        with self.assertRaises(TypeError):
+            ccmap.Map.from_snapshot("not bytes")
         with self.assertRaises(ccmap.StatusError):
             ccmap.Map.from_snapshot(good, preset="nope")
 
