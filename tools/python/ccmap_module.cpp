@@ -16,7 +16,9 @@
 //    ("non_finite_input", "invalid_argument", ...) and whose message starts with it; unknown
 //    keyword arguments and non-numeric parameters raise TypeError.
 //  - The map owns its Stack (heap, via MapAdapter); it holds no Python object. Results are
-//    copies (dicts, new NumPy arrays). Calls hold the GIL: a Map is not shared between threads.
+//    copies (dicts, new NumPy arrays). Every call into the library runs with the GIL held and
+//    no Python code in between (arguments are converted before, results built after), so calls
+//    on one Map from several Python threads are serialised: safe, not parallel.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
