@@ -1,0 +1,899 @@
+// The Python module `ccmap`: the library's Stack<Config> presets behind one class, Map.
+// Host only (pybind11 + NumPy); never part of the flight core. docs/python.md is the user's
+// page; this comment states the contracts the code below keeps.
+//
+//  - Frames: every position is in the map frame of the stack, metres, relative to the origin
+//    the caller chose (subtract absolute coordinates in float64 first, as in C++).
+//  - Arrays: points are (N, 3), query positions (N, 2), weights (N,), float32 or float64 only;
+//    anything else is refused before the library sees it (StatusError "invalid_argument"), so
+//    the map is unchanged. float64 values are rounded to the nearest float32 (as numpy's
+//    astype(np.float32)). A C-contiguous, aligned, native float32 (N, 3) array is handed to the
+//    library without a copy; other layouts are copied. Values inside a well-formed array are the
+//    library's business: NaN/Inf/out-of-range points and bad weights are counted per point and
+//    the good points are used, as in C++. Sensor origins, rotations and translations take any
+//    real numeric array-like of the right shape.
+//  - Refusals raise ccmap.StatusError (a ValueError) whose .status is the library's status name
+//    ("non_finite_input", "invalid_argument", ...) and whose message starts with it; unknown
+//    keyword arguments and non-numeric parameters raise TypeError.
+//  - The map owns its Stack (heap, via MapAdapter); it holds no Python object. Results are
+//    copies (dicts, new NumPy arrays). Every call into the library runs with the GIL held and
+//    no Python code in between (arguments are converted before, results built after), so calls
+//    on one Map from several Python threads are serialised: safe, not parallel.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <iterator>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ccmap/map/config.hpp"
+#include "ccmap/map/types.hpp"
+#include "ccmap/sensor/noise_model.hpp"
+#include "map_adapter.hpp"
+
+namespace py = pybind11;
+
+namespace ccmap::python {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Errors
+// ---------------------------------------------------------------------------------------------
+
+/// A refusal: the library's Status (or the one the library gives for the same fault, e.g.
+/// kInvalidArgument for inconsistent sizes) and what was refused.
+class StatusError : public std::runtime_error {
+ public:
+  StatusError(Status status, const std::string& what)
+      : std::runtime_error(std::string(to_string(status)) + ": " + what), status_(status) {}
+  [[nodiscard]] Status status() const { return status_; }
+
+ private:
+  Status status_;
+};
+
+void check(Status status, const std::string& what) {
+  if (status != Status::kOk) throw StatusError(status, what);
+}
+
+// The Python type ccmap.StatusError; created once at import, lives as long as the interpreter.
+py::handle g_status_error_type;
+
+void translate_status_error(std::exception_ptr error) {
+  try {
+    if (error) std::rethrow_exception(error);
+  } catch (const StatusError& e) {
+    py::object instance = py::reinterpret_borrow<py::object>(g_status_error_type)(e.what());
+    instance.attr("status") = to_string(e.status());
+    PyErr_SetObject(g_status_error_type.ptr(), instance.ptr());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Counters and parameters: one table each
+// ---------------------------------------------------------------------------------------------
+
+struct CounterField {
+  const char* name;
+  std::uint32_t FrameCounters::*member;
+};
+// Every FrameCounters member, in declaration order. A new member goes here (one line).
+constexpr CounterField kCounterFields[] = {
+    {"received", &FrameCounters::received},
+    {"used", &FrameCounters::used},
+    {"rejected_non_finite", &FrameCounters::rejected_non_finite},
+    {"rejected_out_of_range", &FrameCounters::rejected_out_of_range},
+    {"rejected_weight", &FrameCounters::rejected_weight},
+    {"outside_map", &FrameCounters::outside_map},
+    {"too_noisy", &FrameCounters::too_noisy},
+};
+static_assert(sizeof(FrameCounters) == std::size(kCounterFields) * sizeof(std::uint32_t),
+              "FrameCounters gained a member: add it to kCounterFields");
+
+py::dict counters_dict(const FrameCounters& counters) {
+  py::dict d;
+  for (const CounterField& f : kCounterFields) d[f.name] = counters.*f.member;
+  return d;
+}
+
+/// The float members of StackParams settable by name (keyword = member name).
+struct ParamField {
+  const char* name;
+  float StackParams::*member;
+};
+constexpr ParamField kParamFields[] = {
+    {"weight_limit", &StackParams::weight_limit},
+    {"coverage_tau", &StackParams::coverage_tau},
+    {"min_weight", &StackParams::min_weight},
+    {"obstacle_fraction", &StackParams::obstacle_fraction},
+    {"max_inclination", &StackParams::max_inclination},
+    {"kalman_min_variance", &StackParams::kalman_min_variance},
+    {"finest_max_sigma_m", &StackParams::finest_max_sigma_m},
+};
+
+// ---------------------------------------------------------------------------------------------
+// Numbers and arrays in
+// ---------------------------------------------------------------------------------------------
+
+/// double -> float, rounded to nearest-even as IEEE-754 (and numpy's astype) does, including
+/// the overflow to +-inf (a plain static_cast is undefined beyond FLT_MAX).
+float narrow(double v) {
+  const double magnitude = std::fabs(v);
+  if (std::isfinite(v) && magnitude > static_cast<double>(std::numeric_limits<float>::max())) {
+    // At or beyond FLT_MAX + half an ulp the tie goes to even, i.e. to infinity.
+    const float rounded = magnitude >= 0x1.ffffffp+127 ? std::numeric_limits<float>::infinity()
+                                                       : std::numeric_limits<float>::max();
+    return std::signbit(v) ? -rounded : rounded;
+  }
+  return static_cast<float>(v);
+}
+
+/// A Python real number (int, float, numpy scalar) as float; TypeError otherwise.
+float number_arg(py::handle value, const std::string& name) {
+  if (PyBool_Check(value.ptr()) || PyUnicode_Check(value.ptr()) || PyBytes_Check(value.ptr()) ||
+      PyComplex_Check(value.ptr())) {
+    throw py::type_error(name + " must be a real number, not " + std::string(py::str(value.get_type().attr("__name__"))));
+  }
+  PyObject* as_float = PyNumber_Float(value.ptr());
+  if (as_float == nullptr) {
+    PyErr_Clear();
+    throw py::type_error(name + " must be a real number, not " + std::string(py::str(value.get_type().attr("__name__"))));
+  }
+  const double v = PyFloat_AsDouble(as_float);
+  Py_DECREF(as_float);
+  return narrow(v);
+}
+
+std::string shape_text(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i > 0 ? ", " : "") + std::to_string(a.shape(i));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+std::string describe(const py::array& a) {
+  return "got shape " + shape_text(a) + " and dtype " + std::string(py::str(a.dtype()));
+}
+
+py::array as_array(py::handle obj, const std::string& what, const std::string& wanted) {
+  py::array a = py::array::ensure(obj);
+  if (!a) throw StatusError(Status::kInvalidArgument, what + " must be " + wanted + ", got a " +
+                                                           std::string(py::str(obj.get_type().attr("__name__"))));
+  return a;
+}
+
+/// A float32 or float64 array of `ndim` dimensions whose last dimension is `columns` (0: 1-D,
+/// any length); StatusError(invalid_argument) otherwise.
+py::array float_array(py::handle obj, const std::string& what, int ndim, py::ssize_t columns) {
+  const std::string wanted = ndim == 1 ? "an (N,) array of float32 or float64"
+                                       : "an (N, " + std::to_string(columns) + ") array of float32 or float64";
+  py::array a = as_array(obj, what, wanted);
+  const bool float_type = py::isinstance<py::array_t<float>>(a) || py::isinstance<py::array_t<double>>(a);
+  if (!float_type || a.ndim() != ndim || (ndim == 2 && a.shape(1) != columns)) {
+    throw StatusError(Status::kInvalidArgument, what + " must be " + wanted + ", " + describe(a));
+  }
+  return a;
+}
+
+/// Element (i, j) of a float32/float64 array checked by float_array, as float.
+template <int Dims>
+class FloatReader {
+ public:
+  explicit FloatReader(const py::array& a) : a_(a), f32_(py::isinstance<py::array_t<float>>(a)) {}
+  [[nodiscard]] float at(py::ssize_t i, py::ssize_t j = 0) const {
+    const auto* base = static_cast<const char*>(a_.data());
+    const py::ssize_t offset = i * a_.strides(0) + (Dims == 2 ? j * a_.strides(1) : 0);
+    if (f32_) {
+      float v;
+      std::memcpy(&v, base + offset, sizeof v);
+      return v;
+    }
+    double v;
+    std::memcpy(&v, base + offset, sizeof v);
+    return narrow(v);
+  }
+
+ private:
+  const py::array& a_;
+  bool f32_;
+};
+
+/// (N, 3) points: a view of the caller's memory when it is C-contiguous, aligned, native
+/// float32, else a float32 copy. Keeps the array alive while the library reads it.
+class Points {
+ public:
+  Points(py::handle obj, const std::string& what) : array_(float_array(obj, what, 2, 3)) {
+    n_ = static_cast<std::size_t>(array_.shape(0));
+    const bool packed = py::isinstance<py::array_t<float>>(array_) &&
+                        array_.strides(1) == static_cast<py::ssize_t>(sizeof(float)) &&
+                        (n_ <= 1U || array_.strides(0) == static_cast<py::ssize_t>(sizeof(PointXYZ))) &&
+                        reinterpret_cast<std::uintptr_t>(array_.data()) % alignof(PointXYZ) == 0U;
+    if (packed) {
+      data_ = static_cast<const PointXYZ*>(array_.data());  // PointXYZ: three packed floats (types.hpp)
+      return;
+    }
+    const FloatReader<2> r(array_);
+    copy_.resize(n_);
+    for (std::size_t i = 0; i < n_; ++i) {
+      const auto row = static_cast<py::ssize_t>(i);
+      copy_[i] = PointXYZ{r.at(row, 0), r.at(row, 1), r.at(row, 2)};
+    }
+    data_ = copy_.data();
+  }
+  [[nodiscard]] const PointXYZ* data() const { return data_; }
+  [[nodiscard]] std::size_t size() const { return n_; }
+  [[nodiscard]] bool copied() const { return !copy_.empty(); }
+
+ private:
+  py::array array_;
+  std::size_t n_ = 0U;
+  const PointXYZ* data_ = nullptr;
+  std::vector<PointXYZ> copy_;
+};
+
+/// weights=None -> nullptr (the noise model weighs); else an (N,) float array copied to float32.
+const float* weights_arg(py::handle obj, std::size_t n, std::vector<float>* storage) {
+  if (obj.is_none()) return nullptr;
+  const py::array a = float_array(obj, "weights", 1, 0);
+  if (static_cast<std::size_t>(a.shape(0)) != n) {
+    throw StatusError(Status::kInvalidArgument, "weights must hold one weight per point (" + std::to_string(n) +
+                                                    "), " + describe(a));
+  }
+  const FloatReader<1> r(a);
+  storage->resize(n);
+  for (std::size_t i = 0; i < n; ++i) (*storage)[i] = r.at(static_cast<py::ssize_t>(i));
+  return storage->data();
+}
+
+/// A small real-valued array-like of exactly `rows` x `cols` (cols 0: a vector of `rows`),
+/// ints allowed, as floats in row-major order.
+std::vector<float> small_array(py::handle obj, const std::string& what, py::ssize_t rows, py::ssize_t cols) {
+  const std::string wanted = cols == 0 ? "a sequence of " + std::to_string(rows) + " numbers"
+                                       : "a " + std::to_string(rows) + "x" + std::to_string(cols) + " array of numbers";
+  const py::array a = as_array(obj, what, wanted);
+  const char kind = a.dtype().kind();
+  const bool shape_ok = cols == 0 ? (a.ndim() == 1 && a.shape(0) == rows)
+                                  : (a.ndim() == 2 && a.shape(0) == rows && a.shape(1) == cols);
+  if ((kind != 'f' && kind != 'i' && kind != 'u') || !shape_ok) {
+    throw StatusError(Status::kInvalidArgument, what + " must be " + wanted + ", " + describe(a));
+  }
+  const py::array_t<double, py::array::c_style | py::array::forcecast> d(a);
+  std::vector<float> out(static_cast<std::size_t>(d.size()));
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = narrow(d.data()[i]);
+  return out;
+}
+
+PointXYZ point_arg(py::handle obj, const std::string& what) {
+  const std::vector<float> v = small_array(obj, what, 3, 0);
+  return PointXYZ{v[0], v[1], v[2]};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Records out: one field table per record type serves the dict and the structured array
+// ---------------------------------------------------------------------------------------------
+
+enum class Kind : std::uint8_t { kFloat32, kFloat64, kInt32, kClassName, kStatusName };
+
+template <typename Record>
+struct Field {
+  const char* name;
+  Kind kind;
+  double (*get)(const Record&);  ///< the value (exact for float and int32), or the enum code
+};
+
+/// A query's answer with the position asked and the width of the layer named in it.
+struct QueryRecord {
+  float x;
+  float y;
+  QueryResult q;
+  float layer_width;  ///< width of layer q.layer (0 if q.layer < 0)
+};
+
+// The keys of `ccmap query` (tools/cli/cli.cpp). As there: height_m is NaN unless the status is
+// ok, cell_width_m is the width of `layer` (the answering layer, or for unknown the finest
+// layer holding the point), inclination_deg = atan(inclination) in degrees. The map frame has
+// no origin to add (the CLI adds its UTM origin to height_m).
+const Field<QueryRecord> kQueryFields[] = {
+    {"x", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.x); }},
+    {"y", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.y); }},
+    {"status", Kind::kStatusName, [](const QueryRecord& r) { return static_cast<double>(r.q.status); }},
+    {"layer", Kind::kInt32, [](const QueryRecord& r) { return static_cast<double>(r.q.layer); }},
+    {"cell_width_m", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.layer_width); }},
+    {"height_m", Kind::kFloat32,
+     [](const QueryRecord& r) {
+       return r.q.status == Status::kOk ? static_cast<double>(r.q.height_m) : std::numeric_limits<double>::quiet_NaN();
+     }},
+    {"slope_x", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.q.slope_x); }},
+    {"slope_y", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.q.slope_y); }},
+    {"inclination", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.q.inclination); }},
+    {"inclination_deg", Kind::kFloat64,
+     [](const QueryRecord& r) { return std::atan(static_cast<double>(r.q.inclination)) * 180.0 / 3.14159265358979323846; }},
+    {"normal_variance_m2", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.q.normal_variance); }},
+    {"elevation_variance_m2", Kind::kFloat32,
+     [](const QueryRecord& r) { return static_cast<double>(r.q.elevation_variance); }},
+    {"weight", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.q.weight); }},
+    {"class", Kind::kClassName, [](const QueryRecord& r) { return static_cast<double>(r.q.cell_class); }},
+};
+
+/// One exported cell and its layer.
+struct LayerRecord {
+  std::int32_t layer;
+  float res;  ///< the layer's cell width (m)
+  CellRecord cell;
+};
+
+// The columns of the CSV of `ccmap map` (tools/io/csv_writer.hpp), map frame.
+const Field<LayerRecord> kLayerFields[] = {
+    {"layer", Kind::kInt32, [](const LayerRecord& r) { return static_cast<double>(r.layer); }},
+    {"ix", Kind::kInt32, [](const LayerRecord& r) { return static_cast<double>(r.cell.index.x); }},
+    {"iy", Kind::kInt32, [](const LayerRecord& r) { return static_cast<double>(r.cell.index.y); }},
+    {"cx", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.cell.centre_x); }},
+    {"cy", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.cell.centre_y); }},
+    {"res", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.res); }},
+    {"weight", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.cell.weight); }},
+    {"height", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.cell.height_m); }},
+    {"slope_x", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.cell.slope_x); }},
+    {"slope_y", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.cell.slope_y); }},
+    {"normal_var", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.cell.normal_variance); }},
+    {"elev_var", Kind::kFloat32, [](const LayerRecord& r) { return static_cast<double>(r.cell.elevation_variance); }},
+    {"class", Kind::kClassName, [](const LayerRecord& r) { return static_cast<double>(r.cell.cell_class); }},
+};
+
+std::string enum_name(Kind kind, int code) {
+  return kind == Kind::kClassName ? to_string(static_cast<CellClass>(code)) : to_string(static_cast<Status>(code));
+}
+
+/// numpy text dtype wide enough for every name of the kind ("U<n>").
+std::string name_dtype(Kind kind) {
+  std::size_t longest = 0U;
+  for (int code = 0; code <= 0xFF; ++code) longest = std::max(longest, enum_name(kind, code).size());
+  return "U" + std::to_string(longest);
+}
+
+template <typename Record, std::size_t N>
+py::dict to_dict(const Record& record, const Field<Record> (&fields)[N]) {
+  py::dict d;
+  for (const Field<Record>& f : fields) {
+    const double v = f.get(record);
+    switch (f.kind) {
+      case Kind::kFloat32:
+      case Kind::kFloat64: d[f.name] = v; break;
+      case Kind::kInt32: d[f.name] = static_cast<std::int32_t>(v); break;
+      case Kind::kClassName:
+      case Kind::kStatusName: d[f.name] = enum_name(f.kind, static_cast<int>(v)); break;
+    }
+  }
+  return d;
+}
+
+template <typename T, typename Record>
+py::array numeric_column(const std::vector<Record>& rows, const Field<Record>& f) {
+  py::array_t<T> column(static_cast<py::ssize_t>(rows.size()));
+  T* out = column.mutable_data();
+  for (std::size_t i = 0; i < rows.size(); ++i) out[i] = static_cast<T>(f.get(rows[i]));
+  return std::move(column);
+}
+
+/// Enum codes as a fixed-width text column (numpy 'U'), through a table of the names present.
+template <typename Record>
+py::array name_column(const std::vector<Record>& rows, const Field<Record>& f) {
+  py::array_t<std::int32_t> codes(static_cast<py::ssize_t>(rows.size()));
+  std::int32_t* c = codes.mutable_data();
+  std::int32_t max_code = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    c[i] = static_cast<std::int32_t>(f.get(rows[i]));
+    max_code = c[i] > max_code ? c[i] : max_code;
+  }
+  py::list names;
+  for (std::int32_t code = 0; code <= max_code; ++code) names.append(enum_name(f.kind, code));
+  py::module_ np = py::module_::import("numpy");
+  const py::object column = np.attr("array")(names, name_dtype(f.kind))[codes];
+  return py::array(column);
+}
+
+template <typename Record, std::size_t N>
+py::array to_structured(const std::vector<Record>& rows, const Field<Record> (&fields)[N]) {
+  py::list spec, columns;
+  for (const Field<Record>& f : fields) {
+    py::array column;
+    switch (f.kind) {
+      case Kind::kFloat32: column = numeric_column<float>(rows, f); break;
+      case Kind::kFloat64: column = numeric_column<double>(rows, f); break;
+      case Kind::kInt32: column = numeric_column<std::int32_t>(rows, f); break;
+      case Kind::kClassName:
+      case Kind::kStatusName: column = name_column(rows, f); break;
+    }
+    spec.append(py::make_tuple(f.name, column.dtype()));
+    columns.append(column);
+  }
+  py::module_ np = py::module_::import("numpy");
+  py::array out = np.attr("empty")(rows.size(), np.attr("dtype")(spec));
+  for (std::size_t i = 0; i < N; ++i) out.attr("__setitem__")(fields[i].name, columns[i]);
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Map
+// ---------------------------------------------------------------------------------------------
+
+std::string preset_list() {
+  std::string s;
+  for (const Preset& p : presets()) s += (s.empty() ? "" : ", ") + std::string(p.name);
+  return s;
+}
+
+const Preset& preset_arg(const std::string& name) {
+  const Preset* p = find_preset(name);
+  if (p == nullptr) {
+    throw StatusError(Status::kInvalidArgument, "unknown preset '" + name + "' (expected one of: " + preset_list() + ")");
+  }
+  return *p;
+}
+
+/// The sensor keywords, gathered before the noise model is built.
+struct SensorArgs {
+  std::string kind = "stereo";
+  sensor::StereoParams stereo = sensor::kCadreStereoParams;
+  bool stereo_given = false;
+  sensor::LidarParams lidar{0.005F, 0.0F};  // the `ccmap` CLI's lidar default (5 mm)
+  std::vector<std::string> stereo_keys, lidar_keys;
+  bool weight_mode_given = false;
+  sensor::WeightMode weight_mode = sensor::WeightMode::kConstant;
+  float reference_range_m = 1.0F;
+};
+
+std::string string_arg(py::handle value, const std::string& name) {
+  if (!PyUnicode_Check(value.ptr())) throw py::type_error(name + " must be a str");
+  return value.cast<std::string>();
+}
+
+/// True if `key` is a sensor keyword (and records it).
+bool sensor_keyword(const std::string& key, py::handle value, SensorArgs* s) {
+  struct StereoKey {
+    const char* name;
+    float sensor::StereoParams::*member;
+  };
+  static const StereoKey kStereoKeys[] = {{"focal_px", &sensor::StereoParams::focal_px},
+                                          {"baseline_m", &sensor::StereoParams::baseline_m},
+                                          {"disparity_sigma_px", &sensor::StereoParams::disparity_sigma_px}};
+  for (const StereoKey& k : kStereoKeys) {
+    if (key == k.name) {
+      s->stereo.*k.member = number_arg(value, key);
+      s->stereo_given = true;
+      s->stereo_keys.push_back(key);
+      return true;
+    }
+  }
+  if (key == "sensor") {
+    s->kind = string_arg(value, key);
+    if (s->kind != "stereo" && s->kind != "lidar") {
+      throw StatusError(Status::kInvalidArgument, "sensor must be 'stereo' or 'lidar', not '" + s->kind + "'");
+    }
+  } else if (key == "lidar_sigma_m" || key == "lidar_sigma_per_m") {
+    (key == "lidar_sigma_m" ? s->lidar.sigma0_m : s->lidar.sigma_per_m) = number_arg(value, key);
+    s->lidar_keys.push_back(key);
+  } else if (key == "weight_mode") {
+    const std::string mode = string_arg(value, key);
+    if (mode != "constant" && mode != "inverse_variance") {
+      throw StatusError(Status::kInvalidArgument, "weight_mode must be 'constant' or 'inverse_variance', not '" + mode + "'");
+    }
+    s->weight_mode = mode == "constant" ? sensor::WeightMode::kConstant : sensor::WeightMode::kInverseVariance;
+    s->weight_mode_given = true;
+  } else if (key == "reference_range_m") {
+    s->reference_range_m = number_arg(value, key);
+    s->weight_mode_given = true;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+/// default_stack_params(width) with the keywords applied.
+StackParams build_params(const Preset& preset, py::handle cell_width, const py::kwargs& kwargs) {
+  const float width = cell_width.is_none() ? preset.default_cell_width_m : number_arg(cell_width, "cell_width");
+  StackParams params = default_stack_params(width);
+  SensorArgs sensor_args;
+  for (const auto& item : kwargs) {
+    const std::string key = py::str(item.first);
+    bool known = false;
+    for (const ParamField& f : kParamFields) {
+      if (key == f.name) {
+        params.*f.member = number_arg(item.second, key);
+        known = true;
+      }
+    }
+    if (known) continue;
+    if (key == "normal_variance_threshold") {
+      if (PyUnicode_Check(item.second.ptr()) || !PySequence_Check(item.second.ptr())) {
+        throw py::type_error(key + " must be a sequence of numbers");
+      }
+      const auto values = py::reinterpret_borrow<py::sequence>(item.second);
+      if (values.size() > params.normal_variance_threshold.size()) {
+        throw StatusError(Status::kInvalidArgument, key + " holds at most " +
+                                                        std::to_string(params.normal_variance_threshold.size()) +
+                                                        " values (one per layer; <= 0 calibrates)");
+      }
+      for (std::size_t i = 0; i < values.size(); ++i) params.normal_variance_threshold[i] = number_arg(values[i], key);
+    } else if (!sensor_keyword(key, item.second, &sensor_args)) {
+      throw py::type_error("Map() got an unexpected keyword argument '" + key + "'");
+    }
+  }
+  if (sensor_args.kind == "lidar" && !sensor_args.stereo_keys.empty()) {
+    throw py::type_error(sensor_args.stereo_keys.front() + " applies to sensor='stereo', not 'lidar'");
+  }
+  if (sensor_args.kind == "stereo" && !sensor_args.lidar_keys.empty()) {
+    throw py::type_error(sensor_args.lidar_keys.front() + " applies to sensor='lidar' (the default is 'stereo')");
+  }
+  if (sensor_args.kind == "lidar") {
+    params.noise = sensor::NoiseModel::lidar(sensor_args.lidar);
+  } else if (sensor_args.stereo_given) {
+    params.noise = sensor::NoiseModel::stereo(sensor_args.stereo);
+  }  // else: default_stack_params' CADRE stereo model
+  if (sensor_args.weight_mode_given) params.noise.set_weight_mode(sensor_args.weight_mode, sensor_args.reference_range_m);
+  return params;
+}
+
+class Map {
+ public:
+  Map(const Preset& preset, std::unique_ptr<MapAdapter> map) : preset_(&preset), map_(std::move(map)) {}
+
+  static Map create(const std::string& preset_name, py::handle cell_width, const py::kwargs& kwargs) {
+    const Preset& preset = preset_arg(preset_name);
+    const StackParams params = build_params(preset, cell_width, kwargs);
+    std::unique_ptr<MapAdapter> map = preset.make();
+    check(map->init(params), "the map refused its parameters");
+    return Map(preset, std::move(map));
+  }
+
+  /// Loads a snapshot into a new map of `preset`, or of the first of the four presets that
+  /// accepts it (another preset's snapshot answers kVersionMismatch: try the next).
+  static Map from_snapshot(py::handle data, py::handle preset) {
+    PyObject* as_bytes = PyBytes_FromObject(data.ptr());  // bytes, bytearray, memoryview, ...
+    if (as_bytes == nullptr) throw py::error_already_set();
+    const std::string bytes = py::reinterpret_steal<py::bytes>(as_bytes);
+    const auto* p = reinterpret_cast<const std::uint8_t*>(bytes.data());
+    std::vector<const Preset*> candidates;
+    if (preset.is_none()) {
+      for (const Preset& each : presets()) candidates.push_back(&each);
+    } else {
+      candidates.push_back(&preset_arg(string_arg(preset, "preset")));
+    }
+    Status refusal = Status::kVersionMismatch;
+    for (const Preset* candidate : candidates) {
+      std::unique_ptr<MapAdapter> map = candidate->make();
+      const Status status = map->load(p, bytes.size());
+      if (status == Status::kOk) return Map(*candidate, std::move(map));
+      if (status != Status::kVersionMismatch) refusal = status;  // corrupt for one is corrupt for all
+    }
+    throw StatusError(refusal, preset.is_none() ? "no preset (" + preset_list() + ") accepts the snapshot"
+                                                : "preset '" + std::string(py::str(preset)) + "' refuses the snapshot");
+  }
+
+  void move_to(py::handle x, py::handle y) {
+    check(map_->move_to(number_arg(x, "x"), number_arg(y, "y")), "the map refused the move");
+  }
+
+  py::dict update(py::handle points_obj, py::handle sensor_origin, py::handle weights_obj) {
+    const Points points(points_obj, "points");
+    const PointXYZ origin = point_arg(sensor_origin, "sensor_origin");
+    std::vector<float> weight_storage;
+    const float* weights = weights_arg(weights_obj, points.size(), &weight_storage);
+    FrameCounters counters{};
+    check(map_->update_frame(points.data(), weights, points.size(), origin, &counters), "the map refused the frame");
+    return counters_dict(counters);
+  }
+
+  py::dict update_sensor(py::handle points_obj, py::handle rotation_obj, py::handle translation_obj) {
+    const Points points(points_obj, "points");
+    const std::vector<float> r = small_array(rotation_obj, "rotation", 3, 3);
+    const PointXYZ t = point_arg(translation_obj, "translation");
+    const float rotation[3][3] = {{r[0], r[1], r[2]}, {r[3], r[4], r[5]}, {r[6], r[7], r[8]}};
+    const float translation[3] = {t.x, t.y, t.z};
+    FrameCounters counters{};
+    check(map_->update_frame_sensor(points.data(), points.size(), make_pose(rotation, translation), &counters),
+          "the map refused the frame");
+    return counters_dict(counters);
+  }
+
+  /// layer < 0: the stack's answer (query), else that layer's (query_layer).
+  QueryRecord answer(float x, float y, int layer) const {
+    const QueryResult q = layer < 0 ? map_->query(x, y) : map_->query_layer(layer, x, y);
+    return QueryRecord{x, y, q, q.layer >= 0 ? map_->layer_cell_width(q.layer) : 0.0F};
+  }
+
+  py::dict query(py::handle x, py::handle y, py::handle layer) const {
+    const int k = layer.is_none() ? -1 : layer_arg(layer);
+    return to_dict(answer(number_arg(x, "x"), number_arg(y, "y"), k), kQueryFields);
+  }
+
+  py::array query_many(py::handle xy_obj, py::handle layer) const {
+    const py::array xy = float_array(xy_obj, "xy", 2, 2);
+    const int k = layer.is_none() ? -1 : layer_arg(layer);
+    const FloatReader<2> r(xy);
+    std::vector<QueryRecord> rows(static_cast<std::size_t>(xy.shape(0)));
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const auto row = static_cast<py::ssize_t>(i);
+      rows[i] = answer(r.at(row, 0), r.at(row, 1), k);
+    }
+    return to_structured(rows, kQueryFields);
+  }
+
+  std::vector<LayerRecord> layer_records(int layer) const {
+    std::vector<CellRecord> cells;
+    check(map_->export_layer(layer, &cells), "cannot export layer " + std::to_string(layer));
+    std::vector<LayerRecord> rows;
+    rows.reserve(cells.size());
+    for (const CellRecord& c : cells) rows.push_back(LayerRecord{layer, map_->layer_cell_width(layer), c});
+    return rows;
+  }
+
+  py::array layer(py::handle k) const { return to_structured(layer_records(layer_arg(k)), kLayerFields); }
+
+  /// (side, side) float32 over the layer window: grid[iy - iy_min, ix - ix_min], NaN where no
+  /// cell was observed (weight 0). `field`: a float column of layer(), or "class" (the code).
+  py::array layer_grid(py::handle k, const std::string& field) const {
+    const int layer_index = layer_arg(k);
+    const Field<LayerRecord>* chosen = nullptr;
+    std::string allowed;
+    for (const Field<LayerRecord>& f : kLayerFields) {
+      if (f.kind != Kind::kFloat32 && f.kind != Kind::kClassName) continue;
+      allowed += (allowed.empty() ? "" : ", ") + std::string(f.name);
+      if (field == f.name) chosen = &f;
+    }
+    if (chosen == nullptr) {
+      throw StatusError(Status::kInvalidArgument, "layer_grid field '" + field + "' (expected one of: " + allowed + ")");
+    }
+    const std::int32_t side = map_->layer_side(layer_index);
+    const CellIndex lowest = window_lowest(layer_index);
+    py::array_t<float> grid({static_cast<py::ssize_t>(side), static_cast<py::ssize_t>(side)});
+    float* g = grid.mutable_data();
+    for (std::int32_t i = 0; i < side * side; ++i) g[i] = std::numeric_limits<float>::quiet_NaN();
+    for (const LayerRecord& r : layer_records(layer_index)) {
+      const std::int64_t row = static_cast<std::int64_t>(r.cell.index.y) - lowest.y;
+      const std::int64_t col = static_cast<std::int64_t>(r.cell.index.x) - lowest.x;
+      g[row * side + col] = static_cast<float>(chosen->get(r));
+    }
+    return std::move(grid);
+  }
+
+  /// (x_min, x_max, y_min, y_max) of the layer window, metres (matplotlib's imshow extent).
+  py::tuple layer_extent(py::handle k) const {
+    const int layer_index = layer_arg(k);
+    const CellIndex lowest = window_lowest(layer_index);
+    const double w = static_cast<double>(map_->layer_cell_width(layer_index));
+    const double side = map_->layer_side(layer_index);
+    return py::make_tuple(lowest.x * w, (lowest.x + side) * w, lowest.y * w, (lowest.y + side) * w);
+  }
+
+  py::bytes snapshot() const {
+    std::vector<std::uint8_t> bytes;
+    check(map_->save(&bytes), "cannot save the map");
+    return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  }
+
+  // ---- properties ----
+  const char* preset_name() const { return preset_->name; }
+  int layer_count() const { return map_->layer_count(); }
+  template <typename T>
+  std::vector<T> per_layer(T (MapAdapter::*get)(int) const) const {
+    std::vector<T> out;
+    for (int k = 0; k < map_->layer_count(); ++k) out.push_back(((*map_).*get)(k));
+    return out;
+  }
+  std::vector<float> cell_widths() const { return per_layer(&MapAdapter::layer_cell_width); }
+  std::vector<std::int32_t> sides() const { return per_layer(&MapAdapter::layer_side); }
+  std::vector<bool> layer_is_ccm() const { return per_layer(&MapAdapter::layer_is_ccm); }
+  std::vector<float> thresholds() const { return per_layer(&MapAdapter::normal_variance_threshold); }
+  std::vector<py::tuple> window_centres() const {
+    std::vector<py::tuple> out;
+    for (const CellIndex c : per_layer(&MapAdapter::layer_centre)) out.push_back(py::make_tuple(c.x, c.y));
+    return out;
+  }
+  std::vector<py::tuple> window_centres_m() const {
+    std::vector<py::tuple> out;
+    for (int k = 0; k < map_->layer_count(); ++k) {
+      const CellIndex c = map_->layer_centre(k);
+      const double w = static_cast<double>(map_->layer_cell_width(k));
+      out.push_back(py::make_tuple(c.x * w, c.y * w));
+    }
+    return out;
+  }
+  py::dict total_counters() const { return counters_dict(map_->total_counters()); }
+  std::uint32_t rejected_moves() const { return map_->rejected_moves(); }
+  std::uint32_t rejected_frames() const { return map_->rejected_frames(); }
+  std::uint64_t last_update_ns() const { return map_->last_update_ns(); }
+
+  py::dict params() const {
+    const StackParams& p = map_->params();
+    py::dict d;
+    d["cell_width"] = p.finest_cell_width_m;
+    for (const ParamField& f : kParamFields) d[f.name] = p.*f.member;
+    d["normal_variance_threshold"] = std::vector<float>(p.normal_variance_threshold.begin(), p.normal_variance_threshold.end());
+    const sensor::NoiseModel& n = p.noise;
+    if (n.kind() == sensor::SensorKind::kLidar) {
+      d["sensor"] = "lidar";
+      d["lidar_sigma_m"] = n.lidar_sigma0_m();
+      d["lidar_sigma_per_m"] = n.lidar_sigma_per_m();
+    } else {
+      d["sensor"] = "stereo";
+      d["stereo_sigma_per_range_sq"] = n.stereo_sigma_per_range_sq();  // sigma_d / (f b), 1/m
+    }
+    d["weight_mode"] = n.weight_mode() == sensor::WeightMode::kConstant ? "constant" : "inverse_variance";
+    d["reference_range_m"] = n.reference_range_m();
+    return d;
+  }
+
+  std::string repr() const {
+    std::string widths;
+    for (const float w : cell_widths()) {
+      char text[32];
+      std::snprintf(text, sizeof text, "%g", static_cast<double>(w));  // float32 shown to 6 digits
+      widths += (widths.empty() ? "" : ", ") + std::string(text);
+    }
+    return "<ccmap.Map preset='" + std::string(preset_->name) + "' layers=" + std::to_string(layer_count()) +
+           " cell_widths=[" + widths + "]>";
+  }
+
+ private:
+  int layer_arg(py::handle k) const {
+    if (PyBool_Check(k.ptr()) || !PyIndex_Check(k.ptr())) throw py::type_error("layer must be an int");
+    const auto value = k.cast<long long>();
+    if (value < 0 || value >= map_->layer_count()) {
+      throw StatusError(Status::kInvalidArgument, "layer " + std::to_string(value) + " (the map has layers 0.." +
+                                                      std::to_string(map_->layer_count() - 1) + ")");
+    }
+    return static_cast<int>(value);
+  }
+  CellIndex window_lowest(int layer) const {
+    const CellIndex c = map_->layer_centre(layer);
+    const std::int32_t half = map_->layer_side(layer) / 2;
+    return CellIndex{c.x - half, c.y - half};
+  }
+
+  const Preset* preset_;
+  std::unique_ptr<MapAdapter> map_;
+};
+
+}  // namespace
+}  // namespace ccmap::python
+
+PYBIND11_MODULE(ccmap, m) {
+  using ccmap::python::Map;
+  namespace cp = ccmap::python;
+  m.doc() =
+      "ccmap: Converging Covariance terrain maps (the C++ library's Stack presets).\n\n"
+      "    m = ccmap.Map('cadre')                       # or 'ccm', 'kf', 'omg'; keywords set StackParams\n"
+      "    m.move_to(x, y)                              # map frame, metres\n"
+      "    m.update(points_n3, sensor_origin)           # -> frame counters (dict)\n"
+      "    m.query(x, y); m.query_many(xy); m.layer(k); m.layer_grid(k, 'height')\n"
+      "    m.save(path); ccmap.Map.load(path)\n\n"
+      "See docs/python.md.";
+
+  cp::g_status_error_type = PyErr_NewExceptionWithDoc(
+      "ccmap.StatusError",
+      "A refusal by the map (or of an argument before the map saw it). A ValueError; .status is the\n"
+      "library's status name, e.g. 'non_finite_input', 'invalid_argument', 'corrupt'.",
+      PyExc_ValueError, nullptr);
+  m.attr("StatusError") = py::reinterpret_borrow<py::object>(cp::g_status_error_type);
+  py::register_exception_translator(&cp::translate_status_error);
+
+  py::list preset_names;
+  for (const cp::Preset& p : cp::presets()) preset_names.append(p.name);
+  m.attr("PRESETS") = py::tuple(preset_names);
+  py::list class_names;
+  for (int c = 0; c <= static_cast<int>(ccmap::CellClass::kSteep); ++c) {
+    class_names.append(ccmap::to_string(static_cast<ccmap::CellClass>(c)));
+  }
+  m.attr("CLASS_NAMES") = py::tuple(class_names);
+  m.def(
+      "snapshot_size", [](const std::string& preset) { return cp::preset_arg(preset).snapshot_bytes; },
+      py::arg("preset"), "Bytes of a snapshot of the preset (fixed by its configuration).");
+
+  py::class_<Map>(m, "Map",
+                  "A robot-centric multi-resolution terrain map: one of the library's Stack presets.\n\n"
+                  "Map(preset='cadre', cell_width=None, **params)\n"
+                  "  preset: 'cadre' (4 cm Kalman + 8..64 cm CCM), 'ccm' (one CCM layer 256x256),\n"
+                  "          'kf' (one Kalman layer), 'omg' (one OMG layer); the ccmap CLI's presets.\n"
+                  "  cell_width: finest cell width (m); None: the preset's default (0.04 / 0.08).\n"
+                  "  params: StackParams by name: weight_limit, coverage_tau, min_weight,\n"
+                  "          obstacle_fraction, max_inclination, kalman_min_variance,\n"
+                  "          finest_max_sigma_m, normal_variance_threshold (sequence, <= 0 calibrates);\n"
+                  "          sensor='stereo' (default: CADRE stereo; focal_px, baseline_m,\n"
+                  "          disparity_sigma_px) or 'lidar' (lidar_sigma_m = 0.005, lidar_sigma_per_m = 0);\n"
+                  "          weight_mode='constant' | 'inverse_variance', reference_range_m.\n"
+                  "Unknown keyword: TypeError. Parameters the library refuses: StatusError (ValueError).")
+      .def(py::init([](const std::string& preset, py::object cell_width, const py::kwargs& kwargs) {
+             return Map::create(preset, cell_width, kwargs);
+           }),
+           py::arg("preset") = "cadre", py::arg("cell_width") = py::none())
+      .def("move_to", &Map::move_to, py::arg("x"), py::arg("y"),
+           "Re-centre every layer on (x, y) (map frame, m). Refused (StatusError, map unchanged): NaN/Inf or\n"
+           "beyond 1e5 m.")
+      .def("update", &Map::update, py::arg("points"), py::arg("sensor_origin"), py::arg("weights") = py::none(),
+           "Fold one frame of map-frame points ((N, 3) float32/float64) seen from sensor_origin (3 numbers).\n"
+           "weights: None (the sensor model weighs) or (N,) float32/float64. Returns the frame counters.\n"
+           "Bad points/weights inside a good array are counted and skipped; a bad array or origin raises\n"
+           "StatusError and leaves the map unchanged.")
+      .def("update_sensor", &Map::update_sensor, py::arg("points"), py::arg("rotation"), py::arg("translation"),
+           "Fold one frame of sensor-frame points: p_map = rotation @ p + translation (3x3, 3). Returns the\n"
+           "frame counters; refusals as update().")
+      .def("query", &Map::query, py::arg("x"), py::arg("y"), py::arg("layer") = py::none(),
+           "The map's answer at (x, y) as a dict with the keys of `ccmap query` (status, layer, cell_width_m,\n"
+           "height_m (NaN unless status is 'ok'), slope_x, slope_y, inclination, inclination_deg,\n"
+           "normal_variance_m2, elevation_variance_m2, weight, class) plus x, y. layer=k asks one layer.")
+      .def("query_many", &Map::query_many, py::arg("xy"), py::arg("layer") = py::none(),
+           "query() for every row of an (N, 2) float32/float64 array: a NumPy structured array with the same\n"
+           "fields (float32 numbers, int32 layer, text status and class; inclination_deg float64).")
+      .def("layer", &Map::layer, py::arg("k"),
+           "Every observed cell (weight > 0) of layer k as a NumPy structured array with the columns of the\n"
+           "CSV of `ccmap map`: layer, ix, iy, cx, cy, res, weight, height, slope_x, slope_y, normal_var,\n"
+           "elev_var, class (map frame; rows of increasing iy, then ix).")
+      .def("layer_grid", &Map::layer_grid, py::arg("k"), py::arg("field") = "height",
+           "A (side, side) float32 array of one layer() column over layer k's window: grid[row, col] is the\n"
+           "cell ix = ix_min + col, iy = iy_min + row (row 0 = the window's lowest iy, i.e. south; use\n"
+           "imshow(origin='lower', extent=m.layer_extent(k))). NaN where no cell was observed.\n"
+           "field: cx, cy, res, weight, height, slope_x, slope_y, normal_var, elev_var, or class (the code,\n"
+           "an index into ccmap.CLASS_NAMES).")
+      .def("layer_extent", &Map::layer_extent, py::arg("k"),
+           "(x_min, x_max, y_min, y_max) of layer k's window, metres.")
+      .def("snapshot", &Map::snapshot, "The library's snapshot (include/ccmap/map/snapshot.hpp) as bytes.")
+      .def_static("from_snapshot", &Map::from_snapshot, py::arg("data"), py::arg("preset") = py::none(),
+                  "A map from snapshot bytes. preset=None tries the four presets (a snapshot of another\n"
+                  "preset is refused with 'version_mismatch'); StatusError if none accepts it.")
+      .def(
+          "save",
+          [](const Map& self, py::object path) {
+            const py::bytes data = self.snapshot();  // before the file is opened: a refusal leaves it alone
+            py::object f = py::module_::import("builtins").attr("open")(path, "wb");
+            try {
+              f.attr("write")(data);
+            } catch (...) {
+              f.attr("close")();
+              throw;
+            }
+            f.attr("close")();
+          },
+          py::arg("path"), "Write snapshot() to a file.")
+      .def_static(
+          "load",
+          [](py::object path, py::object preset) {
+            py::object f = py::module_::import("builtins").attr("open")(path, "rb");
+            py::object data;
+            try {
+              data = f.attr("read")();
+            } catch (...) {
+              f.attr("close")();
+              throw;
+            }
+            f.attr("close")();
+            return Map::from_snapshot(data, preset);
+          },
+          py::arg("path"), py::arg("preset") = py::none(),
+          "A map from a file written by save() (or by the C++ save_snapshot). preset=None tries the four\n"
+          "presets in turn.")
+      .def_property_readonly("preset", &Map::preset_name)
+      .def_property_readonly("layer_count", &Map::layer_count)
+      .def_property_readonly("cell_widths", &Map::cell_widths, "Cell width of each layer (m), finest first.")
+      .def_property_readonly("sides", &Map::sides, "Cells per axis of each layer.")
+      .def_property_readonly("layer_is_ccm", &Map::layer_is_ccm)
+      .def_property_readonly("window_centres", &Map::window_centres,
+                             "Centre of each layer window as a global cell index (ix, iy).")
+      .def_property_readonly("window_centres_m", &Map::window_centres_m,
+                             "Centre of each layer window in metres (index * cell width).")
+      .def_property_readonly("normal_variance_thresholds", &Map::thresholds,
+                             "Obstacle threshold of each layer (m^2), as calibrated at init.")
+      .def_property_readonly("params", &Map::params, "The parameters the map runs with.")
+      .def_property_readonly("total_counters", &Map::total_counters, "Frame counters summed over the map's life.")
+      .def_property_readonly("rejected_moves", &Map::rejected_moves)
+      .def_property_readonly("rejected_frames", &Map::rejected_frames)
+      .def_property_readonly("last_update_ns", &Map::last_update_ns, "Duration of the last accepted update (ns).")
+      .def("__repr__", &Map::repr);
+}

@@ -1,0 +1,94 @@
+#include "map_adapter.hpp"
+
+#include "ccmap/map/snapshot.hpp"
+#include "ccmap/map/stack.hpp"
+
+namespace ccmap::python {
+namespace {
+
+template <typename Config>
+class StackAdapter final : public MapAdapter {
+ public:
+  using StackType = Stack<Config>;
+
+  Status init(const StackParams& params) override { return stack_->init(params); }
+  Status move_to(float x, float y) override { return stack_->move_to(x, y); }
+  Status update_frame(const PointXYZ* points, const float* weights, std::size_t n, const PointXYZ& sensor_origin,
+                      FrameCounters* counters) override {
+    return stack_->update_frame(points, weights, n, sensor_origin, counters);
+  }
+  Status update_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& pose,
+                             FrameCounters* counters) override {
+    return stack_->update_frame_sensor(points, n, pose, counters);
+  }
+  QueryResult query(float x, float y) const override { return stack_->query(x, y); }
+  QueryResult query_layer(int layer, float x, float y) const override { return stack_->query_layer(layer, x, y); }
+  Status export_layer(int layer, std::vector<CellRecord>* cells) const override {
+    cells->resize(StackType::layer_capacity(layer));
+    std::size_t written = 0U;
+    const Status status = stack_->export_layer(layer, cells->data(), cells->size(), &written);
+    cells->resize(written);
+    return status;
+  }
+  Status save(std::vector<std::uint8_t>* bytes) const override {
+    bytes->resize(snapshot_size<Config>());
+    std::size_t written = 0U;
+    const Status status = save_snapshot(*stack_, bytes->data(), bytes->size(), &written);
+    bytes->resize(written);
+    return status;
+  }
+  Status load(const std::uint8_t* data, std::size_t size) override { return load_snapshot(*stack_, data, size); }
+
+  bool initialised() const override { return stack_->initialised(); }
+  int layer_count() const override { return StackType::kLayerCount; }
+  std::int32_t layer_side(int layer) const override { return StackType::layer_side(layer); }
+  bool layer_is_ccm(int layer) const override { return StackType::layer_is_ccm(layer); }
+  float layer_cell_width(int layer) const override { return stack_->layer_cell_width(layer); }
+  CellIndex layer_centre(int layer) const override { return stack_->layer_centre(layer); }
+  float normal_variance_threshold(int layer) const override { return stack_->normal_variance_threshold(layer); }
+  const StackParams& params() const override { return stack_->params(); }
+  const FrameCounters& total_counters() const override { return stack_->total_counters(); }
+  std::uint32_t rejected_moves() const override { return stack_->rejected_moves(); }
+  std::uint32_t rejected_frames() const override { return stack_->rejected_frames(); }
+  std::uint64_t last_update_ns() const override { return stack_->last_update_ns(); }
+
+ private:
+  std::unique_ptr<StackType> stack_ = std::make_unique<StackType>();  // MBs: never on the C++ stack
+};
+
+template <typename Config>
+std::unique_ptr<MapAdapter> make_adapter() {
+  return std::make_unique<StackAdapter<Config>>();
+}
+
+template <typename Config>
+Preset preset(const char* name) {
+  return Preset{name, Config::kDefaultFinestCellWidthM, Stack<Config>::kLayerCount, snapshot_size<Config>(),
+                &make_adapter<Config>};
+}
+
+}  // namespace
+
+const std::vector<Preset>& presets() {
+  static const std::vector<Preset> all = {preset<CadreConfig>("cadre"), preset<SingleCcmConfig>("ccm"),
+                                          preset<SingleKalmanConfig>("kf"), preset<SingleOmgConfig>("omg")};
+  return all;
+}
+
+const Preset* find_preset(const std::string& name) {
+  for (const Preset& p : presets()) {
+    if (name == p.name) return &p;
+  }
+  return nullptr;
+}
+
+Pose make_pose(const float (&rotation)[3][3], const float (&translation)[3]) {
+  Pose pose{};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) pose.rotation(r, c) = rotation[r][c];
+  }
+  pose.translation = Eigen::Vector3f(translation[0], translation[1], translation[2]);
+  return pose;
+}
+
+}  // namespace ccmap::python

@@ -1,0 +1,72 @@
+// Host adapter between the Python module (ccmap_module.cpp) and the library's Stack<Config>
+// templates: one run-time interface over the four presets of the `ccmap` CLI (cadre, ccm, kf,
+// omg; tools/cli/map_runner.cpp has the same names and types). It speaks the library's own
+// types and Status codes and knows nothing of Python: every refusal is the library's Status.
+// The stack lives on the heap (MBs), owned by the adapter; the adapter holds no Python object.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ccmap/map/config.hpp"
+#include "ccmap/map/types.hpp"
+
+namespace ccmap::python {
+
+class MapAdapter {
+ public:
+  virtual ~MapAdapter() = default;
+
+  [[nodiscard]] virtual Status init(const StackParams& params) = 0;
+  [[nodiscard]] virtual Status move_to(float x, float y) = 0;
+  /// Map-frame points; `weights` is nullptr (the noise model weighs) or one weight per point.
+  [[nodiscard]] virtual Status update_frame(const PointXYZ* points, const float* weights, std::size_t n,
+                                            const PointXYZ& sensor_origin, FrameCounters* counters) = 0;
+  /// Sensor-frame points, p_map = R p + t.
+  [[nodiscard]] virtual Status update_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& pose,
+                                                   FrameCounters* counters) = 0;
+  [[nodiscard]] virtual QueryResult query(float x, float y) const = 0;
+  [[nodiscard]] virtual QueryResult query_layer(int layer, float x, float y) const = 0;
+  /// Every observed cell of `layer` (Stack::export_layer order: rows of increasing y).
+  [[nodiscard]] virtual Status export_layer(int layer, std::vector<CellRecord>* cells) const = 0;
+  /// The library's snapshot (map/snapshot.hpp) of the whole stack.
+  [[nodiscard]] virtual Status save(std::vector<std::uint8_t>* bytes) const = 0;
+  /// All-or-nothing: on failure the stack is unchanged (kVersionMismatch: another preset's snapshot).
+  [[nodiscard]] virtual Status load(const std::uint8_t* data, std::size_t size) = 0;
+
+  [[nodiscard]] virtual bool initialised() const = 0;
+  [[nodiscard]] virtual int layer_count() const = 0;
+  [[nodiscard]] virtual std::int32_t layer_side(int layer) const = 0;
+  [[nodiscard]] virtual bool layer_is_ccm(int layer) const = 0;
+  [[nodiscard]] virtual float layer_cell_width(int layer) const = 0;
+  [[nodiscard]] virtual CellIndex layer_centre(int layer) const = 0;
+  [[nodiscard]] virtual float normal_variance_threshold(int layer) const = 0;
+  [[nodiscard]] virtual const StackParams& params() const = 0;
+  [[nodiscard]] virtual const FrameCounters& total_counters() const = 0;
+  [[nodiscard]] virtual std::uint32_t rejected_moves() const = 0;
+  [[nodiscard]] virtual std::uint32_t rejected_frames() const = 0;
+  [[nodiscard]] virtual std::uint64_t last_update_ns() const = 0;
+};
+
+/// One preset: its CLI name, the library's configuration behind it, a factory.
+struct Preset {
+  const char* name;                   ///< cadre, ccm, kf, omg
+  float default_cell_width_m;         ///< Config::kDefaultFinestCellWidthM
+  int layer_count;                    ///< Stack<Config>::kLayerCount
+  std::size_t snapshot_bytes;         ///< snapshot_size<Config>()
+  std::unique_ptr<MapAdapter> (*make)();  ///< an uninitialised stack
+};
+
+/// The four presets, in the CLI's order.
+const std::vector<Preset>& presets();
+/// nullptr for an unknown name.
+const Preset* find_preset(const std::string& name);
+
+/// The one place that knows how ccmap::Pose stores its rotation (row-major, sensor -> map) and
+/// translation (metres, map frame).
+Pose make_pose(const float (&rotation)[3][3], const float (&translation)[3]);
+
+}  // namespace ccmap::python
