@@ -85,9 +85,9 @@ const Preset* find_preset(const std::string& name) {
 Pose make_pose(const float (&rotation)[3][3], const float (&translation)[3]) {
   Pose pose{};
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) pose.rotation(r, c) = rotation[r][c];
+    for (int c = 0; c < 3; ++c) pose.rotation[r][c] = rotation[r][c];
   }
-  pose.translation = Eigen::Vector3f(translation[0], translation[1], translation[2]);
+  pose.translation = PointXYZ{translation[0], translation[1], translation[2]};
   return pose;
 }
 

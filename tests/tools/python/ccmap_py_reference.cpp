@@ -225,9 +225,9 @@ class Scenario {
   static ccmap::Pose pose(const float (&r)[3][3], PointXYZ t) {
     ccmap::Pose p{};
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) p.rotation(i, j) = r[i][j];
+      for (int j = 0; j < 3; ++j) p.rotation[i][j] = r[i][j];
     }
-    p.translation = Eigen::Vector3f(t.x, t.y, t.z);
+    p.translation = PointXYZ{t.x, t.y, t.z};
     return p;
   }
 
