@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "ccmap/map/types.hpp"
@@ -41,6 +42,11 @@ struct CadreFrameSpec {
   float heading_cos = 1.0F;
   float heading_sin = 0.0F;
   std::uint32_t seed = 1U;  ///< noise seed; 0 -> no range noise
+  /// Shares of pixels a stereo matcher does not deliver as usable ground points, chosen by an
+  /// integer hash of the pixel (deterministic): `invalid_share` NaN (no disparity), `far_share`
+  /// pushed along their ray to 6..15 m (sky, far hills, mismatches: beyond every IV-G range).
+  float invalid_share = 0.0F;
+  float far_share = 0.0F;
 };
 
 struct CadreFrame {
@@ -140,6 +146,22 @@ inline CadreFrame make_cadre_frame(const CadreFrameSpec& spec) {
         px *= scale;
         py *= scale;
         pz *= scale;
+      }
+      // Unusable pixels (integer hash in [0, 1): portable).
+      const std::uint32_t hashed = static_cast<std::uint32_t>(
+          (static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(spec.seed) << 32)) >> 40);
+      const float u01 = static_cast<float>(hashed & 0xFFFFFFU) * (1.0F / 16777216.0F);
+      if (u01 < spec.invalid_share) {
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        px = nan;
+        py = nan;
+        pz = nan;
+      } else if (u01 < spec.invalid_share + spec.far_share) {
+        const float r = std::sqrt(px * px + py * py + pz * pz);
+        const float far = 6.0F + 9.0F * (u01 - spec.invalid_share) / spec.far_share;
+        px *= far / r;
+        py *= far / r;
+        pz *= far / r;
       }
       frame.sensor_points[i] = PointXYZ{px, py, pz};
       frame.map_points[i] = PointXYZ{spec.sensor_x + c * px - s * py, spec.sensor_y + s * px + c * py, h + pz};
