@@ -412,8 +412,12 @@ class Stack {
     if (points == nullptr && n > 0U) {
       return Status::kInvalidArgument;
     }
-    if (n > 0xFFFFFFFFULL) {
-      return Status::kInvalidArgument;
+    // Frame counters are 32-bit. A 32-bit size_t (Cortex-M) cannot exceed them, and there the
+    // comparison would be always false (-Wtype-limits under the warning wall).
+    if constexpr (sizeof(std::size_t) > sizeof(std::uint32_t)) {
+      if (n > 0xFFFFFFFFULL) {
+        return Status::kInvalidArgument;
+      }
     }
     return ccm_check_point(origin.x, origin.y, origin.z);
   }
