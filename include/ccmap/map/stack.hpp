@@ -819,8 +819,10 @@ class Stack {
   FineFrameSum fine_sums_[kFineBatchSlots]{};
   std::uint32_t fine_touched_[kFineBatchSlots]{};
   std::uint32_t fine_touched_count_ = 0U;
-  bool constant_weight_ = true;
-  float stereo_k_ = -1.0F;  ///< stereo sigma per range^2 (1/m), -1 for other models
+  // Zero until init_update_path() sets them, like every member: a static Stack is then all zero
+  // bytes and lands in .bss (zero-filled at start-up, no flash) instead of .data.
+  bool constant_weight_ = false;
+  float stereo_k_ = 0.0F;  ///< stereo sigma per range^2 (1/m), -1 for other models (set by init)
 };
 
 }  // namespace ccmap
