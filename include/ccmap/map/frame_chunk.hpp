@@ -158,6 +158,17 @@ struct PointFront {
   return out;
 }
 
+/// floor(v) as int64 for 1 <= v < 2^63, from the bit pattern in integer operations only. A
+/// static_cast calls libgcc's __aeabi_f2lz on 32-bit Arm, which converts through double
+/// (__aeabi_f2d, __aeabi_dmul) when the FPU is single precision (Cortex-M7 FPv5-SP): no double
+/// may enter the core's image (tests/baremetal, link.no_soft_double).
+[[nodiscard]] inline std::int64_t floor_to_int64(float v) noexcept {
+  const std::uint32_t bits = chunk_float_bits(v);
+  const std::int32_t exponent = static_cast<std::int32_t>((bits >> 23) & 0xFFU) - 150;  // v = significand * 2^exponent
+  const std::uint64_t significand = (bits & 0x7FFFFFU) | 0x800000U;  // v >= 1: normal
+  return static_cast<std::int64_t>(exponent >= 0 ? significand << exponent : significand >> -exponent);
+}
+
 /// Derives the scale and routing bounds for finest width w_0 and the routing table's squared
 /// ranges (m^2, non-decreasing). kInvalidArgument if w_0 is outside what validate_stack_params
 /// accepts (the scale would not fit). Evaluated once at init.
@@ -187,7 +198,7 @@ struct PointFront {
     const float units = max_range_sq_m2[k] / f.range_unit_sq_m2;
     // A bound below one unit takes only points at the sensor (refused anyway); a bound beyond
     // int64 (including the +inf/FLT_MAX of a noise-free model) never refuses.
-    f.max_range_units_sq[k] = !(units < 9.0e18F) ? INT64_MAX : static_cast<std::int64_t>(units);
+    f.max_range_units_sq[k] = !(units < 9.0e18F) ? INT64_MAX : (units < 1.0F ? 0 : floor_to_int64(units));
   }
   f.layers = static_cast<std::uint32_t>(layers);
   *out = f;
