@@ -7,6 +7,9 @@ extern "C" void ccmap_test_write(const char* text) { ccmap_board_write(text); }
 
 int main() {
   static char filter[256];
-  (void)ccmap_board_arguments(filter, sizeof filter);
+  if (ccmap_board_arguments(filter, sizeof filter) == CCMAP_BOARD_ARGUMENTS_ERROR) {
+    ccmap_board_write("cannot read the arguments (QEMU -append) of this image\n");
+    return 2;
+  }
   return ccmap::bmtest::run(filter);
 }

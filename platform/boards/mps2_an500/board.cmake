@@ -29,9 +29,11 @@ if(NOT CCMAP_QEMU_SYSTEM_ARM)
                       "apt-get install qemu-system-arm, or ./tools/install-deps")
 endif()
 # -icount shift=0: one guest instruction = 1 ns of virtual time, so timer reads count
-# instructions and every run is identical (board.h).
+# instructions and every run is identical (board.h). The semihosting console on a stdio
+# chardev: QEMU 7.2 writes it to stderr otherwise.
 set(CCMAP_BOARD_EMULATOR ${CCMAP_QEMU_SYSTEM_ARM} -M mps2-an500 -cpu cortex-m7 -nographic -monitor none
-    -serial none -semihosting -icount shift=0 -kernel)
+    -serial none -chardev stdio,id=semihost -semihosting-config enable=on,target=native,chardev=semihost
+    -icount shift=0 -kernel)
 
 function(ccmap_board_image target)
   cmake_parse_arguments(ARG "" "RAM_SIZE;STACK_SIZE" "" ${ARGN})

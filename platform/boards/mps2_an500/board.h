@@ -7,8 +7,11 @@
  * service, telemetry and FDIR (docs/integration.md, "Bare metal"). This board is the reference
  * integration the bare-metal tests run on.
  *
- * Run an image: qemu-system-arm -M mps2-an500 -cpu cortex-m7 -nographic -monitor none
- *   -serial none -semihosting -icount shift=0 -kernel image.elf [-append "args"]
+ * Run an image (the semihosting text then goes to stdout; with plain -semihosting QEMU 7.2
+ * writes it to stderr):
+ *   qemu-system-arm -M mps2-an500 -cpu cortex-m7 -nographic -monitor none -serial none
+ *     -chardev stdio,id=semihost -semihosting-config enable=on,target=native,chardev=semihost
+ *     -icount shift=0 -kernel image.elf [-append "args"]
  * With -icount shift=0 every guest instruction advances virtual time by exactly 1 ns, so the
  * 25 MHz timer below counts one tick per 40 instructions, identically on every run.
  */
@@ -40,7 +43,10 @@ __attribute__((noreturn)) void ccmap_board_exit(int code);
 uint32_t ccmap_board_ticks(void);
 
 /* The arguments after the image name of QEMU's -append "..." (semihosting SYS_GET_CMDLINE),
- * NUL-terminated in buffer[0..capacity). Returns the length, 0 if there are none or on error. */
+ * NUL-terminated in buffer[0..capacity). Returns their length (0: none), or
+ * CCMAP_BOARD_ARGUMENTS_ERROR (buffer empty) if they cannot be read or do not fit: a program
+ * must not mistake a lost argument for no argument. */
+#define CCMAP_BOARD_ARGUMENTS_ERROR SIZE_MAX
 size_t ccmap_board_arguments(char* buffer, size_t capacity);
 
 /* Deepest main-stack use since start-up (bytes): start-up paints the stack, this counts the

@@ -199,16 +199,16 @@ std::uint32_t ccmap_board_ticks(void) { return 0xFFFFFFFFU - reg(kTimer0Value); 
 
 std::size_t ccmap_board_arguments(char* buffer, std::size_t capacity) {
   if (buffer == nullptr || capacity == 0U) {
-    return 0U;
+    return CCMAP_BOARD_ARGUMENTS_ERROR;
   }
-  static char line[256];
+  static char line[1024];
   struct {
     char* data;
     std::uint32_t size;
   } block{line, sizeof line};
   buffer[0] = '\0';
   if (semihost(kSysGetCmdline, &block) != 0U) {
-    return 0U;
+    return CCMAP_BOARD_ARGUMENTS_ERROR;  // no semihosting, or longer than the buffer
   }
   // QEMU answers "<image> <args of -append>": skip the image name.
   std::size_t i = 0U;
@@ -219,7 +219,11 @@ std::size_t ccmap_board_arguments(char* buffer, std::size_t capacity) {
     ++i;
   }
   std::size_t n = 0U;
-  while (i < block.size && line[i] != '\0' && n + 1U < capacity) {
+  while (i < block.size && line[i] != '\0') {
+    if (n + 1U >= capacity) {
+      buffer[0] = '\0';
+      return CCMAP_BOARD_ARGUMENTS_ERROR;
+    }
     buffer[n++] = line[i++];
   }
   buffer[n] = '\0';
