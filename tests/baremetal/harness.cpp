@@ -92,24 +92,18 @@ Line& Line::i64(std::int64_t v) noexcept {
   return u64(static_cast<std::uint64_t>(v));
 }
 
-Line& Line::hex64(std::uint64_t v) noexcept {
-  char out[17];
-  for (int i = 0; i < 16; ++i) {
-    const auto digit = static_cast<unsigned>((v >> (60 - 4 * i)) & 0xFU);
-    out[i] = static_cast<char>(digit < 10U ? '0' + digit : 'a' + (digit - 10U));
-  }
-  out[16] = '\0';
-  return text(out);
-}
+Line& Line::hex64(std::uint64_t v) noexcept { return hex_digits(v, 16); }
 
-Line& Line::hex32(std::uint32_t v) noexcept {
-  char out[9];
-  for (int i = 0; i < 8; ++i) {
-    const auto digit = static_cast<unsigned>((v >> (28 - 4 * i)) & 0xFU);
+Line& Line::hex32(std::uint32_t v) noexcept { return text("0x").hex_digits(v, 8); }
+
+Line& Line::hex_digits(std::uint64_t v, int digits) noexcept {
+  char out[17];
+  for (int i = 0; i < digits; ++i) {
+    const auto digit = static_cast<unsigned>((v >> (4 * (digits - 1 - i))) & 0xFU);
     out[i] = static_cast<char>(digit < 10U ? '0' + digit : 'a' + (digit - 10U));
   }
-  out[8] = '\0';
-  return text("0x").text(out);
+  out[digits] = '\0';
+  return text(out);
 }
 
 Line& Line::fixed(std::uint64_t value, std::uint64_t scale, int decimals) noexcept {

@@ -49,6 +49,7 @@ class Line {
   void end() noexcept;
 
  private:
+  Line& hex_digits(std::uint64_t v, int digits) noexcept;  ///< the low `digits` (<= 16) hex digits
   char buffer_[256] = {};
   std::size_t size_ = 0;
 };

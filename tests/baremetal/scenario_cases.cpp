@@ -30,20 +30,17 @@ BM_CASE(board_scenario, hash_equals_golden) {
   const scenario::BoardResult r = scenario::run_board_scenario(g_stack, g_points, g_weights, g_records);
   BM_CHECK_EQ(r.failed_step, 0, "a call of the scenario did not answer kOk (step number)");
   ccmap::bmtest::Line().text("board_scenario ").hex64(r.hash).end();
-  ccmap::bmtest::Line()
-      .text("  points received ")
-      .u64(r.totals.received)
-      .text(", used ")
-      .u64(r.totals.used)
-      .text(", non-finite ")
-      .u64(r.totals.rejected_non_finite)
-      .text(", out-of-range ")
-      .u64(r.totals.rejected_out_of_range)
-      .text(", bad weight ")
-      .u64(r.totals.rejected_weight)
-      .text(", too noisy ")
-      .u64(r.totals.too_noisy)
-      .end();
+  const struct {
+    const char* name;
+    std::uint32_t value;
+  } counts[] = {{"  points received ", r.totals.received},          {", used ", r.totals.used},
+                {", non-finite ", r.totals.rejected_non_finite},    {", out-of-range ", r.totals.rejected_out_of_range},
+                {", bad weight ", r.totals.rejected_weight},        {", too noisy ", r.totals.too_noisy}};
+  ccmap::bmtest::Line line;
+  for (const auto& c : counts) {
+    line.text(c.name).u64(c.value);
+  }
+  line.end();
   BM_CHECK_EQ(r.hash, CCMAP_BOARD_SCENARIO_GOLDEN,
               "board_scenario hash differs from tests/golden/determinism.txt: the Cortex-M7 arithmetic differs "
               "from the host's, or the map changed on purpose (regenerate: tests/map/determinism_dump.cpp)");
