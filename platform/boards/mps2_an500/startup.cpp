@@ -66,9 +66,19 @@ constexpr std::uint32_t kStackPaint = 0xC5C5C5C5U;
 constexpr std::size_t kIrqCount = 32U;
 using Handler = void (*)();
 struct VectorTable {
+  // Read by the processor at reset and on exceptions, never by code:
+  // cppcheck-suppress unusedStructMember
   const std::uint32_t* initial_stack;
+  // cppcheck-suppress unusedStructMember
   std::array<Handler, 15U + kIrqCount> handlers;
 };
+
+/// Elements between two linker-script symbols, in integers (they are not one C++ object, so
+/// comparing or subtracting them as pointers would not be defined).
+template <typename T>
+std::size_t count_between(const T* begin, const T* end) noexcept {
+  return (reinterpret_cast<std::uintptr_t>(end) - reinterpret_cast<std::uintptr_t>(begin)) / sizeof(T);
+}
 
 constexpr std::array<Handler, 15U + kIrqCount> make_handlers() {
   std::array<Handler, 15U + kIrqCount> handlers{};
@@ -131,18 +141,21 @@ extern "C" __attribute__((naked)) void ccmap_board_reset() {
 }
 
 extern "C" void ccmap_board_start() {
-  const std::uint32_t* source = __data_load;
-  for (std::uint32_t* p = __data_start; p < __data_end; ++p, ++source) {
-    *p = *source;
+  const std::size_t data_words = count_between(__data_start, __data_end);
+  for (std::size_t i = 0; i < data_words; ++i) {
+    __data_start[i] = __data_load[i];
   }
-  for (std::uint32_t* p = __bss_start; p < __bss_end; ++p) {
-    *p = 0U;
+  const std::size_t bss_words = count_between(__bss_start, __bss_end);
+  for (std::size_t i = 0; i < bss_words; ++i) {
+    __bss_start[i] = 0U;
   }
   // Paint from the stack limit to 64 bytes below this frame.
   std::uint32_t* sp = nullptr;
   __asm__ volatile("mov %0, sp" : "=r"(sp));
-  for (std::uint32_t* p = __stack_limit; p + 16 < sp; ++p) {
-    *p = kStackPaint;
+  const std::size_t below_sp = count_between(__stack_limit, sp);
+  const std::size_t paint_words = below_sp > 16U ? below_sp - 16U : 0U;
+  for (std::size_t i = 0; i < paint_words; ++i) {
+    __stack_limit[i] = kStackPaint;
   }
   reg(kScbShcsr) = reg(kScbShcsr) | kShcsrFaultsEnabled;
   reg(kScbCcr) = reg(kScbCcr) | kCcrDivByZeroTrap;
@@ -151,8 +164,9 @@ extern "C" void ccmap_board_start() {
   reg(kTimer0Value) = 0xFFFFFFFFU;
   reg(kTimer0Ctrl) = 1U;  // enable, no interrupt
   __asm__ volatile("dsb\nisb" ::: "memory");
-  for (const InitFunction* f = __init_array_start; f < __init_array_end; ++f) {
-    (*f)();
+  const std::size_t constructors = count_between(__init_array_start, __init_array_end);
+  for (std::size_t i = 0; i < constructors; ++i) {
+    __init_array_start[i]();
   }
   ccmap_board_exit(ccmap_board_program_main());
 }
@@ -202,24 +216,23 @@ std::size_t ccmap_board_arguments(char* buffer, std::size_t capacity) {
     return CCMAP_BOARD_ARGUMENTS_ERROR;
   }
   static char line[1024];
-  struct {
-    char* data;
-    std::uint32_t size;
-  } block{line, sizeof line};
+  // Parameter block: buffer address, its size; the host writes the length back into word 1.
+  std::uint32_t block[2] = {static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(line)), sizeof line};
   buffer[0] = '\0';
-  if (semihost(kSysGetCmdline, &block) != 0U) {
+  if (semihost(kSysGetCmdline, block) != 0U) {
     return CCMAP_BOARD_ARGUMENTS_ERROR;  // no semihosting, or longer than the buffer
   }
+  const std::uint32_t length = block[1];
   // QEMU answers "<image> <args of -append>": skip the image name.
   std::size_t i = 0U;
-  while (i < block.size && line[i] != '\0' && line[i] != ' ') {
+  while (i < length && line[i] != '\0' && line[i] != ' ') {
     ++i;
   }
-  while (i < block.size && line[i] == ' ') {
+  while (i < length && line[i] == ' ') {
     ++i;
   }
   std::size_t n = 0U;
-  while (i < block.size && line[i] != '\0') {
+  while (i < length && line[i] != '\0') {
     if (n + 1U >= capacity) {
       buffer[0] = '\0';
       return CCMAP_BOARD_ARGUMENTS_ERROR;
@@ -231,15 +244,14 @@ std::size_t ccmap_board_arguments(char* buffer, std::size_t capacity) {
 }
 
 std::size_t ccmap_board_stack_used(void) {
-  const std::uint32_t* p = __stack_limit;
-  while (p < __stack_top && *p == kStackPaint) {
-    ++p;
+  const std::size_t words = count_between(__stack_limit, __stack_top);
+  std::size_t painted = 0U;
+  while (painted < words && __stack_limit[painted] == kStackPaint) {
+    ++painted;
   }
-  return static_cast<std::size_t>(__stack_top - p) * sizeof(std::uint32_t);
+  return (words - painted) * sizeof(std::uint32_t);
 }
 
-std::size_t ccmap_board_stack_size(void) {
-  return static_cast<std::size_t>(__stack_top - __stack_limit) * sizeof(std::uint32_t);
-}
+std::size_t ccmap_board_stack_size(void) { return count_between(__stack_limit, __stack_top) * sizeof(std::uint32_t); }
 
 }  // extern "C"
