@@ -215,7 +215,7 @@ std::size_t ccmap_board_arguments(char* buffer, std::size_t capacity) {
   if (buffer == nullptr || capacity == 0U) {
     return CCMAP_BOARD_ARGUMENTS_ERROR;
   }
-  static char line[1024];
+  static char line[1024];  // static: the stack high-water mark should show the program, not this
   // Parameter block: buffer address, its size; the host writes the length back into word 1.
   std::uint32_t block[2] = {static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(line)), sizeof line};
   buffer[0] = '\0';
