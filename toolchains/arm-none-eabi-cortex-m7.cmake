@@ -18,12 +18,8 @@ set(CMAKE_CXX_COMPILER arm-none-eabi-g++)
 set(CMAKE_TRY_COMPILE_TARGET_TYPE STATIC_LIBRARY)
 
 set(CCMAP_CPU_FLAGS "-mcpu=cortex-m7 -mfpu=fpv5-sp-d16 -mfloat-abi=hard -mthumb")
-# No errno from the math functions: sqrtf is then the one VSQRT.F32 instruction (the same
-# correctly rounded result) instead of a libm call that sets errno, a thread-local variable
-# that needs a thread pointer this start-up does not set up.
-set(CCMAP_TARGET_FLAGS "${CCMAP_CPU_FLAGS} -fno-math-errno")
-set(CMAKE_C_FLAGS_INIT "${CCMAP_TARGET_FLAGS} --specs=picolibc.specs")
-set(CMAKE_CXX_FLAGS_INIT "${CCMAP_TARGET_FLAGS} --specs=picolibcpp.specs")
+set(CMAKE_C_FLAGS_INIT "${CCMAP_CPU_FLAGS} --specs=picolibc.specs")
+set(CMAKE_CXX_FLAGS_INIT "${CCMAP_CPU_FLAGS} --specs=picolibcpp.specs")
 set(CMAKE_EXE_LINKER_FLAGS_INIT "${CCMAP_CPU_FLAGS}")
 
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
