@@ -3,12 +3,12 @@
 // its initial image to flash; test link.map_in_bss).
 #include "ccmap/map/stack.hpp"
 
-namespace {
 struct MapWithTag {
   ccmap::Stack<ccmap::CadreConfig> map;
   int tag = 1;
 };
+// External linkage: the compiler may not fold an internal object that nothing writes away.
+extern MapWithTag g_map;
 MapWithTag g_map;
-}  // namespace
 
 int main() { return g_map.map.initialised() || g_map.tag != 1 ? 1 : 0; }
