@@ -48,7 +48,7 @@ Status make_front_config(float finest_width_m, const float* max_range_sq_m2, int
   for (int k = 0; k < layers; ++k) {
     const float units = max_range_sq_m2[k] * 4294967296.0F;  // m^2 -> 2^-32 m^2 (exact scale)
     // A bound beyond int64 (including the +inf of an unbounded model) never refuses.
-    f.max_range_sq[k] = !(units < 9.0e18F) ? INT64_MAX : static_cast<std::int64_t>(units);
+    f.max_range_sq[k] = !(units < 9.0e18F) ? INT64_MAX : (units < 1.0F ? 0 : floor_to_int64(units));
   }
   for (int k = 0; k < kFrontMaxLayers; ++k) {
     f.max_range_key[k] = route_key_of(f.max_range_sq[k]);

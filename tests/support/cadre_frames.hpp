@@ -105,18 +105,17 @@ struct XorShift {
 };
 }  // namespace detail_frames
 
-/// Builds one frame (image order: top row first, left to right). Allocates (test support).
-inline CadreFrame make_cadre_frame(const CadreFrameSpec& spec) {
+/// Writes one frame (image order: top row first, left to right) into the caller's buffers of
+/// width_px * height_px points each, and its sensor origin and pose. No heap (the bare-metal
+/// tests call it with static buffers).
+inline void fill_cadre_frame(const CadreFrameSpec& spec, PointXYZ* map_points, PointXYZ* sensor_points,
+                             PointXYZ* sensor_origin, Pose* pose) {
   using detail_frames::XorShift;
-  CadreFrame frame;
-  const std::size_t n = static_cast<std::size_t>(spec.width_px) * static_cast<std::size_t>(spec.height_px);
-  frame.map_points.resize(n);
-  frame.sensor_points.resize(n);
   const float h = spec.camera_height_m;
   const float c = spec.heading_cos;
   const float s = spec.heading_sin;
-  frame.sensor_origin = PointXYZ{spec.sensor_x, spec.sensor_y, h};
-  frame.pose = yaw_pose(c, s, PointXYZ{spec.sensor_x, spec.sensor_y, h});
+  *sensor_origin = PointXYZ{spec.sensor_x, spec.sensor_y, h};
+  *pose = yaw_pose(c, s, PointXYZ{spec.sensor_x, spec.sensor_y, h});
   XorShift rng{0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(spec.seed) * 0x2545F4914F6CDD1DULL)};
   // Rows linear in t = h / d, the tangent of the depression angle (a pinhole's row spacing).
   const float t_far = h / spec.far_m;
@@ -163,10 +162,19 @@ inline CadreFrame make_cadre_frame(const CadreFrameSpec& spec) {
         py *= far / r;
         pz *= far / r;
       }
-      frame.sensor_points[i] = PointXYZ{px, py, pz};
-      frame.map_points[i] = PointXYZ{spec.sensor_x + c * px - s * py, spec.sensor_y + s * px + c * py, h + pz};
+      sensor_points[i] = PointXYZ{px, py, pz};
+      map_points[i] = PointXYZ{spec.sensor_x + c * px - s * py, spec.sensor_y + s * px + c * py, h + pz};
     }
   }
+}
+
+/// Builds one frame (fill_cadre_frame into vectors). Allocates (test support).
+inline CadreFrame make_cadre_frame(const CadreFrameSpec& spec) {
+  CadreFrame frame;
+  const std::size_t n = static_cast<std::size_t>(spec.width_px) * static_cast<std::size_t>(spec.height_px);
+  frame.map_points.resize(n);
+  frame.sensor_points.resize(n);
+  fill_cadre_frame(spec, frame.map_points.data(), frame.sensor_points.data(), &frame.sensor_origin, &frame.pose);
   return frame;
 }
 

@@ -328,7 +328,13 @@ class Stack {
       write_counters(frame, counters);
       return Status::kNotInitialised;
     }
-    if ((points == nullptr && n > 0U) || n > 0xFFFFFFFFULL) {
+    bool too_many = false;
+    // Frame counters are 32-bit. A 32-bit size_t (Cortex-M) cannot exceed them, and there the
+    // comparison would be always false (-Wtype-limits under the warning wall).
+    if constexpr (sizeof(std::size_t) > sizeof(std::uint32_t)) {
+      too_many = n > 0xFFFFFFFFULL;
+    }
+    if ((points == nullptr && n > 0U) || too_many) {
       status = Status::kInvalidArgument;
     } else {
       status = detail::make_frame_pose(origin, rotation, pose);

@@ -47,7 +47,7 @@ class UpdatePath {
     const Status status = make_front_config(layers.widths[0], max_range_sq_m2, Layers::kLayerCount, &front_);
     for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
       // Exact: a float width >= 2^-17 m times 2^40 is an integer below 2^47 (validated widths).
-      width_q40_[layer] = static_cast<std::int64_t>(layers.widths[layer] * 1099511627776.0F);
+      width_q40_[layer] = floor_to_int64(layers.widths[layer] * 1099511627776.0F);
     }
     constant_weight_ = params.noise.weight_mode() == sensor::WeightMode::kConstant;
     stereo_ = params.noise.kind() == sensor::SensorKind::kStereo && params.noise.validate() == Status::kOk;
