@@ -140,6 +140,30 @@ inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_varia
   return Status::kOk;
 }
 
+/// Merges the OMG statistics `other` (the same cell's measurements kept apart, e.g. held back by
+/// the outlier gate) into `cell` (Chan et al., as ccm_merge): W = W_a + W_b, d = h_b - h_a,
+/// h = h_a + d W_b / W, s = s_a + s_b + d^2 W_a W_b / W, then the weight limiter. Equal to the
+/// sequential omg_update of other's measurements in real arithmetic while the limiter does not
+/// engage. An empty `other` leaves `cell` unchanged. Preconditions (callers inside the library):
+/// weights >= 0 and finite, weight_limit >= kMinWeightLimit.
+namespace detail {
+inline void omg_merge_unchecked(OmgCell& cell, const OmgCell& other, float weight_limit) noexcept {
+  if (!(other.weight > 0.0F)) {
+    return;
+  }
+  const float weight = cell.weight + other.weight;
+  const float d = other.height - cell.height;
+  const float share = other.weight / weight;
+  cell.height += d * share;
+  cell.s += other.s + d * d * cell.weight * share;
+  cell.weight = weight;
+  if (cell.weight > weight_limit) {
+    cell.s *= weight_limit / cell.weight;
+    cell.weight = weight_limit;
+  }
+}
+}  // namespace detail
+
 /// Mixture variance of an OMG cell (m^2); 0 for a never-observed cell.
 [[nodiscard]] inline float omg_variance(const OmgCell& cell) noexcept {
   return ccm_variance(cell.s, cell.weight);
