@@ -95,6 +95,14 @@ constexpr CounterField kCounterFields[] = {
     {"rejected_weight", &FrameCounters::rejected_weight},
     {"outside_map", &FrameCounters::outside_map},
     {"too_noisy", &FrameCounters::too_noisy},
+    {"gated_finer", &FrameCounters::gated_finer},
+    {"gated_occluded", &FrameCounters::gated_occluded},
+    {"gated_held", &FrameCounters::gated_held},
+    {"gated_pool_full", &FrameCounters::gated_pool_full},
+    {"gated_admitted", &FrameCounters::gated_admitted},
+    {"gated_dropped", &FrameCounters::gated_dropped},
+    {"reseeded_cells", &FrameCounters::reseeded_cells},
+    {"merged_cells", &FrameCounters::merged_cells},
 };
 static_assert(sizeof(FrameCounters) == std::size(kCounterFields) * sizeof(std::uint32_t),
               "FrameCounters gained a member: add it to kCounterFields");
@@ -118,6 +126,9 @@ constexpr ParamField kParamFields[] = {
     {"max_inclination", &StackParams::max_inclination},
     {"kalman_min_variance", &StackParams::kalman_min_variance},
     {"finest_max_sigma_m", &StackParams::finest_max_sigma_m},
+    {"outlier_gate_sigma", &StackParams::outlier_gate_sigma},
+    {"change_min_points", &StackParams::change_min_points},
+    {"change_share", &StackParams::change_share},
 };
 
 // ---------------------------------------------------------------------------------------------

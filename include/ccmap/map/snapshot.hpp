@@ -10,9 +10,11 @@
 // life-time counters. Loading re-initialises the stack from the stored parameters and restores
 // windows and cells, so the loaded stack answers every query and export bitwise identically to
 // the saved one (routing table and thresholds are recomputed by init(), deterministically).
-// Not stored: RingGrid::cells_cleared_by_moves() (restarts at 0 on load).
+// Not stored: RingGrid::cells_cleared_by_moves() (restarts at 0 on load) and the outlier gate's
+// held points awaiting the change rule (map/detail/held_pool.hpp: at most kHeldSlots cells per
+// pool; after a load such a cell needs change_min_points held points anew).
 //
-// Format (version 1). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 2). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -26,6 +28,7 @@
 //                   min_weight, obstacle_fraction, max_inclination, kalman_min_variance,
 //                   normal_variance_threshold[0..7]
 //                4  finest_max_sigma_m
+//               12  outlier_gate_sigma, change_min_points, change_share
 //               20  noise model: kind (u8), weight mode (u8), 2 reserved 0, stereo k = sigma_d/(f b)
 //                   (1/m), lidar sigma0 (m), lidar sigma per m, reference range (m)
 //   per layer    8  window centre (int32 x, int32 y; global cell indices), then
@@ -33,7 +36,7 @@
 //                   window's lowest y, x increasing inside a row (RingGrid::for_each order).
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
 //                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz.
-//   counters    28  total FrameCounters (7 x uint32, in declaration order)
+//   counters    60  total FrameCounters (15 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
@@ -64,7 +67,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 1U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 2U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -74,13 +77,13 @@ inline constexpr std::uint16_t kSnapshotFormatVersion = 1U;
 
 namespace detail {
 
-static_assert(kMaxLayers == 8, "snapshot format version 1 stores 8 sides and 8 thresholds");
+static_assert(kMaxLayers == 8, "snapshot format version 2 stores 8 sides and 8 thresholds");
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
-inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U) + 20U;
+inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
-inline constexpr std::size_t kSnapshotCountersBytes = 7U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotCountersBytes = 15U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
 inline constexpr std::size_t kSnapshotCcmCellBytes = std::size_t{9} * 4U;
@@ -313,7 +316,7 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 418,016 bytes (docs/integration.md lists every preset).
+/// CadreConfig: 418,060 bytes (docs/integration.md lists every preset).
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();

@@ -299,6 +299,14 @@ class Stack {
   [[nodiscard]] std::uint32_t rejected_frames() const noexcept { return rejected_frames_; }
   /// Duration of the last accepted frame update (platform monotonic clock, ns).
   [[nodiscard]] std::uint64_t last_update_ns() const noexcept { return last_update_ns_; }
+  /// Cells whose points outside the outlier gate await the change rule (docs/design.md,
+  /// "Outlier gate and change"); 0 with the gate off. Not map state: not in snapshots.
+  [[nodiscard]] std::uint32_t held_cells() const noexcept {
+    return update_.pending_ccm_cells() + update_.pending_fine_cells();
+  }
+  /// Cells with held points at the end of the last frame, before the change rule decided (the
+  /// held-point slots it took; at most detail::kHeldSlots per pool: CCM layers, finest layer).
+  [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
   /// Raw CCM layer `ccm_index` (0 = first CCM layer), read-only, for serialisation, pictures and
   /// tests. Contract: 0 <= ccm_index < kCcmLayerCount; a violation is reported to the assert
   /// hook and answered with an empty, uninitialised grid (every accessor safe, no cells).
