@@ -7,21 +7,40 @@
 #include <filesystem>
 #include <sstream>
 
+#include "ccmap/map/config.hpp"
 #include "sim/data_dir.hpp"
 
 namespace ccmap::experiments {
+
+void GateSetting::apply(StackParams* params) const {
+  if (sigma >= 0.0) params->outlier_gate_sigma = static_cast<float>(sigma);
+  if (min_points >= 0.0) params->change_min_points = static_cast<float>(min_points);
+  if (share >= 0.0) params->change_share = static_cast<float>(share);
+}
+
+std::string GateSetting::describe(const StackParams& defaults) const {
+  StackParams p = defaults;
+  apply(&p);
+  if (!(p.outlier_gate_sigma > 0.0F)) return "gate off (the paper's update)";
+  return format("gate %.3g sigma, change rule %.3g points / %.3g %%", static_cast<double>(p.outlier_gate_sigma),
+                static_cast<double>(p.change_min_points), 100.0 * static_cast<double>(p.change_share));
+}
 
 int parse_experiment_args(int argc, char** argv, const std::string& description, ExperimentArgs* args) {
   std::string data_flag;
   const char* prog = argc > 0 ? argv[0] : "experiment";
   auto usage = [&](FILE* f) {
     std::fprintf(f,
-                 "%s\n\nusage: %s [--seed N] [--out DIR] [--quick] [--data DIR]\n"
+                 "%s\n\nusage: %s [--seed N] [--out DIR] [--quick] [--data DIR] [--gate K] [--change-points M]\n"
+                 "       [--change-share S]\n"
                  "  --seed N    random seed (default 1); results are deterministic by seed\n"
                  "  --out DIR   output directory for figures (default out/experiments)\n"
                  "  --quick     reduced size (what the CI test runs)\n"
                  "  --data DIR  real-data directory (default $CCMAP_DATA_DIR, else the shared data next to the "
-                 "source tree)\n",
+                 "source tree)\n"
+                 "  --gate K, --change-points M, --change-share S\n"
+                 "              the maps' outlier gate (K sigma, 0 = off: the paper's update) and change rule\n"
+                 "              (docs/design.md); default: the library's\n",
                  description.c_str(), prog);
   };
   for (int i = 1; i < argc; ++i) {
@@ -43,6 +62,14 @@ int parse_experiment_args(int argc, char** argv, const std::string& description,
       args->out_dir = argv[++i];
     } else if (a == "--data" && has_value) {
       data_flag = argv[++i];
+    } else if ((a == "--gate" || a == "--change-points" || a == "--change-share") && has_value) {
+      char* end = nullptr;
+      const double v = std::strtod(argv[++i], &end);
+      if (end == nullptr || *end != '\0' || !(v >= 0.0)) {
+        std::fprintf(stderr, "bad %s value %s\n", a.c_str(), argv[i]);
+        return 2;
+      }
+      (a == "--gate" ? args->gate.sigma : a == "--change-points" ? args->gate.min_points : args->gate.share) = v;
     } else {
       std::fprintf(stderr, "unknown or incomplete argument: %s\n", a.c_str());
       usage(stderr);

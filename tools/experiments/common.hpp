@@ -5,16 +5,34 @@
 #include <string>
 #include <vector>
 
+namespace ccmap {
+struct StackParams;
+}
+
 namespace ccmap::experiments {
+
+/// The outlier gate and change rule of a run (docs/design.md, "Outlier gate and change"):
+/// negative fields keep the library's default_stack_params value; sigma 0 switches the gate off.
+struct GateSetting {
+  double sigma = -1.0;
+  double min_points = -1.0;
+  double share = -1.0;
+  /// Writes the non-negative fields into *params.
+  void apply(StackParams* params) const;
+  /// "library default", "off", or e.g. "3 sigma, 3 points, 8 %".
+  std::string describe(const StackParams& defaults) const;
+};
 
 /// Flags every experiment accepts:
 ///   --seed N   (default 1)  --out DIR (default out/experiments)  --quick (reduced size)
 ///   --data DIR (real data; default $CCMAP_DATA_DIR, else <source>/../shared/data)
+///   --gate K, --change-points M, --change-share S   (the outlier gate: GateSetting)
 struct ExperimentArgs {
   std::uint64_t seed = 1;
   std::string out_dir = "out/experiments";
   bool quick = false;
   std::string data_dir;  ///< resolved (never empty after parse_experiment_args)
+  GateSetting gate;
 };
 
 /// Parses argv into *args. Returns -1 to go on, otherwise the exit code to return right away

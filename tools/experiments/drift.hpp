@@ -34,6 +34,8 @@
 #include <string>
 #include <vector>
 
+#include "experiments/common.hpp"
+
 namespace ccmap::experiments {
 
 struct DriftConfig {
@@ -51,6 +53,7 @@ struct DriftConfig {
   double tolerance = 0.05;
   std::uint64_t seed = 1;
   bool progress = false;
+  GateSetting gate;                     ///< the maps' outlier gate (default: the library's)
   static DriftConfig quick() {
     DriftConfig c;
     c.cell_widths_m = {0.04};

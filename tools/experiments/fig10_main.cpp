@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   if (rc >= 0) return rc;
   DriftConfig cfg = args.quick ? DriftConfig::quick() : DriftConfig{};
   cfg.seed = args.seed;
+  cfg.gate = args.gate;
   cfg.progress = true;
   const DriftResult r = run_drift(cfg);
   std::printf("Fig. 10: drift resilience (single-layer CCM maps, CADRE stereo)\n%s\n", drift_table(cfg, r).c_str());

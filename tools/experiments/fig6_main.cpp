@@ -92,6 +92,7 @@ int main(int argc, char** argv) {
   } else {
     DetectionConfig cfg = args.quick ? DetectionConfig::quick() : DetectionConfig{};
     cfg.first_seed = have_range ? seed_a : args.seed;
+    cfg.gate = args.gate;
     if (have_range) cfg.trials = seed_b - seed_a;
     cfg.progress = true;
     result = run_detection(cfg);

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   if (rc >= 0) return rc;
   LidarConfig cfg = args.quick ? LidarConfig::quick() : LidarConfig{};
   cfg.seed = args.seed;
+  cfg.gate = args.gate;
   std::vector<std::string> pictures;
   LidarRun crop;
   std::string why;

@@ -2,7 +2,8 @@
 // with a 90 deg turn over a generated lunar terrain, maps with Stack<CadreConfig> from a CADRE
 // stereo frame every 0.3 m, and reports hazard detection against ground truth, update times
 // and pictures. See traverse.hpp for the definitions.
-//   ccmap_traverse [--seed N] [--out DIR] [--stride K] [--frames N] [--quick]
+//   ccmap_traverse [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--mismatch P]
+//                  [--gate K] [--change-points M] [--change-share S]
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -13,12 +14,17 @@ namespace {
 
 int usage(const char* argv0, std::FILE* f) {
   std::fprintf(f,
-               "usage: %s [--seed N] [--out DIR] [--stride K] [--frames N] [--quick]\n"
+               "usage: %s [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--mismatch P]\n"
+               "       [--gate K] [--change-points M] [--change-share S]\n"
                "  --seed N    terrain and noise seed (default 1); results are deterministic by seed\n"
                "  --out DIR   pictures (default out/traverse)\n"
                "  --stride K  cast every K-th pixel of the 850 x 650 frame (default 1: full frame)\n"
                "  --frames N  stop after N frames (default: the whole 13.5 m path, 46 frames)\n"
-               "  --quick     8 frames at stride 4 (what the CI test runs)\n",
+               "  --quick     8 frames at stride 4 (what the CI test runs)\n"
+               "  --mismatch P  stereo mismatches: a share P of the pixels at a random disparity (default 0)\n"
+               "  --gate K, --change-points M, --change-share S\n"
+               "              the map's outlier gate (K sigma, 0 = off: the paper's update) and change rule\n"
+               "              (docs/design.md); default: the library's\n",
                argv0);
   return f == stdout ? 0 : 2;
 }
@@ -31,6 +37,8 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1;
   int stride = 0, frames = -1;
   bool quick = false;
+  double mismatch = 0.0;
+  ccmap::experiments::GateSetting gate;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
@@ -49,6 +57,14 @@ int main(int argc, char** argv) {
     } else if (a == "--frames" && v != nullptr && std::atoi(v) >= 1) {
       frames = std::atoi(v);
       ++i;
+    } else if ((a == "--mismatch" || a == "--gate" || a == "--change-points" || a == "--change-share") && v != nullptr &&
+               std::strtod(v, nullptr) >= 0.0) {
+      const double value = std::strtod(v, nullptr);
+      (a == "--mismatch" ? mismatch
+       : a == "--gate"   ? gate.sigma
+       : a == "--change-points" ? gate.min_points
+                                : gate.share) = value;
+      ++i;
     } else {
       std::fprintf(stderr, "unknown or incomplete argument: %s\n", a.c_str());
       return usage(argv[0], stderr);
@@ -60,6 +76,8 @@ int main(int argc, char** argv) {
     cfg.out_dir = out;
   }
   cfg.seed = seed;
+  cfg.mismatch_share = mismatch;
+  cfg.gate = gate;
   if (stride > 0) cfg.pixel_stride = stride;
   if (frames > 0) cfg.max_frames = frames;
   cfg.log = stdout;
