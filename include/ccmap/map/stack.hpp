@@ -49,6 +49,8 @@ namespace detail {
 void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept;
 template <typename Config>
 struct SnapshotAccess;  // map/snapshot.hpp: save/load read and restore the raw state
+template <typename Config>
+struct PlannerAccess;   // map/detail/region_walk.hpp: the planner queries read the query view
 }  // namespace detail
 
 template <typename Config>
@@ -312,6 +314,9 @@ class Stack {
   // save_snapshot / load_snapshot read and restore the private state through this friend only;
   // a new state member must be added to the snapshot format (map/snapshot.hpp) as well.
   friend struct detail::SnapshotAccess<Config>;
+  // The planner queries (map/footprint.hpp, map/path_query.hpp, map/costmap.hpp) read the layers
+  // through the query view, and only that, through this friend.
+  friend struct detail::PlannerAccess<Config>;
 
  private:
   [[nodiscard]] detail::QueryView<Config> view() const noexcept {

@@ -60,28 +60,26 @@ class QueryView {
     QueryResult out = empty_result(Status::kOk, layer);
     out.cell_width_m = width;
     if (Layers::is_ccm(layer)) {
-      const CcmCell cell = pooled(layers_, params_.weight_limit, layer, index);
+      const CcmAnswer a = ccm_answer(layer, pooled(layers_, params_.weight_limit, layer, index));
       // Known: covered (eq. 12), or an obstacle already (classify_ccm: obstacle evidence wins).
-      const CellClass cell_class = classify_ccm(cell, width, params_, thresholds_[layer]);
-      if (require_known && cell_class == CellClass::kUnknown) {
+      if (require_known && a.cell_class == CellClass::kUnknown) {
         return empty_result(Status::kUnknown, layer);
       }
       const float qx = x - grid::cell_centre(index.x, width);
       const float qy = y - grid::cell_centre(index.y, width);
-      const CcmSurface surface = ccm_surface(cell);
-      out.weight = cell.weight;
-      out.height_m = ccm_height_at(cell, surface, qx, qy);
-      out.slope_x = surface.slope_x;
-      out.slope_y = surface.slope_y;
-      out.inclination = ccm_inclination(surface);
-      out.normal_variance = surface.normal_variance;
-      out.elevation_variance = ccm_elevation_variance(cell, surface, qx, qy);
-      out.cell_class = cell_class;
+      out.weight = a.cell.weight;
+      out.height_m = ccm_height_at(a.cell, a.surface, qx, qy);
+      out.slope_x = a.surface.slope_x;
+      out.slope_y = a.surface.slope_y;
+      out.inclination = ccm_inclination(a.surface);
+      out.normal_variance = a.surface.normal_variance;
+      out.elevation_variance = ccm_elevation_variance(a.cell, a.surface, qx, qy);
+      out.cell_class = a.cell_class;
       return out;
     }
     if constexpr (Layers::kHasFine) {
       const FineCell& cell = layers_.fine.cell_unchecked(index);
-      const bool known = cell.weight >= params_.min_weight && cell.weight > 0.0F;
+      const bool known = fine_known(cell);
       if (require_known && !known) {
         return empty_result(Status::kUnknown, layer);
       }
@@ -94,7 +92,27 @@ class QueryView {
     return out;
   }
 
- private:
+  /// What an answer of a CCM layer takes from its (pooled) cell, whatever the point: the
+  /// class (classify_ccm with the layer's threshold) and the surface (eqs. 9, 11).
+  struct CcmAnswer {
+    CcmCell cell;
+    CcmSurface surface;
+    CellClass cell_class;
+  };
+  [[nodiscard]] CcmAnswer ccm_answer(int layer, const CcmCell& cell) const noexcept {
+    return CcmAnswer{cell, ccm_surface(cell), classify_ccm(cell, layers_.widths[layer], params_, thresholds_[layer])};
+  }
+
+  /// A piece-wise constant cell is known with at least min_weight (and some weight).
+  [[nodiscard]] bool fine_known(const FineCell& cell) const noexcept {
+    return cell.weight >= params_.min_weight && cell.weight > 0.0F;
+  }
+
+  [[nodiscard]] const Layers& layers() const noexcept { return layers_; }
+  [[nodiscard]] const StackParams& params() const noexcept { return params_; }
+  /// Normal-variance threshold of a layer (m^2). Precondition: 0 <= layer < kLayerCount.
+  [[nodiscard]] float threshold(int layer) const noexcept { return thresholds_[layer]; }
+
   /// Roughness filter of the piece-wise constant layer (the baseline of Section V-B): the
   /// cell is an obstacle if any known neighbour differs in height by more than the maximum
   /// inclination times their distance. It cannot tell slopes from steps.
@@ -121,6 +139,7 @@ class QueryView {
     }
   }
 
+ private:
   /// Replaces slope, normal variance and class of a constant-layer answer with those of the
   /// first CCM layer's pooled cell at (x, y), when that cell is known.
   void refine_with_ccm(float x, float y, QueryResult& answer) const noexcept {
