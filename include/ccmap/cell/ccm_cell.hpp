@@ -90,17 +90,26 @@ inline constexpr float kMinWeightLimit = 1.0e-3F;
 // Weight limiter, eqs. (6)-(7)
 // ---------------------------------------------------------------------------------------------
 
+namespace detail {
+/// Scales every co-moment S by `scale` (the caller sets the new weight W = scale * W): the
+/// variances S / W and the mean stay, the weight of future measurements relative to the cell
+/// grows by 1 / scale. The weight limiter (eq. 7) and the motion fading (map/detail/motion.hpp)
+/// both go through here, so a co-moment added to the cell is scaled by both.
+inline void ccm_scale_comoments(CcmCell& cell, float scale) noexcept {
+  cell.s_xx *= scale;
+  cell.s_yy *= scale;
+  cell.s_zz *= scale;
+  cell.s_xz *= scale;
+  cell.s_yz *= scale;
+}
+}  // namespace detail
+
 /// If W > W_l: S *= W_l / W (eq. 7), W = W_l (eq. 6). The variances S/W and the mean are
 /// unchanged; only the relative weight of future measurements is held at w / W_l.
 /// Precondition: weight_limit > 0 (checked by the public update functions).
 inline void ccm_apply_weight_limit(CcmCell& cell, float weight_limit) noexcept {
   if (cell.weight > weight_limit) {
-    const float scale = weight_limit / cell.weight;
-    cell.s_xx *= scale;
-    cell.s_yy *= scale;
-    cell.s_zz *= scale;
-    cell.s_xz *= scale;
-    cell.s_yz *= scale;
+    detail::ccm_scale_comoments(cell, weight_limit / cell.weight);
     cell.weight = weight_limit;
   }
 }

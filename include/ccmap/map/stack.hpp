@@ -5,6 +5,7 @@
 // cells and pool finer layers on demand (Section IV-F). Every layer is a statically sized ring
 // buffer inside this object: after init() nothing allocates, and every call is bounded:
 //   update_frame(_sensor)   O(points)                  move_to   O(cells that leave)
+//   move_to with a position uncertainty: + one pass over every cell
 //   query                   O(4^layers) cells, independent of map size and point count
 //   export_layer            O(side^2 * 4^layers)
 //
@@ -14,6 +15,7 @@
 //   map/detail/update_path.hpp  the per-point back half and the Kalman frame batches
 //   map/detail/pooling.hpp      pooling at query time
 //   map/detail/answers.hpp      answers, classes, the roughness filter baseline
+//   map/detail/motion.hpp       what an uncertain move does to the cells
 //
 // Positions are map-frame metres relative to the stack origin (see map/types.hpp).
 //
@@ -37,6 +39,7 @@
 #include "ccmap/map/detail/answers.hpp"
 #include "ccmap/map/detail/front.hpp"
 #include "ccmap/map/detail/layers.hpp"
+#include "ccmap/map/detail/motion.hpp"
 #include "ccmap/map/detail/pooling.hpp"
 #include "ccmap/map/detail/update_path.hpp"
 #include "ccmap/map/types.hpp"
@@ -135,6 +138,37 @@ class Stack {
       }
     }
     return Status::kOk;
+  }
+
+  /// The same move for a pose that is known only to `position_sigma_m` (m, 1-sigma, isotropic
+  /// in x and y): the odometry's uncertainty of the position change since the last move. After
+  /// the window move, every observed cell accounts for it (map/detail/motion.hpp): a CCM cell's
+  /// height-estimate variance at its mean grows by inclination^2 sigma^2 through a smaller
+  /// weight (its statistics scaled as the weight limiter scales them, never below min_weight:
+  /// new points then count more), a constant cell's height variance grows by gradient^2 sigma^2.
+  /// One pass over every cell (CADRE: 14,336); position_sigma_m = 0 is move_to(x, y) exactly.
+  /// Refused (counted, map unchanged): as move_to(x, y); a position_sigma_m that is not finite
+  /// (kNonFiniteInput), negative (kInvalidArgument) or above kMaxAbsCoordinateM (kOutOfRange).
+  [[nodiscard]] Status move_to(float x, float y, float position_sigma_m) noexcept {
+    if (!initialised_) {
+      return Status::kNotInitialised;
+    }
+    Status status = check_position(x, y);
+    if (status == Status::kOk) {
+      status = !std::isfinite(position_sigma_m) ? Status::kNonFiniteInput
+               : position_sigma_m < 0.0F        ? Status::kInvalidArgument
+               : position_sigma_m > kMaxAbsCoordinateM ? Status::kOutOfRange
+                                                       : Status::kOk;
+    }
+    if (status != Status::kOk) {
+      ++rejected_moves_;
+      return status;
+    }
+    status = move_to(x, y);
+    if (status == Status::kOk && position_sigma_m > 0.0F) {
+      detail::forget_for_motion(layers_, params_, position_sigma_m * position_sigma_m);
+    }
+    return status;
   }
 
   /// Folds one frame of points given in the map frame. `sensor_origin` is the sensor's
