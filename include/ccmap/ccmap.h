@@ -169,6 +169,13 @@ typedef struct ccmap_frame_counters {
  * out-of-range position. */
 ccmap_status ccmap_move_to(ccmap_map* map, float x, float y);
 
+/* The same move for a pose known only to position_sigma_m (m, 1-sigma, isotropic): the
+ * odometry's uncertainty of the position change since the last move. Every observed cell then
+ * forgets in proportion to inclination^2 sigma^2 (Stack::move_to(x, y, sigma); one pass over
+ * every cell). 0 is ccmap_move_to exactly. Refused (counted): as ccmap_move_to, and a non-finite
+ * (CCMAP_NON_FINITE_INPUT), negative (CCMAP_INVALID_ARGUMENT) or > 1e5 (CCMAP_OUT_OF_RANGE) sigma. */
+ccmap_status ccmap_move_to_uncertain(ccmap_map* map, float x, float y, float position_sigma_m);
+
 /* Folds n points, xyz[3*i .. 3*i+2] in the map frame (m). weights may be NULL (the noise
  * model's weight) or n weights, one per point (the w_t of eq. (1)); a weight outside
  * (0, 1e6] refuses its point. sensor_origin_xyz: the sensor position in the map frame (3 floats).
@@ -245,6 +252,129 @@ typedef struct ccmap_cell_record {
  * written) if capacity < ccmap_layer_capacity(map, layer). */
 ccmap_status ccmap_export_layer(const ccmap_map* map, int32_t layer, ccmap_cell_record* out, size_t capacity,
                                 size_t* written);
+
+/* ---- planner queries (include/ccmap/map/footprint.hpp, path_query.hpp, costmap.hpp) -------- */
+#define CCMAP_MAX_FOOTPRINT_CELLS 4096u      /* bounding box of a footprint, in finest-layer cells */
+#define CCMAP_DEFAULT_MAX_UNKNOWN_SHARE 0.1f
+#define CCMAP_MAX_PATH_SAMPLES 256u
+#define CCMAP_MAX_PATH_VERTICES 256u
+#define CCMAP_MAX_COSTMAP_SIDE 1024u
+#define CCMAP_MAX_INFLATION_PIXELS 32
+#define CCMAP_COST_FREE 0u
+#define CCMAP_COST_MAX_TRAVERSABLE 252u
+#define CCMAP_COST_INSCRIBED 253u
+#define CCMAP_COST_LETHAL 254u
+#define CCMAP_COST_UNKNOWN 255u
+
+/* An oriented rectangle (map frame): centre, direction of the length axis (any length >= 1e-6;
+ * build it from cos/sin of the yaw), full extents (m). */
+typedef struct ccmap_footprint {
+  float x;
+  float y;
+  float heading_x;
+  float heading_y;
+  float length_m;
+  float width_m;
+} ccmap_footprint;
+
+/* Answer of a footprint query (ccmap::FootprintResult). */
+typedef struct ccmap_footprint_result {
+  int32_t status;          /* CCMAP_OK, CCMAP_OUTSIDE_MAP (no layer holds any part), or the refusal */
+  int32_t worst_class;     /* ccmap_cell_class of the known parts (obstacle > steep > traversable);
+                              CCMAP_CLASS_UNKNOWN if none is known */
+  float unknown_share;     /* [0, 1] of the area */
+  float max_step_m;        /* height range over the known parts, or 4 sigma_s relief if larger */
+  float max_inclination;   /* dz/dxy */
+  float min_height_m;
+  float max_height_m;
+  float area_m2;
+  int32_t worst_layer;     /* answering layer of the worst part, -1 if none is known */
+  int32_t worst_index_x;   /* its cell (global index) */
+  int32_t worst_index_y;
+  float worst_x;           /* that cell's centre (m) */
+  float worst_y;
+  uint32_t cells_visited;  /* map cells read */
+} ccmap_footprint_result;
+
+/* Every part of the rectangle answered by the finest layer that knows it, as ccmap_query would
+ * answer its points. Returns out->status, or CCMAP_INVALID_ARGUMENT (NULL pointers, bad handle).
+ * Refusals: CCMAP_NON_FINITE_INPUT, CCMAP_INVALID_ARGUMENT (zero heading, extents not > 0),
+ * CCMAP_OUT_OF_RANGE (centre beyond 1e5 m; bounding box over CCMAP_MAX_FOOTPRINT_CELLS cells). */
+ccmap_status ccmap_query_footprint(const ccmap_map* map, const ccmap_footprint* footprint, ccmap_footprint_result* out);
+
+/* The verdict: obstacle/steep if a known part is; else unknown if unknown_share > max_unknown_share
+ * or nothing is known; else traversable (ccmap_cell_class). Unknown for NULL or a refused result. */
+int32_t ccmap_footprint_class(const ccmap_footprint_result* result, float max_unknown_share);
+
+typedef struct ccmap_path_pose {
+  float x;
+  float y;
+  float heading_x; /* unit direction of travel */
+  float heading_y;
+} ccmap_path_pose;
+
+/* The body swept along a path: length along the travel, width, distance between poses (all > 0),
+ * and the unknown share above which a footprint counts as unknown ([0, 1]). */
+typedef struct ccmap_path_sweep {
+  float length_m;
+  float width_m;
+  float step_m;
+  float max_unknown_share;
+} ccmap_path_sweep;
+
+typedef struct ccmap_path_result {
+  int32_t status;
+  int32_t hazard_found;            /* 1: a pose's footprint is obstacle or steep */
+  float first_hazard_m;            /* its distance along the path; 0 if none */
+  ccmap_path_pose hazard_pose;
+  ccmap_footprint_result hazard;
+  int32_t unknown_found;           /* 1: a pose's footprint has more unknown area than allowed */
+  float first_unknown_m;
+  ccmap_path_pose unknown_pose;
+  ccmap_footprint_result unknown;
+  float path_length_m;
+  float checked_m;                 /* distance of the last pose evaluated */
+  uint32_t samples;                /* poses evaluated (step apart from 0, and the end) */
+  uint32_t cells_visited;
+} ccmap_path_result;
+
+/* The body at poses every sweep->step_m along the polyline xy[2*i], xy[2*i+1] (count 2 ..
+ * CCMAP_MAX_PATH_VERTICES points, heading along each segment), until both a hazard and an unknown
+ * footprint are found. Returns out->status or CCMAP_INVALID_ARGUMENT; CCMAP_OUT_OF_RANGE for more
+ * than CCMAP_MAX_PATH_SAMPLES poses. */
+ccmap_status ccmap_query_path(const ccmap_map* map, const float* xy, size_t count, const ccmap_path_sweep* sweep,
+                              ccmap_path_result* out);
+/* The same along a circular arc from `start` (curvature 1/m, > 0 left; |curvature| length_m <= 2 pi). */
+ccmap_status ccmap_query_arc(const ccmap_map* map, const ccmap_path_pose* start, float curvature, float length_m,
+                             const ccmap_path_sweep* sweep, ccmap_path_result* out);
+
+/* A cost raster of side x side pixels of resolution_m around (centre_x, centre_y): pixel
+ * (ix, iy) at cost[ix + side * iy], row 0 at the lowest y (costmap_2d). inflation_radius_m 0: none. */
+typedef struct ccmap_costmap_spec {
+  float centre_x;
+  float centre_y;
+  float resolution_m;
+  uint32_t side;
+  float inflation_radius_m;
+} ccmap_costmap_spec;
+
+typedef struct ccmap_costmap_stats {
+  uint32_t free;       /* cost 0 */
+  uint32_t cost;       /* 1 .. 252 */
+  uint32_t inscribed;  /* 253 */
+  uint32_t lethal;     /* 254 */
+  uint32_t unknown;    /* 255 */
+  uint32_t cells_visited;
+} ccmap_costmap_stats;
+
+/* Fills cost[0 .. side^2) in the costmap_2d convention (0 free .. 252, 253 inscribed, 254 lethal,
+ * 255 unknown; the worst over each pixel's square; include/ccmap/map/costmap.hpp has the cost
+ * function). stats may be NULL. Refused, buffer untouched: CCMAP_INVALID_ARGUMENT (NULL, side 0 or
+ * above CCMAP_MAX_COSTMAP_SIDE, resolution not > 0, negative radius), CCMAP_BUFFER_TOO_SMALL,
+ * CCMAP_NON_FINITE_INPUT, CCMAP_OUT_OF_RANGE (raster beyond 1e5 m, radius above
+ * CCMAP_MAX_INFLATION_PIXELS pixels), CCMAP_NOT_INITIALISED. */
+ccmap_status ccmap_fill_costmap(const ccmap_map* map, const ccmap_costmap_spec* spec, uint8_t* cost, size_t capacity,
+                                ccmap_costmap_stats* stats);
 
 /* ---- counters ------------------------------------------------------------------------------- */
 typedef struct ccmap_counters {

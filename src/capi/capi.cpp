@@ -11,6 +11,9 @@
 #include <type_traits>
 
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/platform/platform.hpp"
@@ -50,6 +53,22 @@ static_assert(std::is_standard_layout<PointXYZ>::value && sizeof(PointXYZ) == 3U
 // place, record by record (same size, so record i occupies the same bytes in both forms).
 static_assert(sizeof(ccmap_cell_record) == sizeof(CellRecord) && alignof(ccmap_cell_record) >= alignof(CellRecord),
               "ccmap_cell_record and CellRecord must have the same size");
+
+// Planner queries: the C limits and costs are the C++ ones; path points are read as PathPoint.
+static_assert(CCMAP_MAX_FOOTPRINT_CELLS == kMaxFootprintCells, "CCMAP_MAX_FOOTPRINT_CELLS");
+static_assert(!(CCMAP_DEFAULT_MAX_UNKNOWN_SHARE < kDefaultMaxUnknownShare) &&
+                  !(CCMAP_DEFAULT_MAX_UNKNOWN_SHARE > kDefaultMaxUnknownShare),
+              "CCMAP_DEFAULT_MAX_UNKNOWN_SHARE");
+static_assert(CCMAP_MAX_PATH_SAMPLES == kMaxPathSamples && CCMAP_MAX_PATH_VERTICES == kMaxPathVertices, "path limits");
+static_assert(CCMAP_MAX_COSTMAP_SIDE == kMaxCostmapSide && CCMAP_MAX_INFLATION_PIXELS == kMaxInflationPixels,
+              "costmap limits");
+static_assert(CCMAP_COST_FREE == kCostFree && CCMAP_COST_MAX_TRAVERSABLE == kCostMaxTraversable &&
+                  CCMAP_COST_INSCRIBED == kCostInscribed && CCMAP_COST_LETHAL == kCostLethal &&
+                  CCMAP_COST_UNKNOWN == kCostUnknown,
+              "costmap values");
+static_assert(std::is_standard_layout<PathPoint>::value && sizeof(PathPoint) == 2U * sizeof(float) &&
+                  alignof(PathPoint) == alignof(float) && offsetof(PathPoint, y) == sizeof(float),
+              "PathPoint must be two packed floats");
 
 // ---- storage ----
 constexpr std::uint32_t kHandleMagic = 0x43434D48U;  // "CCMH"
@@ -244,6 +263,59 @@ void result_to_c(const QueryResult& q, ccmap_query_result* out) noexcept {
   out->cell_class = static_cast<std::int32_t>(q.cell_class);
 }
 
+ccmap_footprint_result footprint_to_c(const FootprintResult& r) noexcept {
+  ccmap_footprint_result c{};
+  c.status = static_cast<std::int32_t>(r.status);
+  c.worst_class = static_cast<std::int32_t>(r.worst_class);
+  c.unknown_share = r.unknown_share;
+  c.max_step_m = r.max_step_m;
+  c.max_inclination = r.max_inclination;
+  c.min_height_m = r.min_height_m;
+  c.max_height_m = r.max_height_m;
+  c.area_m2 = r.area_m2;
+  c.worst_layer = r.worst_layer;
+  c.worst_index_x = r.worst_index.x;
+  c.worst_index_y = r.worst_index.y;
+  c.worst_x = r.worst_x;
+  c.worst_y = r.worst_y;
+  c.cells_visited = r.cells_visited;
+  return c;
+}
+
+FootprintResult footprint_from_c(const ccmap_footprint_result& c) noexcept {
+  FootprintResult r{};
+  r.status = c.status >= 0 && c.status <= static_cast<std::int32_t>(CCMAP_VERSION_MISMATCH) ? static_cast<Status>(c.status)
+                                                                                           : Status::kInvalidArgument;
+  r.worst_class = c.worst_class >= CCMAP_CLASS_UNKNOWN && c.worst_class <= CCMAP_CLASS_STEEP
+                      ? static_cast<CellClass>(c.worst_class)
+                      : CellClass::kUnknown;
+  r.unknown_share = c.unknown_share;
+  return r;
+}
+
+ccmap_path_pose pose_to_c(const PathPose& p) noexcept { return ccmap_path_pose{p.x, p.y, p.heading_x, p.heading_y}; }
+
+void path_to_c(const PathResult& r, ccmap_path_result* out) noexcept {
+  *out = ccmap_path_result{};
+  out->status = static_cast<std::int32_t>(r.status);
+  out->hazard_found = r.hazard_found ? 1 : 0;
+  out->first_hazard_m = r.first_hazard_m;
+  out->hazard_pose = pose_to_c(r.hazard_pose);
+  out->hazard = footprint_to_c(r.hazard);
+  out->unknown_found = r.unknown_found ? 1 : 0;
+  out->first_unknown_m = r.first_unknown_m;
+  out->unknown_pose = pose_to_c(r.unknown_pose);
+  out->unknown = footprint_to_c(r.unknown);
+  out->path_length_m = r.path_length_m;
+  out->checked_m = r.checked_m;
+  out->samples = r.samples;
+  out->cells_visited = r.cells_visited;
+}
+
+PathSweep sweep_from_c(const ccmap_path_sweep& s) noexcept {
+  return PathSweep{s.length_m, s.width_m, s.step_m, s.max_unknown_share};
+}
+
 void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
   *out = ccmap_frame_counters{f.received, f.used, f.rejected_non_finite, f.rejected_out_of_range,
                               f.rejected_weight, f.outside_map, f.too_noisy};
@@ -330,6 +402,11 @@ ccmap_status ccmap_move_to(ccmap_map* map, float x, float y) {
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [x, y](auto& stack) { return ccmap::to_c(stack.move_to(x, y)); });
 }
 
+ccmap_status ccmap_move_to_uncertain(ccmap_map* map, float x, float y, float position_sigma_m) {
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT,
+                         [=](auto& stack) { return ccmap::to_c(stack.move_to(x, y, position_sigma_m)); });
+}
+
 ccmap_status ccmap_update_frame(ccmap_map* map, const float* xyz, const float* weights, size_t n,
                                 const float* sensor_origin_xyz, ccmap_frame_counters* counters) {
   if (sensor_origin_xyz == nullptr) {
@@ -390,6 +467,74 @@ ccmap_status ccmap_query_layer(const ccmap_map* map, int32_t layer, float x, flo
     const ccmap::QueryResult q = stack.query_layer(layer, x, y);
     ccmap::result_to_c(q, out);
     return ccmap::to_c(q.status);
+  });
+}
+
+ccmap_status ccmap_query_footprint(const ccmap_map* map, const ccmap_footprint* footprint, ccmap_footprint_result* out) {
+  if (footprint == nullptr || out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::Footprint f{footprint->x,        footprint->y,        footprint->heading_x,
+                           footprint->heading_y, footprint->length_m, footprint->width_m};
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::FootprintResult r = ccmap::query_footprint(stack, f);
+    *out = ccmap::footprint_to_c(r);
+    return ccmap::to_c(r.status);
+  });
+}
+
+int32_t ccmap_footprint_class(const ccmap_footprint_result* result, float max_unknown_share) {
+  if (result == nullptr) {
+    return CCMAP_CLASS_UNKNOWN;
+  }
+  return static_cast<std::int32_t>(ccmap::footprint_class(ccmap::footprint_from_c(*result), max_unknown_share));
+}
+
+ccmap_status ccmap_query_path(const ccmap_map* map, const float* xy, size_t count, const ccmap_path_sweep* sweep,
+                              ccmap_path_result* out) {
+  if (sweep == nullptr || out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  // NULL xy is refused by the query itself (kInvalidArgument, in out->status).
+  const auto* points = reinterpret_cast<const ccmap::PathPoint*>(xy);
+  const ccmap::PathSweep s = ccmap::sweep_from_c(*sweep);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::PathResult r = ccmap::query_path(stack, points, count, s);
+    ccmap::path_to_c(r, out);
+    return ccmap::to_c(r.status);
+  });
+}
+
+ccmap_status ccmap_query_arc(const ccmap_map* map, const ccmap_path_pose* start, float curvature, float length_m,
+                             const ccmap_path_sweep* sweep, ccmap_path_result* out) {
+  if (start == nullptr || sweep == nullptr || out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::PathPose p{start->x, start->y, start->heading_x, start->heading_y};
+  const ccmap::PathSweep s = ccmap::sweep_from_c(*sweep);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::PathResult r = ccmap::query_arc(stack, p, curvature, length_m, s);
+    ccmap::path_to_c(r, out);
+    return ccmap::to_c(r.status);
+  });
+}
+
+ccmap_status ccmap_fill_costmap(const ccmap_map* map, const ccmap_costmap_spec* spec, uint8_t* cost, size_t capacity,
+                                ccmap_costmap_stats* stats) {
+  if (stats != nullptr) {
+    *stats = ccmap_costmap_stats{};
+  }
+  if (spec == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::CostmapSpec s{spec->centre_x, spec->centre_y, spec->resolution_m, spec->side, spec->inflation_radius_m};
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    ccmap::CostmapStats st{};
+    const Status status = ccmap::fill_costmap(stack, s, cost, capacity, &st);
+    if (stats != nullptr) {
+      *stats = ccmap_costmap_stats{st.free, st.cost, st.inscribed, st.lethal, st.unknown, st.cells_visited};
+    }
+    return ccmap::to_c(status);
   });
 }
 

@@ -1,6 +1,7 @@
 /* The C API from plain C99: placement in static storage, init, frames (with and without
- * weights, map and sensor frame), queries, export, counters, snapshots, every preset and the
- * refusal of NULL pointers, foreign handles and bad enum values. Exits non-zero on failure. */
+ * weights, map and sensor frame), queries, export, counters, snapshots, every preset, the planner
+ * queries (footprint, path, arc, cost raster), uncertain moves, and the refusal of NULL pointers,
+ * foreign handles and bad enum values. Exits non-zero on failure. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -291,6 +292,132 @@ static void test_snapshots(ccmap_map* map) {
   CHECK_STATUS(ccmap_load_snapshot(ccm, g_snapshot, written), CCMAP_VERSION_MISMATCH);
 }
 
+static uint8_t g_cost[60 * 60];
+
+/* The plane of make_plane with a 15 cm box on [0.42, 0.62] x [-0.21, 0.19]: its edges inside
+ * 8 cm cells (a step exactly on a cell edge is no cell's normal variance). */
+static size_t make_box_plane(void) {
+  const size_t n = make_plane();
+  size_t i;
+  for (i = 0; i < n; ++i) {
+    const float x = g_xyz[3 * i], y = g_xyz[3 * i + 1];
+    if (x >= 0.42f && x <= 0.62f && y >= -0.21f && y <= 0.19f) g_xyz[3 * i + 2] += 0.15f;
+  }
+  return n;
+}
+
+static void test_planner_queries(ccmap_map* map) {
+  const size_t n = make_box_plane();
+  const float sensor[3] = {0.0f, 0.0f, 0.5f};
+  const ccmap_footprint flat = {-0.5f, 0.01f, 1.0f, 0.0f, 0.6f, 0.4f};
+  const ccmap_footprint on_box = {0.52f, -0.01f, 1.0f, 0.0f, 0.6f, 0.4f};
+  const ccmap_footprint off_map = {40.0f, 0.0f, 1.0f, 0.0f, 0.6f, 0.4f};
+  ccmap_footprint bad = flat;
+  const float path[4] = {-0.8f, 0.0f, 0.8f, 0.0f};
+  const ccmap_path_pose start = {-0.8f, 0.0f, 1.0f, 0.0f};
+  const ccmap_path_sweep sweep = {0.6f, 0.4f, 0.02f, CCMAP_DEFAULT_MAX_UNKNOWN_SHARE};
+  ccmap_path_sweep bad_sweep = sweep;
+  ccmap_footprint_result f;
+  ccmap_path_result pr;
+  ccmap_costmap_spec spec;
+  ccmap_costmap_stats stats;
+  ccmap_frame_counters c;
+  ccmap_params p = precise_lidar_params(CCMAP_PRESET_CADRE);
+  CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_update_frame(map, g_xyz, NULL, n, sensor, &c), CCMAP_OK);
+
+  /* Footprints: flat ground (the plane's range over 0.6 x 0.4: 0.1 * 0.6 + 0.05 * 0.4 = 0.08, give
+   * or take a 4 cm constant cell's step), the box, off the map. */
+  CHECK_STATUS(ccmap_query_footprint(map, &flat, &f), CCMAP_OK);
+  CHECK(f.worst_class == CCMAP_CLASS_TRAVERSABLE);
+  CHECK_NEAR(f.unknown_share, 0.0, 1e-6);
+  CHECK_NEAR(f.max_step_m, 0.08, 0.012);
+  CHECK_NEAR(f.max_inclination, 0.1118, 0.01);
+  CHECK_NEAR(f.area_m2, 0.24, 1e-4);
+  CHECK(f.cells_visited > 0u);
+  CHECK(ccmap_footprint_class(&f, CCMAP_DEFAULT_MAX_UNKNOWN_SHARE) == CCMAP_CLASS_TRAVERSABLE);
+  CHECK_STATUS(ccmap_query_footprint(map, &on_box, &f), CCMAP_OK);
+  CHECK(f.worst_class == CCMAP_CLASS_OBSTACLE);
+  CHECK(f.max_step_m > 0.12f);
+  CHECK(f.worst_x > 0.3f && f.worst_x < 0.7f);
+  CHECK(ccmap_footprint_class(&f, CCMAP_DEFAULT_MAX_UNKNOWN_SHARE) == CCMAP_CLASS_OBSTACLE);
+  CHECK_STATUS(ccmap_query_footprint(map, &off_map, &f), CCMAP_OUTSIDE_MAP);
+  CHECK_NEAR(f.unknown_share, 1.0, 1e-6);
+  CHECK(ccmap_footprint_class(&f, 1.0f) == CCMAP_CLASS_UNKNOWN);
+  CHECK(ccmap_footprint_class(NULL, 1.0f) == CCMAP_CLASS_UNKNOWN);
+  CHECK_STATUS(ccmap_query_footprint(map, NULL, &f), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_footprint(map, &flat, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_footprint(NULL, &flat, &f), CCMAP_INVALID_ARGUMENT);
+  bad.x = (float)NAN;
+  CHECK_STATUS(ccmap_query_footprint(map, &bad, &f), CCMAP_NON_FINITE_INPUT);
+  CHECK(f.worst_layer == -1);
+  bad = flat;
+  bad.heading_x = 0.0f;
+  CHECK_STATUS(ccmap_query_footprint(map, &bad, &f), CCMAP_INVALID_ARGUMENT);
+  bad = flat;
+  bad.length_m = 3.0f;
+  bad.width_m = 3.0f;
+  CHECK_STATUS(ccmap_query_footprint(map, &bad, &f), CCMAP_OUT_OF_RANGE);
+
+  /* Path at the box: the body's front (0.3 m ahead) reaches the 8 cm cell [0.40, 0.48] that
+   * holds the box edge at 0.9 m (give or take a step). */
+  CHECK_STATUS(ccmap_query_path(map, path, 2, &sweep, &pr), CCMAP_OK);
+  CHECK(pr.hazard_found == 1);
+  CHECK(pr.first_hazard_m > 0.8f && pr.first_hazard_m < 1.0f);
+  CHECK_NEAR(pr.hazard_pose.x, -0.8 + pr.first_hazard_m, 1e-5);
+  CHECK(pr.hazard.worst_class == CCMAP_CLASS_OBSTACLE || pr.hazard.worst_class == CCMAP_CLASS_STEEP);
+  CHECK_NEAR(pr.path_length_m, 1.6, 1e-6);
+  CHECK(pr.samples >= 2u && pr.samples <= 81u);
+  CHECK_STATUS(ccmap_query_arc(map, &start, 0.0f, 1.6f, &sweep, &pr), CCMAP_OK);
+  CHECK(pr.hazard_found == 1);
+  CHECK(pr.first_hazard_m > 0.8f && pr.first_hazard_m < 1.0f);
+  CHECK_STATUS(ccmap_query_arc(map, &start, 10.0f, 1.0f, &sweep, &pr), CCMAP_OUT_OF_RANGE);
+  CHECK_STATUS(ccmap_query_path(map, NULL, 2, &sweep, &pr), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_path(map, path, 1, &sweep, &pr), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_path(map, path, 2, NULL, &pr), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_arc(map, NULL, 0.0f, 1.0f, &sweep, &pr), CCMAP_INVALID_ARGUMENT);
+  bad_sweep.step_m = 0.001f;
+  CHECK_STATUS(ccmap_query_path(map, path, 2, &bad_sweep, &pr), CCMAP_OUT_OF_RANGE);
+  CHECK(pr.samples == 0u);
+
+  /* Cost raster: 60 x 60 at 4 cm over [-1.2, 1.2]^2 (on the cell grid): the box lethal, the plane
+   * costed, the unobserved rim unknown; inflated by 12 cm around the box. */
+  spec.centre_x = 0.0f;
+  spec.centre_y = 0.0f;
+  spec.resolution_m = 0.04f;
+  spec.side = 60u;
+  spec.inflation_radius_m = 0.0f;
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, &stats), CCMAP_OK);
+  CHECK(g_cost[(size_t)(41 + 60 * 30)] == CCMAP_COST_LETHAL);  /* (0.46, 0.02): the box edge's cell */
+  CHECK(g_cost[(size_t)(12 + 60 * 30)] <= CCMAP_COST_MAX_TRAVERSABLE); /* (-0.7, 0.02) */
+  CHECK(g_cost[(size_t)(12 + 60 * 30)] > 0u);  /* a 6 % slope costs something */
+  CHECK(g_cost[(size_t)(2 + 60 * 30)] == CCMAP_COST_UNKNOWN);  /* (-1.1, 0.02): never observed */
+  CHECK(stats.lethal > 10u && stats.unknown > 100u);
+  CHECK(stats.free + stats.cost + stats.inscribed + stats.lethal + stats.unknown == 3600u);
+  CHECK(stats.inscribed == 0u);
+  spec.inflation_radius_m = 0.12f;
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, &stats), CCMAP_OK);
+  CHECK(stats.inscribed > 10u);
+  CHECK(g_cost[(size_t)(41 + 60 * 30)] == CCMAP_COST_LETHAL);
+  CHECK(g_cost[(size_t)(38 + 60 * 30)] == CCMAP_COST_INSCRIBED);  /* 12 cm before the edge's cell */
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost - 1, &stats), CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, NULL, sizeof g_cost, &stats), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_fill_costmap(map, NULL, g_cost, sizeof g_cost, &stats), CCMAP_INVALID_ARGUMENT);
+  spec.resolution_m = (float)NAN;
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, NULL), CCMAP_NON_FINITE_INPUT);
+  spec.resolution_m = 0.04f;
+  spec.side = CCMAP_MAX_COSTMAP_SIDE + 1u;
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, NULL), CCMAP_INVALID_ARGUMENT);
+
+  /* Uncertain moves. */
+  CHECK_STATUS(ccmap_move_to_uncertain(map, 0.05f, 0.0f, 0.01f), CCMAP_OK);
+  CHECK_STATUS(ccmap_move_to_uncertain(map, 0.05f, 0.0f, (float)NAN), CCMAP_NON_FINITE_INPUT);
+  CHECK_STATUS(ccmap_move_to_uncertain(map, 0.05f, 0.0f, -1.0f), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_move_to_uncertain(NULL, 0.05f, 0.0f, 0.01f), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_footprint(map, &on_box, &f), CCMAP_OK);
+  CHECK(f.worst_class == CCMAP_CLASS_OBSTACLE); /* forgetting keeps classes */
+}
+
 static void test_single_layer_presets(void) {
   void* storages[3];
   size_t sizes[3];
@@ -335,6 +462,7 @@ int main(void) {
   test_params(map);
   test_frames_queries_export(map);
   test_snapshots(map);
+  test_planner_queries(map);
   test_single_layer_presets();
 
   printf("ccmap C API: %d checks, %d failed\n", g_checks, g_failures);
