@@ -135,7 +135,7 @@ void check_against_point_queries(const Cadre& map, const Case& c) {
   const double ux = rect.ux, uy = rect.uy;
   const double edge = 0.0005;
   const std::vector<test::RectSample> samples =
-      test::rect_samples(map, rect.cx, rect.cy, ux, uy, c.L, c.W, 0.005, edge, 1e-5, 0.04, 2e-5);
+      test::rect_samples(map, rect.cx, rect.cy, ux, uy, c.L, c.W, 0.007, edge, 1e-5, 0.04, 2e-5);
   std::set<std::tuple<int, int, int>> sampled_cells;
   int unmatched = 0, wrong = 0;
   for (const test::RectSample& s : samples) {
@@ -181,7 +181,7 @@ void check_against_point_queries(const Cadre& map, const Case& c) {
 
   // Aggregates: the query against the reference of the interior grid samples.
   const std::vector<test::RectSample> grid =
-      test::rect_samples(map, rect.cx, rect.cy, ux, uy, c.L, c.W, 0.004, 1e9, 1e-5, 0.04, 0.0);
+      test::rect_samples(map, rect.cx, rect.cy, ux, uy, c.L, c.W, 0.005, 1e9, 1e-5, 0.04, 0.0);
   const Reference ref = reference_of(grid);
   const FootprintResult r = query_footprint(map, fp);
   ASSERT_TRUE(r.status == Status::kOk) << to_string(r.status);

@@ -159,7 +159,11 @@ class FootprintSink {
     if (rank > worst_rank_ || severity > worst_severity_) {
       worst_rank_ = rank;
       worst_severity_ = severity;
-      worst_ = a;
+      worst_class_ = a.cell_class;
+      worst_layer_ = a.layer;
+      worst_index_ = a.index;
+      worst_x_ = a.centre_x;
+      worst_y_ = a.centre_y;
     }
   }
 
@@ -172,17 +176,17 @@ class FootprintSink {
     if (!known_) {
       return r;
     }
-    r.worst_class = worst_.cell_class;
+    r.worst_class = worst_class_;
     r.min_height_m = min_height_;
     r.max_height_m = max_height_;
     const float range = max_height_ - min_height_;
     const float relief = kReliefPerNormalSigma * std::sqrt(max_normal_variance_);
     r.max_step_m = relief > range ? relief : range;
     r.max_inclination = max_inclination_;
-    r.worst_layer = worst_.layer;
-    r.worst_index = worst_.index;
-    r.worst_x = worst_.centre_x;
-    r.worst_y = worst_.centre_y;
+    r.worst_layer = worst_layer_;
+    r.worst_index = worst_index_;
+    r.worst_x = worst_x_;
+    r.worst_y = worst_y_;
     return r;
   }
 
@@ -199,7 +203,11 @@ class FootprintSink {
   float max_inclination_ = 0.0F;
   int worst_rank_ = 0;
   float worst_severity_ = -1.0F;
-  RegionAnswer worst_{};
+  CellClass worst_class_ = CellClass::kUnknown;
+  std::int32_t worst_layer_ = -1;
+  CellIndex worst_index_{0, 0};
+  float worst_x_ = 0.0F;
+  float worst_y_ = 0.0F;
 };
 
 /// The footprint query over an already validated rectangle (the path query samples through it).

@@ -6,7 +6,7 @@
 // Integrators need not read it.
 //
 // How: a depth-first walk of the layers' quadtree over the rectangle, from the coarsest layer's
-// cells down. A cell that no finer window overlaps is a leaf: the part of it inside the
+// cells down (an explicit stack, at most kLayerCount deep). A cell that no finer window overlaps is a leaf: the part of it inside the
 // rectangle (the whole square, or the square clipped to a convex polygon) is one piece, and its
 // answer is the first known cell on the path from the leaf up (layers whose window does not
 // hold it skipped). Windows start on even indices, so a cell of layer k is either inside or
@@ -19,7 +19,7 @@
 // leaf on the rectangle's boundary) and cell reads per answer: 1 for a constant cell (+ 9 for
 // the roughness filter when the first CCM layer does not know it), the pooling reads of a CCM
 // cell (detail::pooled: up to 4^k cells below a cell of stack layer k). cells_read() counts
-// every read. The recursion is at most kLayerCount deep.
+// every read. Pooling recurses at most kLayerCount deep (detail::pooled).
 #pragma once
 
 #include <cmath>
@@ -43,19 +43,17 @@ struct PlannerAccess {
 };
 
 /// The answer of a map cell to every point of a piece inside it (what Stack::query answers
-/// there, less the point-dependent height).
+/// there, less the point-dependent height). Compact (56 bytes): the walk keeps one per layer.
 struct RegionAnswer {
+  std::int8_t layer;         ///< answering layer; the finest holding the piece if none knows it; -1 if none holds it
+  std::int8_t class_layer;   ///< layer whose cell gave class, slopes and normal variance
   bool known;                ///< false: no layer knows the piece (or none holds it)
-  std::int32_t layer;        ///< answering layer; the finest holding the piece if none knows it; -1 if none holds it
-  std::int32_t class_layer;  ///< layer whose cell gave class, slopes and normal variance
-  CellIndex index;           ///< answering cell (global index in `layer`)
   CellClass cell_class;      ///< kUnknown iff !known
+  CellIndex index;           ///< answering cell (global index in `layer`)
   float slope_x;             ///< as QueryResult
   float slope_y;
   float inclination;
   float normal_variance;
-  float weight;
-  float cell_width;          ///< of the answering layer (m)
   // Height at map point (x, y) of the piece: mean_z + height_slope_x * ((x - centre_x) - mean_x)
   //                                              + height_slope_y * ((y - centre_y) - mean_y),
   // eq. (10) for a CCM answer; a constant cell's height (slopes 0) for a constant-layer answer.
@@ -67,6 +65,7 @@ struct RegionAnswer {
   float height_slope_x;
   float height_slope_y;
 };
+static_assert(kMaxLayers <= 127, "layers fit int8");
 
 /// One part of the rectangle inside one leaf cell.
 struct RegionPiece {
@@ -110,7 +109,7 @@ class RegionWalk {
     const auto y1 = static_cast<std::int32_t>(std::floor((rect.cy + rect.half_extent_y) * inv));
     for (std::int32_t iy = y0; iy <= y1; ++iy) {
       for (std::int32_t ix = x0; ix <= x1; ++ix) {
-        visit(top, CellIndex{ix, iy}, false, sink);
+        walk_tree(top, CellIndex{ix, iy}, sink);
       }
     }
   }
@@ -121,28 +120,65 @@ class RegionWalk {
   [[nodiscard]] std::uint32_t nodes_visited() const noexcept { return nodes_; }
 
  private:
+  /// Depth-first over the quadtree below top-layer cell `root`, children in the order
+  /// (0,0) (1,0) (0,1) (1,1). An explicit stack of at most kLayerCount entries instead of
+  /// recursion: the walk's own stack use does not grow with the depth.
   template <typename Sink>
-  void visit(int k, CellIndex c, bool inside, Sink& sink) noexcept {
-    ++nodes_;
-    const float w = layers_.widths[k];
-    const float half = 0.5F * w;
-    const float dx = grid::cell_centre(c.x, w) - rect_.cx;
-    const float dy = grid::cell_centre(c.y, w) - rect_.cy;
-    const Overlap overlap = inside ? Overlap::kInside : square_overlap(rect_, dx, dy, half);
-    if (overlap == Overlap::kNone) {
-      return;
-    }
-    path_[k] = c;
-    answered_[k] = false;
-    if (k > 0 && finer_window_overlaps(k, c)) {
-      const bool all_inside = overlap == Overlap::kInside;
-      for (int i = 0; i < 4; ++i) {
-        visit(k - 1, CellIndex{2 * c.x + (i & 1), 2 * c.y + (i >> 1)}, all_inside, sink);
+  void walk_tree(int top, CellIndex root, Sink& sink) noexcept {
+    struct Node {
+      CellIndex cell;
+      std::int8_t layer;
+      std::int8_t next_child;  ///< -1: not yet entered; then the next child to push (4: done)
+      bool inside;             ///< known to lie wholly inside the rectangle
+      bool children_inside;
+    };
+    Node stack[Layers::kLayerSlots];
+    int depth = 0;
+    stack[0] = Node{root, static_cast<std::int8_t>(top), -1, false, false};
+    while (depth >= 0) {
+      Node& n = stack[depth];
+      if (n.next_child < 0) {
+        n.next_child = 0;
+        ++nodes_;
+        const int k = n.layer;
+        const float w = layers_.widths[k];
+        const float half = 0.5F * w;
+        const float dx = grid::cell_centre(n.cell.x, w) - rect_.cx;
+        const float dy = grid::cell_centre(n.cell.y, w) - rect_.cy;
+        const Overlap overlap = n.inside ? Overlap::kInside : square_overlap(rect_, dx, dy, half);
+        if (overlap == Overlap::kNone) {
+          --depth;
+          continue;
+        }
+        path_[k] = n.cell;
+        answered_[k] = false;
+        if (k == 0 || !finer_window_overlaps(k, n.cell)) {
+          leaf(k, dx, dy, half, overlap == Overlap::kPartial, sink);
+          --depth;
+          continue;
+        }
+        n.children_inside = overlap == Overlap::kInside;
       }
-      return;
+      // A node of layer k sits at depth top - k and layer-0 nodes are leaves, so depth + 1 <
+      // kLayerCount here; the second test only states it to the compiler.
+      if (n.next_child == 4 || depth + 1 >= static_cast<int>(Layers::kLayerSlots)) {
+        --depth;
+        continue;
+      }
+      const int i = n.next_child++;
+      stack[depth + 1] = Node{CellIndex{2 * n.cell.x + (i & 1), 2 * n.cell.y + (i >> 1)},
+                              static_cast<std::int8_t>(n.layer - 1), -1, n.children_inside, false};
+      ++depth;
     }
+  }
+
+  /// One piece: the leaf square (clipped when partial) and its answer. Not inlined into the walk,
+  /// so that the clip's and pooling's locals do not enlarge the walk's frame.
+  template <typename Sink>
+  [[gnu::noinline]] void leaf(int k, float dx, float dy, float half, bool partial, Sink& sink) noexcept {
+    const float w = 2.0F * half;
     RegionPiece piece{nullptr, dx, dy, half, w * w};
-    if (overlap == Overlap::kPartial) {
+    if (partial) {
       piece.area = clip_square(rect_, dx, dy, half, &polygon_);
       if (!(piece.area > min_piece_width_m_ * w)) {
         return;
@@ -178,9 +214,10 @@ class RegionWalk {
     return false;
   }
 
-  /// The answer of the leaf at layer k: the first known cell on its path up.
-  [[nodiscard]] RegionAnswer resolve(int k) noexcept {
-    RegionAnswer unknown = unknown_answer(-1);
+  /// The answer of the leaf at layer k: the first known cell on its path up; else the unknown
+  /// answer of the finest layer holding it (layer -1: none does).
+  [[nodiscard]] const RegionAnswer& resolve(int k) noexcept {
+    const RegionAnswer* unknown = nullptr;
     for (int j = k; j < kLayers; ++j) {
       if (!layers_.contains(j, path_[j])) {
         continue;
@@ -189,20 +226,21 @@ class RegionWalk {
       if (a.known) {
         return a;
       }
-      if (unknown.layer < 0) {
-        unknown = unknown_answer(j);
-      }
+      unknown = unknown == nullptr ? &a : unknown;
     }
-    return unknown;
+    if (unknown == nullptr) {
+      outside_ = unknown_answer(-1);
+      unknown = &outside_;
+    }
+    return *unknown;
   }
 
-  [[nodiscard]] RegionAnswer unknown_answer(int layer) const noexcept {
+  [[nodiscard]] static RegionAnswer unknown_answer(int layer) noexcept {
     RegionAnswer a{};
     a.known = false;
-    a.layer = layer;
-    a.class_layer = layer;
+    a.layer = static_cast<std::int8_t>(layer);
+    a.class_layer = static_cast<std::int8_t>(layer);
     a.cell_class = CellClass::kUnknown;
-    a.cell_width = layer >= 0 ? layers_.widths[layer] : 0.0F;
     return a;
   }
 
@@ -216,8 +254,8 @@ class RegionWalk {
     a = unknown_answer(j);
     const CellIndex c = path_[j];
     a.index = c;
-    a.centre_x = grid::cell_centre(c.x, a.cell_width);
-    a.centre_y = grid::cell_centre(c.y, a.cell_width);
+    a.centre_x = grid::cell_centre(c.x, layers_.widths[j]);
+    a.centre_y = grid::cell_centre(c.y, layers_.widths[j]);
     if (Layers::is_ccm(j)) {
       const typename View::CcmAnswer ccm = view_.ccm_answer(j, pooled(layers_, view_.params().weight_limit, j, c, reads_));
       if (ccm.cell_class == CellClass::kUnknown) {
@@ -229,7 +267,6 @@ class RegionWalk {
       a.slope_y = ccm.surface.slope_y;
       a.inclination = ccm_inclination(ccm.surface);
       a.normal_variance = ccm.surface.normal_variance;
-      a.weight = ccm.cell.weight;
       a.mean_x = ccm.cell.mean_x;
       a.mean_y = ccm.cell.mean_y;
       a.mean_z = ccm.cell.mean_z;
@@ -244,7 +281,6 @@ class RegionWalk {
         return a;
       }
       a.known = true;
-      a.weight = cell.weight;
       a.mean_z = cell.height;
       a.normal_variance = fine_variance(cell);
       // Hazards are a CCM matter: the first CCM layer's cell there, when it knows it.
@@ -252,7 +288,7 @@ class RegionWalk {
       if (Layers::kCcmLayerCount > 0 && layers_.contains(first_ccm, path_[first_ccm])) {
         const RegionAnswer& ccm = answer(first_ccm);
         if (ccm.known) {
-          a.class_layer = first_ccm;
+          a.class_layer = static_cast<std::int8_t>(first_ccm);
           a.cell_class = ccm.cell_class;
           a.slope_x = ccm.slope_x;
           a.slope_y = ccm.slope_y;
@@ -274,6 +310,7 @@ class RegionWalk {
   CellIndex path_[Layers::kLayerSlots]{};
   bool answered_[Layers::kLayerSlots]{};
   RegionAnswer answers_[Layers::kLayerSlots]{};
+  RegionAnswer outside_{};  ///< the answer of a piece no layer holds
   Polygon polygon_{};
   ReadCount reads_{};
   std::uint32_t nodes_ = 0U;
