@@ -6,6 +6,9 @@
 #include <memory>
 #include <vector>
 
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
 
@@ -115,6 +118,54 @@ void BM_Move1m(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_Move1m)->Unit(benchmark::kMicrosecond);
+
+void BM_MoveUncertain(benchmark::State& state) {
+  // Its own map: the fading changes the weights the other cases read.
+  auto stack = make_stack<ccmap::CadreConfig>(0.04F);
+  for (const CadreFrame& f : frames(850, 650)) {
+    (void)stack->update_frame(f.map_points.data(), f.map_points.size(), f.sensor_origin, nullptr);
+  }
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(stack->move_to(0.0F, 0.0F, 0.005F));
+  }
+}
+BENCHMARK(BM_MoveUncertain)->Unit(benchmark::kMicrosecond);
+
+// Planner queries on the mapped CADRE stack: the rover body 0.6 m x 0.4 m 0.9 m ahead, a
+// 2 m x 1 m body at 37 deg, a 2 m path (a footprint every 5 cm), a 5 m x 5 m cost raster at 4 cm.
+void BM_Footprint(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ccmap::query_footprint(stack, ccmap::Footprint{0.9F, 0.05F, 1.0F, 0.0F, 0.6F, 0.4F}));
+  }
+}
+void BM_FootprintLarge(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ccmap::query_footprint(stack, ccmap::Footprint{1.0F, 0.05F, 0.8F, 0.6F, 2.0F, 1.0F}));
+  }
+}
+void BM_Path2m(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  const ccmap::PathPoint route[] = {{0.3F, 0.0F}, {2.3F, 0.0F}};
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        ccmap::query_path(stack, route, 2, ccmap::PathSweep{0.6F, 0.4F, 0.05F, ccmap::kDefaultMaxUnknownShare}));
+  }
+}
+void BM_Costmap5m(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  std::vector<std::uint8_t> cost(125U * 125U);
+  const float radius = static_cast<float>(state.range(0)) * 0.01F;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        ccmap::fill_costmap(stack, ccmap::CostmapSpec{0.0F, 0.0F, 0.04F, 125U, radius}, cost.data(), cost.size(), nullptr));
+  }
+}
+BENCHMARK(BM_Footprint)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_FootprintLarge)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Path2m)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Costmap5m)->Arg(0)->Arg(30)->Unit(benchmark::kMicrosecond);
 
 void BM_StaticMemory(benchmark::State& state) {
   for (auto _ : state) {
