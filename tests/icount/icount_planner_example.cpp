@@ -60,7 +60,9 @@ int main(int argc, char** argv) {
   const Footprint body{0.9F, 0.05F, 1.0F, 0.0F, 0.6F, 0.4F};
   const Footprint large{1.0F, 0.05F, 0.8F, 0.6F, 2.0F, 1.0F};
   const PathPoint route[] = {{0.3F, 0.0F}, {2.3F, 0.0F}};
-  const PathSweep sweep{0.6F, 0.4F, 0.05F, kDefaultMaxUnknownShare};
+  // max_unknown_share 1: no footprint counts as unknown, so all 41 poses are evaluated (the sweep
+  // stops once both a hazard and an unknown footprint are found).
+  const PathSweep sweep{0.6F, 0.4F, 0.05F, 1.0F};
   std::vector<std::uint8_t> cost(125U * 125U);
   std::uint32_t read = 0U;
   for (int c = 0; c < calls; ++c) {

@@ -176,7 +176,7 @@ int main(int argc, char** argv) {
       sink = sink + query_footprint(*stack, Footprint{1.0F, 0.05F, 0.8F, 0.6F, 2.0F, 1.0F}).max_step_m;
       large_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
       t0 = monotonic_ns();
-      sink = sink + query_path(*stack, route, 2, PathSweep{0.6F, 0.4F, 0.05F, kDefaultMaxUnknownShare}).checked_m;
+      sink = sink + query_path(*stack, route, 2, PathSweep{0.6F, 0.4F, 0.05F, 1.0F}).checked_m;
       path_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
       CostmapStats st{};
       t0 = monotonic_ns();
