@@ -323,7 +323,6 @@ class Stack {
   [[nodiscard]] Status begin_frame(const PointXYZ* points, std::size_t n, const PointXYZ& origin, const float* rotation,
                                    detail::FramePose* pose, FrameCounters& frame, FrameCounters* counters,
                                    std::uint64_t* start) noexcept {
-    Status status = Status::kOk;
     if (!initialised_) {
       write_counters(frame, counters);
       return Status::kNotInitialised;
@@ -334,11 +333,8 @@ class Stack {
     if constexpr (sizeof(std::size_t) > sizeof(std::uint32_t)) {
       too_many = n > 0xFFFFFFFFULL;
     }
-    if ((points == nullptr && n > 0U) || too_many) {
-      status = Status::kInvalidArgument;
-    } else {
-      status = detail::make_frame_pose(origin, rotation, pose);
-    }
+    const Status status = ((points == nullptr && n > 0U) || too_many) ? Status::kInvalidArgument
+                                                                      : detail::make_frame_pose(origin, rotation, pose);
     if (status != Status::kOk) {
       ++rejected_frames_;
       write_counters(frame, counters);
