@@ -181,6 +181,49 @@ void BM_Costmap5m(benchmark::State& state) {
         ccmap::fill_costmap(stack, ccmap::CostmapSpec{0.0F, 0.0F, 0.04F, 125U, radius}, cost.data(), cost.size(), nullptr));
   }
 }
+// The flight cycle's corridor (1 m x 2 m, 0.3 .. 2.3 m ahead) after three cycles of the drive:
+// the 1250 per-cell point queries of run_cycle, and one footprint query of the same rectangle.
+const ccmap::Stack<ccmap::CadreConfig>& cycle_map() {
+  static std::unique_ptr<ccmap::Stack<ccmap::CadreConfig>> stack = [] {
+    auto s = make_stack<ccmap::CadreConfig>(0.04F);
+    for (int k = 0; k < 3; ++k) {
+      const ccmap::test::CyclePose p = ccmap::test::cycle_pose(k);
+      const CadreFrame f = ccmap::test::cycle_frame(k);
+      (void)s->move_to(p.x, p.y);
+      (void)s->update_frame_sensor(f.sensor_points.data(), f.sensor_points.size(), f.pose, nullptr);
+    }
+    return s;
+  }();
+  return *stack;
+}
+void BM_CorridorCells(benchmark::State& state) {
+  const auto& stack = cycle_map();
+  const ccmap::test::CyclePose p = ccmap::test::cycle_pose(2);
+  for (auto _ : state) {
+    int hazards = 0;
+    for (int i = 0; i < 50; ++i) {
+      const float ahead = 0.3F + (static_cast<float>(i) + 0.5F) * 0.04F;
+      for (int j = 0; j < 25; ++j) {
+        const float side = -0.5F + (static_cast<float>(j) + 0.5F) * 0.04F;
+        const ccmap::QueryResult q = stack.query(p.x + p.heading_cos * ahead - p.heading_sin * side,
+                                                 p.y + p.heading_sin * ahead + p.heading_cos * side);
+        hazards += q.cell_class == ccmap::CellClass::kObstacle ? 1 : 0;
+      }
+    }
+    benchmark::DoNotOptimize(hazards);
+  }
+}
+void BM_CorridorFootprint(benchmark::State& state) {
+  const auto& stack = cycle_map();
+  const ccmap::test::CyclePose p = ccmap::test::cycle_pose(2);
+  const ccmap::Footprint corridor{p.x + 1.3F * p.heading_cos, p.y + 1.3F * p.heading_sin, p.heading_cos, p.heading_sin,
+                                  2.0F, 1.0F};
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ccmap::query_footprint(stack, corridor));
+  }
+}
+BENCHMARK(BM_CorridorCells)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CorridorFootprint)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Footprint)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_FootprintLarge)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Path2m)->Unit(benchmark::kMicrosecond);
