@@ -60,21 +60,23 @@ class QueryView {
     QueryResult out = empty_result(Status::kOk, layer);
     out.cell_width_m = width;
     if (Layers::is_ccm(layer)) {
-      const CcmAnswer a = ccm_answer(layer, pooled(layers_, params_.weight_limit, layer, index));
+      const CcmCell cell = pooled(layers_, params_.weight_limit, layer, index);
       // Known: covered (eq. 12), or an obstacle already (classify_ccm: obstacle evidence wins).
-      if (require_known && a.cell_class == CellClass::kUnknown) {
+      const CellClass cell_class = classify_ccm(cell, width, params_, thresholds_[layer]);
+      if (require_known && cell_class == CellClass::kUnknown) {
         return empty_result(Status::kUnknown, layer);
       }
       const float qx = x - grid::cell_centre(index.x, width);
       const float qy = y - grid::cell_centre(index.y, width);
-      out.weight = a.cell.weight;
-      out.height_m = ccm_height_at(a.cell, a.surface, qx, qy);
-      out.slope_x = a.surface.slope_x;
-      out.slope_y = a.surface.slope_y;
-      out.inclination = ccm_inclination(a.surface);
-      out.normal_variance = a.surface.normal_variance;
-      out.elevation_variance = ccm_elevation_variance(a.cell, a.surface, qx, qy);
-      out.cell_class = a.cell_class;
+      const CcmSurface surface = ccm_surface(cell);
+      out.weight = cell.weight;
+      out.height_m = ccm_height_at(cell, surface, qx, qy);
+      out.slope_x = surface.slope_x;
+      out.slope_y = surface.slope_y;
+      out.inclination = ccm_inclination(surface);
+      out.normal_variance = surface.normal_variance;
+      out.elevation_variance = ccm_elevation_variance(cell, surface, qx, qy);
+      out.cell_class = cell_class;
       return out;
     }
     if constexpr (Layers::kHasFine) {
@@ -92,15 +94,19 @@ class QueryView {
     return out;
   }
 
-  /// What an answer of a CCM layer takes from its (pooled) cell, whatever the point: the
-  /// class (classify_ccm with the layer's threshold) and the surface (eqs. 9, 11).
+  /// What a known answer of a CCM layer takes from its (pooled) cell, whatever the point: the
+  /// class (classify_ccm with the layer's threshold, as answer_at) and, only when the class is
+  /// known, the surface (eqs. 9, 11; zero otherwise).
   struct CcmAnswer {
-    CcmCell cell;
     CcmSurface surface;
     CellClass cell_class;
   };
   [[nodiscard]] CcmAnswer ccm_answer(int layer, const CcmCell& cell) const noexcept {
-    return CcmAnswer{cell, ccm_surface(cell), classify_ccm(cell, layers_.widths[layer], params_, thresholds_[layer])};
+    CcmAnswer a{CcmSurface{0.0F, 0.0F, 0.0F}, classify_ccm(cell, layers_.widths[layer], params_, thresholds_[layer])};
+    if (a.cell_class != CellClass::kUnknown) {
+      a.surface = ccm_surface(cell);
+    }
+    return a;
   }
 
   /// A piece-wise constant cell is known with at least min_weight (and some weight).

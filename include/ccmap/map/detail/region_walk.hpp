@@ -257,7 +257,8 @@ class RegionWalk {
     a.centre_x = grid::cell_centre(c.x, layers_.widths[j]);
     a.centre_y = grid::cell_centre(c.y, layers_.widths[j]);
     if (Layers::is_ccm(j)) {
-      const typename View::CcmAnswer ccm = view_.ccm_answer(j, pooled(layers_, view_.params().weight_limit, j, c, reads_));
+      const CcmCell cell = pooled(layers_, view_.params().weight_limit, j, c, reads_);
+      const typename View::CcmAnswer ccm = view_.ccm_answer(j, cell);
       if (ccm.cell_class == CellClass::kUnknown) {
         return a;
       }
@@ -267,9 +268,9 @@ class RegionWalk {
       a.slope_y = ccm.surface.slope_y;
       a.inclination = ccm_inclination(ccm.surface);
       a.normal_variance = ccm.surface.normal_variance;
-      a.mean_x = ccm.cell.mean_x;
-      a.mean_y = ccm.cell.mean_y;
-      a.mean_z = ccm.cell.mean_z;
+      a.mean_x = cell.mean_x;
+      a.mean_y = cell.mean_y;
+      a.mean_z = cell.mean_z;
       a.height_slope_x = ccm.surface.slope_x;
       a.height_slope_y = ccm.surface.slope_y;
       return a;
