@@ -367,6 +367,179 @@ TEST(CliQuery, AnswersAtAMapFramePoint) {
   EXPECT_NE(far.out.find("status: outside_map"), std::string::npos) << far.out;
 }
 
+/// "key: value" lines of a query's output.
+std::map<std::string, std::string> key_values(const std::string& text) {
+  std::map<std::string, std::string> kv;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    const std::size_t colon = line.find(": ");
+    EXPECT_NE(colon, std::string::npos) << "not 'key: value': " << line;
+    if (colon != std::string::npos) kv[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  return kv;
+}
+
+TEST(CliQuery, FootprintOfTheBodyOnThePlaneAndOnTheStep) {
+  // The scene's plane (0.2, -0.1) with its 30 cm step at local x = 0.84, the ccm preset (8 cm).
+  const fs::path dir = temp_dir();
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "utm.ply", s);
+  char at[128];
+  // A 0.6 x 0.4 m body along x, 0.5 m clear of the step: traversable, the plane's height range
+  // 0.2 * 0.6 + 0.1 * 0.4 = 0.16 m, its inclination atan(|(0.2, -0.1)|) = 12.6 deg.
+  std::snprintf(at, sizeof at, "%.6f,%.6f", s.x0 - 0.2, s.y0 + 0.1);
+  const CliRun flat = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                           "--footprint", "0.6,0.4"});
+  ASSERT_EQ(flat.code, 0) << flat.err;
+  std::map<std::string, std::string> kv = key_values(flat.out);
+  EXPECT_EQ(kv["class"], "traversable") << "the point answer is still there";
+  EXPECT_EQ(kv["footprint_class"], "traversable");
+  EXPECT_NEAR(std::stod(kv["footprint_unknown_share"]), 0.0, 1e-6);
+  EXPECT_NEAR(std::stod(kv["footprint_max_step_m"]), 0.16, 2e-3);
+  EXPECT_NEAR(std::stod(kv["footprint_max_inclination_deg"]), 12.604, 0.05);
+  // Turned by 90 deg the body spans 0.6 m along y: 0.2 * 0.4 + 0.1 * 0.6 = 0.14 m.
+  const CliRun turned = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                             "--footprint", "0.6,0.4,90"});
+  ASSERT_EQ(turned.code, 0) << turned.err;
+  EXPECT_NEAR(std::stod(key_values(turned.out)["footprint_max_step_m"]), 0.14, 2e-3);
+  // Over the step: obstacle, a step of at least the 30 cm edge.
+  std::snprintf(at, sizeof at, "%.6f,%.6f", s.x0 + 0.84, s.y0 + 0.1);
+  const CliRun step = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                           "--footprint", "0.6,0.4,30"});
+  ASSERT_EQ(step.code, 0) << step.err;
+  kv = key_values(step.out);
+  EXPECT_EQ(kv["footprint_class"], "obstacle");
+  EXPECT_GT(std::stod(kv["footprint_max_step_m"]), 0.3);
+  // Half off the observed square (x local 1.6): unknown at the default 10 %, traversable at 60 %.
+  std::snprintf(at, sizeof at, "%.6f,%.6f", s.x0 + 1.6, s.y0 - 1.0);
+  const CliRun edge = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                           "--footprint", "0.64,0.4"});
+  ASSERT_EQ(edge.code, 0) << edge.err;
+  kv = key_values(edge.out);
+  EXPECT_EQ(kv["footprint_class"], "unknown");
+  EXPECT_NEAR(std::stod(kv["footprint_unknown_share"]), 0.5, 1e-4);
+  const CliRun tolerant = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                               "--footprint", "0.64,0.4", "--max-unknown-share", "0.6"});
+  ASSERT_EQ(tolerant.code, 0) << tolerant.err;
+  EXPECT_EQ(key_values(tolerant.out)["footprint_class"], "traversable");
+}
+
+TEST(CliQuery, PathFindsTheStepAndTheEndOfTheObservedGround) {
+  const fs::path dir = temp_dir();
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "utm.ply", s);
+  // Along +x from local (-1.0, 0.1): the body's front (0.3 m ahead) enters the 8 cm cell
+  // [0.80, 0.88) that holds the step just after 1.5 m (2 cm steps: at 1.52).
+  char path[256];
+  std::snprintf(path, sizeof path, "%.6f,%.6f:%.6f,%.6f", s.x0 - 1.0, s.y0 + 0.1, s.x0 + 0.7, s.y0 + 0.1);
+  const CliRun r = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--path", path,
+                        "--footprint", "0.6,0.4", "--step", "0.02"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::map<std::string, std::string> kv = key_values(r.out);
+  ASSERT_NE(kv["first_hazard_m"], "none") << r.out;
+  EXPECT_NEAR(std::stod(kv["first_hazard_m"]), 1.52, 0.025);
+  EXPECT_EQ(kv["hazard_class"], "obstacle");
+  EXPECT_NEAR(std::stod(kv["hazard_x"]), s.x0 - 1.0 + std::stod(kv["first_hazard_m"]), 1e-3) << "absolute coordinates";
+  EXPECT_EQ(kv["first_unknown_m"], "none");
+  EXPECT_NEAR(std::stod(kv["path_length_m"]), 1.7, 1e-5);
+  EXPECT_EQ(kv["path_poses"], "86") << "no unknown footprint: every pose evaluated (1.7 m / 2 cm + 1)";
+  // Along -y from local (-0.5, 0): more than 10 % of the body (0.06 m of its 0.6 m) is beyond the
+  // observed square (y = -1.6) once its front (0.3 m ahead) passes -1.66: 1.6 - 0.3 + 0.06 = 1.36 m.
+  std::snprintf(path, sizeof path, "%.6f,%.6f:%.6f,%.6f:%.6f,%.6f", s.x0 - 0.5, s.y0, s.x0 - 0.5, s.y0 - 0.5, s.x0 - 0.5,
+                s.y0 - 2.0);
+  const CliRun out = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--path", path,
+                          "--footprint", "0.6,0.4"});
+  ASSERT_EQ(out.code, 0) << out.err;
+  kv = key_values(out.out);
+  EXPECT_EQ(kv["first_hazard_m"], "none");
+  ASSERT_NE(kv["first_unknown_m"], "none") << out.out;
+  EXPECT_NEAR(std::stod(kv["first_unknown_m"]), 1.36, 0.05);
+}
+
+TEST(CliMap, CostmapPerLayerAsPgmAndPng) {
+  const fs::path dir = temp_dir();
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "utm.ply", s);
+  const CliRun r = run({"map", "--preset", "cadre", "--cloud", (dir / "utm.ply").string(), "--out",
+                        (dir / "out").string(), "--costmap", "--inflate", "0.1"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const int sides[5] = {64, 64, 64, 32, 32};
+  for (int k = 0; k < 5; ++k) {
+    const fs::path png = dir / "out" / ("costmap_" + std::to_string(k) + ".png");
+    const fs::path pgm = dir / "out" / ("costmap_" + std::to_string(k) + ".pgm");
+    ASSERT_TRUE(fs::exists(png)) << png;
+    ASSERT_TRUE(fs::exists(pgm)) << pgm;
+    std::ifstream in(pgm, std::ios::binary);
+    std::string magic;
+    int w = 0, h = 0, maxval = 0;
+    in >> magic >> w >> h >> maxval;
+    in.get();
+    EXPECT_EQ(magic, "P5");
+    EXPECT_EQ(w, sides[k]);
+    EXPECT_EQ(h, sides[k]);
+    EXPECT_EQ(maxval, 255);
+    std::vector<unsigned char> pixels(static_cast<std::size_t>(w * h));
+    in.read(reinterpret_cast<char*>(pixels.data()), static_cast<std::streamsize>(pixels.size()));
+    ASSERT_TRUE(in) << "truncated " << pgm;
+    int lethal = 0, inscribed = 0, unknown = 0, cost = 0;
+    for (const unsigned char v : pixels) {
+      lethal += v == 254 ? 1 : 0;
+      inscribed += v == 253 ? 1 : 0;
+      unknown += v == 255 ? 1 : 0;
+      cost += v <= 252 ? 1 : 0;
+    }
+    EXPECT_GT(cost, 0) << "layer " << k << ": the plane costs its 12.6 deg";
+    if (k <= 2) {
+      EXPECT_GT(lethal, 0) << "layer " << k << ": the step is lethal";
+    }
+    // 10 cm of inflation: 2.5 pixels at 4 cm, 1.25 at 8 cm, less than a pixel beyond.
+    EXPECT_EQ(inscribed > 0, k <= 1) << "layer " << k << ": " << inscribed << " inscribed pixels";
+    if (k >= 2) {
+      EXPECT_GT(unknown, 0) << "layer " << k << ": beyond the 3.2 m square";
+    }
+  }
+  EXPECT_NE(r.out.find("costmap 0 (64 x 64 at 0.04 m"), std::string::npos) << r.out;
+}
+
+TEST(CliErrors, PlannerOptionsAreCheckedWithOneLine) {
+  const fs::path dir = temp_dir();
+  const Scene s{0.0, 0.0, 0.0};
+  write_scene_ply(dir / "scene.ply", s);
+  const std::string cloud = (dir / "scene.ply").string();
+  const std::string out = (dir / "out").string();
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "0.6"}),
+                        "--footprint", "one number");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "0.6,-1"}),
+                        "--footprint", "negative width");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "30,30"}),
+                        "refused the footprint", "beyond the footprint limit");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0"}), "--path needs --footprint",
+                        "path without a body");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0", "--footprint", "0.6,0.4,10"}),
+                        "YAW_DEG", "yaw with a path");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0", "--footprint", "0.6,0.4"}),
+                        "--path", "one point");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,x", "--footprint", "0.6,0.4"}),
+                        "--path", "not a number");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0", "--footprint",
+                             "0.6,0.4", "--step", "0.001"}),
+                        "refused the path query", "too many poses");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--path", "0,0:1,0",
+                             "--footprint", "0.6,0.4"}),
+                        "give one", "both queries");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--max-unknown-share", "2"}),
+                        "--max-unknown-share", "share above 1");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--costmap"}), "--costmap",
+                        "costmap on a query");
+  expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--inflate", "0.1"}),
+                        "--inflate needs --costmap", "inflate alone");
+  expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--footprint", "0.6,0.4"}),
+                        "belong to 'ccmap query'", "footprint on map");
+  expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--costmap", "--inflate", "5"}),
+                        "refused the cost raster", "inflation beyond 32 pixels");
+}
+
 // =============================================================================================
 // Errors: one line, non-zero exit, no output files
 // =============================================================================================

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -18,6 +19,7 @@
 #include "csv_writer.hpp"
 #include "layer_images.hpp"
 #include "map_runner.hpp"
+#include "png.hpp"
 
 namespace ccmap::tools {
 namespace {
@@ -55,6 +57,11 @@ constexpr const char* kMapHelp =
     "  --out DIR       writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
     "                  normal_var,class}.png; class colours: unknown grey, traversable green,\n"
     "                  obstacle red, steep orange, unobserved black\n"
+    "  --costmap       also writes DIR/costmap_<k>.png and .pgm per layer: the planner's cost\n"
+    "                  raster (costmap_2d values as grey levels: 0 free .. 252 cost, 253\n"
+    "                  inscribed, 254 lethal, 255 unknown) over layer k's window at its cell\n"
+    "                  width, north up; each pixel the worst of the map over its square\n"
+    "  --inflate M     with --costmap: pixels within M metres of a lethal one are inscribed\n"
     "\n"
     "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the first\n"
     "cloud's centroid rounded to the coarsest cell width) in double precision before the\n"
@@ -62,11 +69,24 @@ constexpr const char* kMapHelp =
 
 constexpr const char* kQueryHelp =
     "usage: ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --at X,Y\n"
+    "                   [--footprint LENGTH,WIDTH[,YAW_DEG]] [--max-unknown-share F]\n"
+    "       ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --path X1,Y1:X2,Y2[:...]\n"
+    "                   --footprint LENGTH,WIDTH [--step METRES] [--max-unknown-share F]\n"
     "                   [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
     "\n"
     "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
     "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
-    "variance, elevation variance and class, one 'key: value' per line.\n";
+    "variance, elevation variance and class, one 'key: value' per line.\n"
+    "\n"
+    "  --footprint L,W[,YAW_DEG]  with --at: also the rover body, an L x W m rectangle centred\n"
+    "                  there, its length along YAW_DEG (degrees from +x, default 0): adds\n"
+    "                  footprint_class (traversable|obstacle|steep|unknown), footprint_unknown_share,\n"
+    "                  footprint_max_step_m, footprint_max_inclination_deg\n"
+    "  --path X1,Y1:X2,Y2[:...]  the body swept along this polyline (map frame, 2 .. 256 points),\n"
+    "                  its length along each segment: prints first_hazard_m (obstacle or steep)\n"
+    "                  and first_unknown_m, each a distance along the path or 'none'\n"
+    "  --step M        distance between the body's poses along --path (default: the finest cell)\n"
+    "  --max-unknown-share F  a footprint with a larger unknown share is unknown (default 0.1)\n";
 
 /// Thrown inside this file only, turned into "ccmap: error: ..." by run_cli.
 struct CliError {
@@ -113,7 +133,28 @@ struct Options {
   SensorChoice sensor = SensorChoice::kLidar;
   double sigma = 0.005;
   bool help = false;
+  bool have_footprint = false;
+  double footprint_length = 0.0, footprint_width = 0.0, footprint_yaw_deg = 0.0;
+  bool footprint_has_yaw = false;
+  std::vector<double> path;  ///< x0 y0 x1 y1 ... (map frame, as given)
+  double step = 0.0;         ///< <= 0: the finest cell width
+  double max_unknown_share = 0.1;
+  bool costmap = false;
+  double inflate = 0.0;
 };
+
+/// "A,B[,C]" -> numbers; `what` names the option in errors.
+std::vector<double> parse_list(const std::string& flag, const std::string& text, char separator) {
+  std::vector<double> out;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = text.find(separator, start);
+    out.push_back(parse_number(flag, text.substr(start, end == std::string::npos ? std::string::npos : end - start)));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return out;
+}
 
 Options parse_options(int argc, char** argv) {
   Options o;
@@ -126,6 +167,10 @@ Options parse_options(int argc, char** argv) {
       o.help = true;
       continue;
     }
+    if (arg == "--costmap") {
+      o.costmap = true;
+      continue;
+    }
     if (arg.rfind("--", 0) != 0) fail("unexpected argument '" + arg + "' (options start with --)", 2);
     const std::size_t eq = arg.find('=');
     if (eq != std::string::npos) {
@@ -133,7 +178,9 @@ Options parse_options(int argc, char** argv) {
       arg = arg.substr(0, eq);
       have_value = true;
     }
-    static const char* kKnown[] = {"--preset", "--res", "--wl", "--cloud", "--poses", "--out", "--at", "--sensor", "--sigma"};
+    static const char* kKnown[] = {"--preset", "--res",  "--wl",        "--cloud", "--poses",
+                                   "--out",    "--at",   "--sensor",    "--sigma", "--footprint",
+                                   "--path",   "--step", "--max-unknown-share", "--inflate"};
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
       fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
     }
@@ -168,6 +215,44 @@ Options parse_options(int argc, char** argv) {
       else fail("--sensor: unknown sensor '" + value + "' (expected lidar or stereo)", 2);
     } else if (arg == "--sigma") {
       o.sigma = parse_positive(arg, value, 10.0);
+    } else if (arg == "--footprint") {
+      const std::vector<double> v = parse_list(arg, value, ',');
+      if (v.size() < 2 || v.size() > 3) fail("--footprint: expected LENGTH,WIDTH[,YAW_DEG], got '" + value + "'", 2);
+      for (std::size_t k = 0; k < v.size(); ++k) {
+        if (!std::isfinite(v[k]) || (k < 2 && !(v[k] > 0.0))) {
+          fail("--footprint: '" + value + "': length and width must be > 0, all finite", 2);
+        }
+      }
+      o.footprint_length = v[0];
+      o.footprint_width = v[1];
+      o.footprint_has_yaw = v.size() == 3;
+      o.footprint_yaw_deg = o.footprint_has_yaw ? v[2] : 0.0;
+      o.have_footprint = true;
+    } else if (arg == "--path") {
+      o.path.clear();
+      std::size_t start = 0;
+      while (true) {
+        const std::size_t end = value.find(':', start);
+        const std::string point = value.substr(start, end == std::string::npos ? std::string::npos : end - start);
+        const std::vector<double> xy = parse_list(arg, point, ',');
+        if (xy.size() != 2 || !std::isfinite(xy[0]) || !std::isfinite(xy[1])) {
+          fail("--path: expected X1,Y1:X2,Y2[:...] (finite), got '" + point + "'", 2);
+        }
+        o.path.insert(o.path.end(), xy.begin(), xy.end());
+        if (end == std::string::npos) break;
+        start = end + 1;
+      }
+      if (o.path.size() < 4) fail("--path: at least two points X1,Y1:X2,Y2", 2);
+    } else if (arg == "--step") {
+      o.step = parse_positive(arg, value, 100.0);
+    } else if (arg == "--max-unknown-share") {
+      o.max_unknown_share = parse_number(arg, value);
+      if (!(o.max_unknown_share >= 0.0 && o.max_unknown_share <= 1.0)) {
+        fail("--max-unknown-share: " + value + " is out of range (expected 0 .. 1)", 2);
+      }
+    } else if (arg == "--inflate") {
+      o.inflate = parse_number(arg, value);
+      if (!(o.inflate >= 0.0) || !std::isfinite(o.inflate)) fail("--inflate: " + value + " is out of range (expected >= 0)", 2);
     }
   }
   return o;
@@ -336,9 +421,33 @@ std::vector<LayerCellRow> layer_rows(const MappedClouds& m, int layer, const std
   return rows;
 }
 
+/// Writes a cost raster (row 0 at the lowest y) as a binary PGM and a grey PNG, north up.
+void write_costmap_images(const std::string& prefix, const std::vector<std::uint8_t>& cost, int side) {
+  std::string error;
+  RgbImage image(side, side);
+  std::vector<unsigned char> rows;
+  rows.reserve(cost.size());
+  for (int row = 0; row < side; ++row) {
+    const int iy = side - 1 - row;  // north up
+    for (int ix = 0; ix < side; ++ix) {
+      const std::uint8_t v = cost[static_cast<std::size_t>(iy) * static_cast<std::size_t>(side) + static_cast<std::size_t>(ix)];
+      const std::uint8_t grey[3] = {v, v, v};
+      image.set(ix, row, grey);
+      rows.push_back(v);
+    }
+  }
+  if (!write_png(prefix + ".png", image, &error)) fail(error);
+  std::ofstream pgm(prefix + ".pgm", std::ios::binary);
+  pgm << "P5\n" << side << ' ' << side << "\n255\n";
+  pgm.write(reinterpret_cast<const char*>(rows.data()), static_cast<std::streamsize>(rows.size()));
+  if (!pgm) fail("cannot write " + prefix + ".pgm");
+}
+
 int run_map(const Options& o, std::ostream& out) {
   if (o.out_dir.empty()) fail("--out DIR is required", 2);
   if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  if (o.have_footprint || !o.path.empty()) fail("--footprint and --path belong to 'ccmap query'", 2);
+  if (o.inflate > 0.0 && !o.costmap) fail("--inflate needs --costmap", 2);
   MappedClouds m = build_map(o, out, true);
   std::error_code ec;
   std::filesystem::create_directories(o.out_dir, ec);
@@ -379,14 +488,62 @@ int run_map(const Options& o, std::ostream& out) {
   }
   out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
       << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+  if (o.costmap) {
+    for (int k = 0; k < m.runner->layer_count(); ++k) {
+      const int side = m.runner->layer_side(k);
+      const float res = m.runner->layer_cell_width(k);
+      float cx = 0.0F, cy = 0.0F;
+      m.runner->layer_window_centre(k, &cx, &cy);
+      std::vector<std::uint8_t> cost;
+      if (!m.runner->costmap(cx, cy, res, side, static_cast<float>(o.inflate), &cost, &error)) fail(error);
+      const std::string prefix = o.out_dir + "/costmap_" + std::to_string(k);
+      write_costmap_images(prefix, cost, side);
+      std::size_t counts[4] = {0, 0, 0, 0};  // free/cost, inscribed, lethal, unknown
+      for (const std::uint8_t v : cost) ++counts[v <= 252 ? 0 : v - 252];
+      out << "costmap " << k << " (" << side << " x " << side << " at " << fmt("%g", m.widths[static_cast<std::size_t>(k)])
+          << " m, centre " << fmt("%.3f", static_cast<double>(cx) + m.origin[0]) << ' '
+          << fmt("%.3f", static_cast<double>(cy) + m.origin[1]) << "): cost " << counts[0] << ", inscribed "
+          << counts[1] << ", lethal " << counts[2] << ", unknown " << counts[3] << " pixels -> " << prefix
+          << ".{png,pgm}\n";
+    }
+  }
+  return 0;
+}
+
+/// The path query: first_hazard_m / first_unknown_m lines.
+int run_path_query(const Options& o, const MappedClouds& m, std::ostream& out) {
+  if (!o.have_footprint) fail("--path needs --footprint LENGTH,WIDTH (the body swept along it)", 2);
+  if (o.footprint_has_yaw) fail("--footprint: YAW_DEG does not apply to --path (the body follows the path)", 2);
+  std::vector<float> xy;
+  for (std::size_t i = 0; i < o.path.size(); i += 2) {
+    xy.push_back(static_cast<float>(o.path[i] - m.origin[0]));
+    xy.push_back(static_cast<float>(o.path[i + 1] - m.origin[1]));
+  }
+  const double step = o.step > 0.0 ? o.step : m.widths.front();
+  const LocalPath p = m.runner->path(xy, static_cast<float>(o.footprint_length), static_cast<float>(o.footprint_width),
+                                     static_cast<float>(step), static_cast<float>(o.max_unknown_share));
+  if (p.status != "ok") fail("the map refused the path query (" + p.status + ")", 2);
+  out << "path_length_m: " << fmt("%.6f", p.length_m) << "\n";
+  out << "path_poses: " << p.poses << "\n";
+  out << "first_hazard_m: " << (p.hazard ? fmt("%.6f", p.first_hazard_m) : std::string("none")) << "\n";
+  if (p.hazard) {
+    out << "hazard_class: " << p.hazard_class << "\n";
+    out << "hazard_x: " << fmt("%.6f", static_cast<double>(p.hazard_x) + m.origin[0]) << "\n";
+    out << "hazard_y: " << fmt("%.6f", static_cast<double>(p.hazard_y) + m.origin[1]) << "\n";
+  }
+  out << "first_unknown_m: " << (p.unknown ? fmt("%.6f", p.first_unknown_m) : std::string("none")) << "\n";
   return 0;
 }
 
 int run_query(const Options& o, std::ostream& out) {
-  if (!o.have_at) fail("--at X,Y is required", 2);
+  if (!o.have_at && o.path.empty()) fail("--at X,Y or --path X1,Y1:X2,Y2[:...] is required", 2);
+  if (o.have_at && !o.path.empty()) fail("--at and --path are two queries: give one", 2);
   if (!o.out_dir.empty()) fail("--out belongs to 'ccmap map'", 2);
+  if (o.costmap || o.inflate > 0.0) fail("--costmap and --inflate belong to 'ccmap map'", 2);
+  if (o.step > 0.0 && o.path.empty()) fail("--step belongs to --path", 2);
   std::ostringstream log;
   MappedClouds m = build_map(o, log, true);
+  if (!o.path.empty()) return run_path_query(o, m, out);
   const double lx = o.at_x - m.origin[0], ly = o.at_y - m.origin[1];
   const LocalQuery q = m.runner->query(static_cast<float>(lx), static_cast<float>(ly));
   const double kPi = 3.14159265358979323846;
@@ -407,6 +564,18 @@ int run_query(const Options& o, std::ostream& out) {
   out << "elevation_variance_m2: " << fmt("%.6g", q.elevation_variance) << "\n";
   out << "weight: " << fmt("%.6g", q.weight) << "\n";
   out << "class: " << q.cell_class << "\n";
+  if (o.have_footprint) {
+    const double yaw = o.footprint_yaw_deg * kPi / 180.0;
+    const LocalFootprint f = m.runner->footprint(
+        static_cast<float>(lx), static_cast<float>(ly), static_cast<float>(std::cos(yaw)), static_cast<float>(std::sin(yaw)),
+        static_cast<float>(o.footprint_length), static_cast<float>(o.footprint_width), static_cast<float>(o.max_unknown_share));
+    if (f.status != "ok" && f.status != "outside_map") fail("the map refused the footprint (" + f.status + ")", 2);
+    out << "footprint_class: " << f.verdict << "\n";
+    out << "footprint_unknown_share: " << fmt("%.6f", f.unknown_share) << "\n";
+    out << "footprint_max_step_m: " << fmt("%.6f", f.max_step) << "\n";
+    out << "footprint_max_inclination_deg: "
+        << fmt("%.3f", std::atan(static_cast<double>(f.max_inclination)) * 180.0 / kPi) << "\n";
+  }
   return 0;
 }
 

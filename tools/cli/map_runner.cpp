@@ -3,6 +3,9 @@
 #include <cmath>
 
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
@@ -127,6 +130,63 @@ class StackRunner final : public MapRunner {
     out.weight = q.weight;
     out.cell_class = to_string(q.cell_class);
     return out;
+  }
+
+  LocalFootprint footprint(float x, float y, float hx, float hy, float length, float width,
+                           float max_unknown_share) const override {
+    const FootprintResult r = query_footprint(*stack_, Footprint{x, y, hx, hy, length, width});
+    LocalFootprint out;
+    out.status = to_string(r.status);
+    out.worst_class = to_string(r.worst_class);
+    out.verdict = to_string(footprint_class(r, max_unknown_share));
+    out.unknown_share = r.unknown_share;
+    out.max_step = r.max_step_m;
+    out.max_inclination = r.max_inclination;
+    out.min_height = r.min_height_m;
+    out.max_height = r.max_height_m;
+    out.cells_visited = r.cells_visited;
+    return out;
+  }
+
+  LocalPath path(const std::vector<float>& xy, float length, float width, float step,
+                 float max_unknown_share) const override {
+    std::vector<PathPoint> points(xy.size() / 2U);
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = PathPoint{xy[2 * i], xy[2 * i + 1]};
+    const PathResult r =
+        query_path(*stack_, points.data(), points.size(), PathSweep{length, width, step, max_unknown_share});
+    LocalPath out;
+    out.status = to_string(r.status);
+    out.hazard = r.hazard_found;
+    out.unknown = r.unknown_found;
+    out.first_hazard_m = r.first_hazard_m;
+    out.first_unknown_m = r.first_unknown_m;
+    out.hazard_x = r.hazard_pose.x;
+    out.hazard_y = r.hazard_pose.y;
+    out.unknown_x = r.unknown_pose.x;
+    out.unknown_y = r.unknown_pose.y;
+    out.hazard_class = to_string(r.hazard.worst_class);
+    out.length_m = r.path_length_m;
+    out.poses = r.samples;
+    return out;
+  }
+
+  bool costmap(float cx, float cy, float resolution, int side, float inflation_m, std::vector<std::uint8_t>* cost,
+               std::string* error) const override {
+    cost->assign(static_cast<std::size_t>(side) * static_cast<std::size_t>(side), kCostUnknown);
+    const Status status = fill_costmap(*stack_, CostmapSpec{cx, cy, resolution, static_cast<std::uint32_t>(side), inflation_m},
+                                       cost->data(), cost->size(), nullptr);
+    if (status != Status::kOk) {
+      *error = std::string("the map refused the cost raster (") + to_string(status) + ")";
+      return false;
+    }
+    return true;
+  }
+
+  void layer_window_centre(int layer, float* x, float* y) const override {
+    const CellIndex c = stack_->layer_centre(layer);
+    // The window holds [c - side/2, c + side/2): its centre is the lower edge of cell c.
+    *x = static_cast<float>(c.x) * stack_->layer_cell_width(layer);
+    *y = static_cast<float>(c.y) * stack_->layer_cell_width(layer);
   }
 
   FrameStats totals() const override { return to_stats(stack_->total_counters()); }

@@ -51,6 +51,25 @@ struct LocalQuery {
   const char* cell_class = "unknown";
 };
 
+/// A footprint query's answer (map/footprint.hpp) in the local frame.
+struct LocalFootprint {
+  std::string status;               ///< ok, outside_map, or the refusal
+  const char* worst_class = "unknown";
+  const char* verdict = "unknown";  ///< footprint_class() with the caller's unknown share
+  float unknown_share = 1, max_step = 0, max_inclination = 0, min_height = 0, max_height = 0;
+  std::uint32_t cells_visited = 0;
+};
+
+/// A path query's answer (map/path_query.hpp) in the local frame.
+struct LocalPath {
+  std::string status;
+  bool hazard = false, unknown = false;
+  float first_hazard_m = 0, first_unknown_m = 0, hazard_x = 0, hazard_y = 0, unknown_x = 0, unknown_y = 0;
+  const char* hazard_class = "unknown";
+  float length_m = 0;
+  std::uint32_t poses = 0;
+};
+
 class MapRunner {
  public:
   virtual ~MapRunner() = default;
@@ -71,6 +90,18 @@ class MapRunner {
   virtual void layer_window_min(int layer, std::int32_t* ix, std::int32_t* iy) const = 0;
   virtual bool export_layer(int layer, std::vector<LocalCell>* cells, std::string* error) const = 0;
   virtual LocalQuery query(float x, float y) const = 0;
+  /// The footprint query of the rectangle centred (x, y), length axis along (hx, hy).
+  virtual LocalFootprint footprint(float x, float y, float hx, float hy, float length, float width,
+                                   float max_unknown_share) const = 0;
+  /// The path query along the polyline xy (x0 y0 x1 y1 ...), the body every `step` m.
+  virtual LocalPath path(const std::vector<float>& xy, float length, float width, float step,
+                         float max_unknown_share) const = 0;
+  /// The cost raster (map/costmap.hpp) of side x side pixels of `resolution` m around (cx, cy),
+  /// row 0 at the lowest y; false with a reason if the library refuses the raster.
+  virtual bool costmap(float cx, float cy, float resolution, int side, float inflation_m,
+                       std::vector<std::uint8_t>* cost, std::string* error) const = 0;
+  /// Centre of a layer's window (local metres).
+  virtual void layer_window_centre(int layer, float* x, float* y) const = 0;
   virtual FrameStats totals() const = 0;
   virtual float weight_limit() const = 0;
   virtual float min_weight() const = 0;
