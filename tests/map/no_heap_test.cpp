@@ -1,7 +1,8 @@
 // Proof of "no heap after initialisation": this test binary replaces the global allocation
 // functions (operator new/delete in all forms, and malloc/calloc/realloc/free through glibc's
 // __libc_* entry points) with counting versions, builds a CADRE stack, and asserts that
-// feeding frames, moving, querying and exporting allocate nothing.
+// feeding frames, moving (also with a position sigma), querying, exporting and the planner queries
+// (footprint, path, arc, cost raster) allocate nothing.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -10,6 +11,9 @@
 #include <new>
 #include <vector>
 
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/poses.hpp"
 
@@ -69,6 +73,7 @@ namespace {
 // Stack in static storage, as flight software would place it.
 Stack<CadreConfig> g_stack;
 CellRecord g_records[64 * 64];
+std::uint8_t g_cost[125 * 125];
 
 TEST(NoHeap, CountingAllocatorSeesAllocations) {
   // The instrument works: a vector allocation is counted.
@@ -110,6 +115,15 @@ TEST(NoHeap, CadreStackRunsWithoutAllocatingAfterInit) {
       std::size_t written = 0;
       status_errors += g_stack.export_layer(layer, g_records, 64 * 64, &written) != Status::kOk;
     }
+    // The planner queries and the uncertain move.
+    status_errors += g_stack.move_to(0.3F * static_cast<float>(step), 0.1F, 0.01F) != Status::kOk;
+    status_errors += query_footprint(g_stack, Footprint{0.5F, 0.2F, 0.8F, 0.6F, 2.0F, 1.0F}).status != Status::kOk;
+    const PathPoint route[] = {{0.0F, 0.0F}, {2.0F, 0.5F}, {2.5F, 2.0F}};
+    status_errors += query_path(g_stack, route, 3, PathSweep{0.6F, 0.4F, 0.05F, 1.0F}).status != Status::kOk;
+    status_errors += query_arc(g_stack, PathPose{0.0F, 0.0F, 1.0F, 0.0F}, 0.5F, 2.0F, PathSweep{0.6F, 0.4F, 0.05F, 1.0F})
+                         .status != Status::kOk;
+    status_errors += fill_costmap(g_stack, CostmapSpec{0.0F, 0.0F, 0.04F, 125U, 0.3F}, g_cost, sizeof g_cost, nullptr) !=
+                     Status::kOk;
   }
   (void)g_stack.move_to(std::numeric_limits<float>::quiet_NaN(), 0.0F);
   (void)g_stack.move_to(1000.0F, 1000.0F);
