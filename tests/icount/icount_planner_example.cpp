@@ -22,19 +22,10 @@
 #include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/count_arg.hpp"
 #include "support/icount_marker.hpp"
 
 namespace {
-bool parse(const char* text, int max, int* value) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < 1 || v > max) {
-    return false;
-  }
-  *value = static_cast<int>(v);
-  return true;
-}
-
 int fail(const char* what) {
   std::fprintf(stderr, "icount_planner_example: %s\n", what);
   return 1;
@@ -43,9 +34,10 @@ int fail(const char* what) {
 
 int main(int argc, char** argv) {
   using namespace ccmap;
+  using test::parse_count;
   int calls = 3, frames = 3, width_px = 400, height_px = 250;
-  if (argc != 1 && (argc != 5 || !parse(argv[1], 1000, &calls) || !parse(argv[2], 100, &frames) ||
-                    !parse(argv[3], 4000, &width_px) || !parse(argv[4], 4000, &height_px))) {
+  if (argc != 1 && (argc != 5 || !parse_count(argv[1], 1000, &calls) || !parse_count(argv[2], 100, &frames) ||
+                    !parse_count(argv[3], 4000, &width_px) || !parse_count(argv[4], 4000, &height_px))) {
     std::fprintf(stderr, "usage: icount_planner_example [calls (1..1000) frames (1..100) width_px height_px]\n");
     return 2;
   }

@@ -17,26 +17,16 @@
 
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/count_arg.hpp"
 #include "support/icount_marker.hpp"
 
-namespace {
-bool parse(const char* text, int max, int* value) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < 1 || v > max) {
-    return false;
-  }
-  *value = static_cast<int>(v);
-  return true;
-}
-}  // namespace
-
 int main(int argc, char** argv) {
+  using ccmap::test::parse_count;
   int frames = 3;
   int width_px = 80;
   int height_px = 50;
-  if (argc != 1 && (argc != 4 || !parse(argv[1], 1000, &frames) || !parse(argv[2], 4000, &width_px) ||
-                    !parse(argv[3], 4000, &height_px))) {
+  if (argc != 1 && (argc != 4 || !parse_count(argv[1], 1000, &frames) || !parse_count(argv[2], 4000, &width_px) ||
+                    !parse_count(argv[3], 4000, &height_px))) {
     std::fprintf(stderr, "usage: icount_stack_example [frames (1..1000) width_px height_px (1..4000)]\n");
     return 2;
   }
