@@ -43,10 +43,10 @@ struct PlannerAccess {
 };
 
 /// The answer of a map cell to every point of a piece inside it (what Stack::query answers
-/// there, less the point-dependent height). Compact (56 bytes): the walk keeps one per layer.
+/// there, less the point-dependent height). Compact (60 bytes): the walk keeps one per layer.
 struct RegionAnswer {
-  std::int8_t layer;         ///< answering layer; the finest holding the piece if none knows it; -1 if none holds it
-  std::int8_t class_layer;   ///< layer whose cell gave class, slopes and normal variance
+  std::int16_t layer;        ///< answering layer; the finest holding the piece if none knows it; -1 if none holds it
+  std::int16_t class_layer;  ///< layer whose cell gave class, slopes and normal variance
   bool known;                ///< false: no layer knows the piece (or none holds it)
   CellClass cell_class;      ///< kUnknown iff !known
   CellIndex index;           ///< answering cell (global index in `layer`)
@@ -65,7 +65,7 @@ struct RegionAnswer {
   float height_slope_x;
   float height_slope_y;
 };
-static_assert(kMaxLayers <= 127, "layers fit int8");
+static_assert(kMaxLayers <= 32767, "layers fit int16");
 
 /// One part of the rectangle inside one leaf cell.
 struct RegionPiece {
@@ -127,14 +127,14 @@ class RegionWalk {
   void walk_tree(int top, CellIndex root, Sink& sink) noexcept {
     struct Node {
       CellIndex cell;
-      std::int8_t layer;
-      std::int8_t next_child;  ///< -1: not yet entered; then the next child to push (4: done)
+      std::int16_t layer;
+      std::int16_t next_child;  ///< -1: not yet entered; then the next child to push (4: done)
       bool inside;             ///< known to lie wholly inside the rectangle
       bool children_inside;
     };
     Node stack[Layers::kLayerSlots];
     int depth = 0;
-    stack[0] = Node{root, static_cast<std::int8_t>(top), -1, false, false};
+    stack[0] = Node{root, static_cast<std::int16_t>(top), -1, false, false};
     while (depth >= 0) {
       Node& n = stack[depth];
       if (n.next_child < 0) {
@@ -167,7 +167,7 @@ class RegionWalk {
       }
       const int i = n.next_child++;
       stack[depth + 1] = Node{CellIndex{2 * n.cell.x + (i & 1), 2 * n.cell.y + (i >> 1)},
-                              static_cast<std::int8_t>(n.layer - 1), -1, n.children_inside, false};
+                              static_cast<std::int16_t>(n.layer - 1), -1, n.children_inside, false};
       ++depth;
     }
   }
@@ -238,8 +238,8 @@ class RegionWalk {
   [[nodiscard]] static RegionAnswer unknown_answer(int layer) noexcept {
     RegionAnswer a{};
     a.known = false;
-    a.layer = static_cast<std::int8_t>(layer);
-    a.class_layer = static_cast<std::int8_t>(layer);
+    a.layer = static_cast<std::int16_t>(layer);
+    a.class_layer = static_cast<std::int16_t>(layer);
     a.cell_class = CellClass::kUnknown;
     return a;
   }
@@ -289,7 +289,7 @@ class RegionWalk {
       if (Layers::kCcmLayerCount > 0 && layers_.contains(first_ccm, path_[first_ccm])) {
         const RegionAnswer& ccm = answer(first_ccm);
         if (ccm.known) {
-          a.class_layer = static_cast<std::int8_t>(first_ccm);
+          a.class_layer = static_cast<std::int16_t>(first_ccm);
           a.cell_class = ccm.cell_class;
           a.slope_x = ccm.slope_x;
           a.slope_y = ccm.slope_y;
