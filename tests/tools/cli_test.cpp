@@ -18,6 +18,7 @@
 
 #include "cli.hpp"
 #include "csv_writer.hpp"
+#include "temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using ccmap::tools::LayerCellRow;
@@ -40,14 +41,9 @@ CliRun run(std::vector<std::string> args) {
   return CliRun{code, out.str(), err.str()};
 }
 
-fs::path temp_dir() {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("ccmap_cli_test_" + std::to_string(::getpid()) + "_" +
-                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+/// The test's own temporary directory, removed at its end, also when it fails.
+using TempDir = ccmap::test::TempDir;
+const char* const kTempPrefix = "ccmap_cli_test_";
 
 /// Checks that a failed run printed exactly one line "ccmap: error: ..." containing `needle`.
 void expect_one_line_error(const CliRun& r, const std::string& needle, const std::string& what) {
@@ -150,7 +146,7 @@ bool summary_counts(const std::string& out, long long* read, long long* used) {
 // =============================================================================================
 
 TEST(CliMap, CcmPresetInclinedPlaneWithStepLocalCoordinates) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.0, 0.0, 0.0};
   write_scene_ply(dir / "scene.ply", s);
   const CliRun r = run({"map", "--preset", "ccm", "--cloud", (dir / "scene.ply").string(), "--out", (dir / "out").string()});
@@ -169,7 +165,7 @@ TEST(CliMap, CcmPresetInclinedPlaneWithStepLocalCoordinates) {
 
 TEST(CliMap, UtmSizedCoordinatesKeepMillimetres) {
   // x ~ 5.2e5, y ~ 4.9e6, z ~ 2235: float alone would have 3 cm / 50 cm steps here.
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
   write_scene_ply(dir / "utm.ply", s);
   const CliRun r = run({"map", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--out", (dir / "out").string()});
@@ -184,7 +180,7 @@ TEST(CliMap, UtmSizedCoordinatesKeepMillimetres) {
 }
 
 TEST(CliMap, CadrePresetWritesFiveLayersFinestFirst) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
   write_scene_ply(dir / "utm.ply", s);
   const CliRun r = run({"map", "--preset", "cadre", "--cloud", (dir / "utm.ply").string(), "--out", (dir / "out").string()});
@@ -232,7 +228,7 @@ TEST(CliMap, CadrePresetWritesFiveLayersFinestFirst) {
 }
 
 TEST(CliMap, ResAndWeightLimitFlags) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.0, 0.0, 0.0};
   write_scene_ply(dir / "scene.ply", s);
   const CliRun r = run({"map", "--preset=ccm", "--res", "0.16", "--wl", "50", "--cloud", (dir / "scene.ply").string(),
@@ -249,7 +245,7 @@ TEST(CliMap, ResAndWeightLimitFlags) {
 }
 
 TEST(CliMap, KalmanAndOmgPresets) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.0, 0.0, 0.0};
   write_scene_ply(dir / "scene.ply", s);
   for (const char* preset : {"kf", "omg"}) {
@@ -268,7 +264,7 @@ TEST(CliMap, KalmanAndOmgPresets) {
 }
 
 TEST(CliMap, TwoFramesWithPosesGiveTheSameMapAsOne) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
   write_scene_ply(dir / "west.ply", s, -kHalfSide, 0.0);
   write_scene_ply(dir / "east.ply", s, 0.0, kHalfSide);
@@ -288,7 +284,7 @@ TEST(CliMap, TwoFramesWithPosesGiveTheSameMapAsOne) {
 }
 
 TEST(CliMap, NonFinitePointsAreSkippedAndCounted) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   {
     std::ofstream out(dir / "pts.xyz");
     for (int j = 0; j < 40; ++j) {
@@ -308,7 +304,7 @@ TEST(CliMap, NonFinitePointsAreSkippedAndCounted) {
 TEST(CliMap, PerPointWeightsFromTheFileReplaceTheSensorModel) {
   // One 32 cm cell, a checkerboard of heights 1 (weight 9) and 0 (weight 1): the weighted mean
   // is 0.9 (unweighted it would be 0.5); one point with weight -1 is refused as a bad weight.
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   {
     std::ofstream out(dir / "weighted.xyz");
     for (int j = 0; j < 32; ++j) {
@@ -334,7 +330,7 @@ TEST(CliMap, PerPointWeightsFromTheFileReplaceTheSensorModel) {
 // =============================================================================================
 
 TEST(CliQuery, AnswersAtAMapFramePoint) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
   write_scene_ply(dir / "utm.ply", s);
   const double qx = s.x0 - 0.51, qy = s.y0 + 0.33;  // sub-cell position, away from the step
@@ -372,7 +368,7 @@ TEST(CliQuery, AnswersAtAMapFramePoint) {
 // =============================================================================================
 
 TEST(CliErrors, BadInputGivesOneLineAndNonZeroExit) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.0, 0.0, 0.0};
   write_scene_ply(dir / "scene.ply", s);
   const std::string good = (dir / "scene.ply").string();
@@ -444,7 +440,7 @@ TEST(CliErrors, HelpTexts) {
 }
 
 TEST(CliErrors, TheBuiltBinaryExitsNonZeroWithOneLine) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const std::string err_file = (dir / "err.txt").string();
   const std::string help = std::string("'") + CCMAP_CLI_BINARY + "' map --help > /dev/null 2>&1";
   const int help_status = std::system(help.c_str());
@@ -473,7 +469,7 @@ TEST(CliRealData, LoneStarCropAndScan) {
   if (!fs::exists(crop) || !fs::exists(las)) {
     GTEST_SKIP() << "real data not found under " << data << " (set CCMAP_DATA_DIR to the folder holding lone_star_tls/)";
   }
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   // The 10 x 10 m crop fits the 8 cm CCM layer (+-10.24 m): every finite point is used.
   const CliRun r = run({"map", "--preset", "ccm", "--res", "0.16", "--cloud", crop.string(), "--out", (dir / "crop").string()});
   ASSERT_EQ(r.code, 0) << r.err;
