@@ -386,9 +386,9 @@ TEST(Tiling, PlanFitsEveryLayersWindow) {
 }
 
 TEST(Tiling, FloatInCellNamesTheCellTheLibraryLocates) {
-  // Positions at and within 1e-9 m of the edges of cells 0..T of a tile frame: the float the
+  // Positions at and within 1e-9 m of the edges of cells -31..30 of a tile frame: the float the
   // tool hands over must lie in the cell it decided on, as the library's own RingGrid::locate
-  // sees it, and within a few float steps of the position.
+  // sees it, and within the library's position quantum of the position.
   int nudged = 0;
   const std::pair<float, double> widths[] = {{0.04F, 0.04}, {0.08F, 0.08}, {0.1F, 0.1}, {0.3F, 0.3}};
   for (const auto& [width, w] : widths) {  // the library's float width, the user's decimal
@@ -404,7 +404,8 @@ TEST(Tiling, FloatInCellNamesTheCellTheLibraryLocates) {
         ccmap::CellIndex located{};
         ASSERT_TRUE(grid.locate(v, 0.0F, &located)) << v;
         EXPECT_EQ(located.x, cell) << "width " << width << ", position " << local;
-        EXPECT_LE(std::fabs(static_cast<double>(v) - local), 4.0 * std::ldexp(1.0, -23) * (std::fabs(local) + w));
+        // Within the library's position quantum (2^-18 m) and a few float steps.
+        EXPECT_LE(std::fabs(static_cast<double>(v) - local), std::ldexp(1.0, -18) + 4.0 * std::ldexp(1.0, -23) * (std::fabs(local) + w));
         nudged += v != static_cast<float>(local) ? 1 : 0;
       }
     }

@@ -77,19 +77,34 @@ bool plan_tiles(MapRunner& runner, const std::vector<double>& widths, std::int32
 }
 
 bool float_in_cell(double local_m, std::int64_t cell, float inv_width, float* out) {
-  float v = static_cast<float>(local_m);
-  // A few steps at most: a cell spans >= 2^9 floats for every width and tile the library and
-  // plan_tiles accept (tile <= 2^15 cells, float's 24 bits).
-  for (int step = 0; step < 64; ++step) {
-    const std::int64_t index = grid::exact_floor_mul(v, inv_width);
-    if (index == cell) {
-      *out = v;
-      return true;
-    }
-    v = std::nextafter(v, index < cell ? std::numeric_limits<float>::infinity()
-                                       : -std::numeric_limits<float>::infinity());
+  // The library's own index of a tile-frame position (it quantises positions before flooring).
+  auto index_of = [inv_width](double v, std::int64_t* index) {
+    CellIndex c{0, 0};
+    if (!grid::index_of_position(static_cast<float>(v), 0.0F, inv_width, &c)) return false;
+    *index = c.x;
+    return true;
+  };
+  std::int64_t index = 0;
+  if (!index_of(local_m, &index) || index < cell - 1 || index > cell + 1) return false;
+  if (index == cell) {
+    *out = static_cast<float>(local_m);
+    return true;
   }
-  return false;
+  // Rounding put it in a neighbour: bisect towards the cell's centre, half a cell inside it,
+  // keeping the position nearest to local_m that the library puts in the cell.
+  double outside = local_m;
+  double inside = (static_cast<double>(cell) + 0.5) / static_cast<double>(inv_width);
+  if (!index_of(inside, &index) || index != cell) return false;
+  for (int step = 0; step < 64; ++step) {
+    const double mid = 0.5 * (outside + inside);
+    if (index_of(mid, &index) && index == cell) {
+      inside = mid;
+    } else {
+      outside = mid;
+    }
+  }
+  *out = static_cast<float>(inside);
+  return true;
 }
 
 LayerCellRow make_row(int layer, std::int64_t ix, std::int64_t iy, double width, double z_origin,

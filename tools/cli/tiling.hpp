@@ -31,9 +31,10 @@
 //
 // Assignment in double. The tool decides each point's finest cell in double on the map-frame
 // grid (floor((x - origin) / w)), then hands the library a float tile-frame coordinate inside
-// that cell: the rounded value, moved by the fewest float steps (at most ~0.2 um) for the
-// library's own index function (grid::exact_floor_mul with 1/w in float) to name that cell.
-// The tool's bookkeeping and the library's cells therefore never disagree, edges included.
+// that cell: the rounded value, or, when rounding (or the library's 3.8 um position quantum,
+// grid::quantize_position) puts it in a neighbour, the nearest position that the library's own
+// index function (grid::index_of_position, what updates and queries use) puts in that cell,
+// a few um away at most. The tool's bookkeeping and the library's cells never disagree.
 #pragma once
 
 #include <cstdint>
@@ -61,10 +62,11 @@ struct TilePlan {
 [[nodiscard]] bool plan_tiles(MapRunner& runner, const std::vector<double>& widths, std::int32_t max_tile_cells,
                               TilePlan* plan, std::string* error);
 
-/// A float coordinate near `local_m` (tile frame, m) in the tile-frame finest cell `cell`, as the
-/// library's index function computes it with `inv_width` (= 1 / finest width, in float): the
-/// nearest float, moved step by step into the cell if rounding put it in a neighbour. False
-/// if `cell` is not within a few float steps of `local_m` (a caller error).
+/// A float coordinate near `local_m` (tile frame, m) in the tile-frame finest cell `cell`, as
+/// grid::index_of_position computes it with `inv_width` (= 1 / finest width, in float): the
+/// nearest float, or, if that lies in a neighbouring cell, the position in `cell` nearest to
+/// local_m (bisection towards the cell's centre). False if local_m is not in `cell` or a
+/// neighbour of it (a caller error) or beyond the library's index range.
 [[nodiscard]] bool float_in_cell(double local_m, std::int64_t cell, float inv_width, float* out);
 
 /// One row of a layer CSV from a library cell: global index (map-frame grid), centre, height in
