@@ -1,8 +1,0 @@
-# tools/check-paths (part of tools/lint) on a small fixture tree: it must name exactly the stale
-# paths and the conditional CMake pickups planted there, and pass the same tree once they are
-# fixed. Python 3 is in the host package tier.
-find_program(CCMAP_PYTHON3 python3 REQUIRED)
-add_test(NAME ccmap_tools_check_paths_finds_stale_paths
-         COMMAND ${CMAKE_COMMAND} -DPYTHON=${CCMAP_PYTHON3} -DCHECKER=${PROJECT_SOURCE_DIR}/tools/check-paths
-                 -DDIR=${CMAKE_CURRENT_BINARY_DIR}/check_paths_fixture -P ${CMAKE_CURRENT_LIST_DIR}/check_paths_check.cmake)
-set_tests_properties(ccmap_tools_check_paths_finds_stale_paths PROPERTIES LABELS "tools" TIMEOUT 60)
