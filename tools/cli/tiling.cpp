@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <tuple>
 
 #include "ccmap/cell/ccm_cell.hpp"
@@ -18,7 +17,7 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) {
   return (a % b != 0 && a < 0) ? q - 1 : q;
 }
 
-/// The finest-cell window [lo, hi) on both axes of a layer, in that layer's cells.
+/// True if the layer's window holds its cells [lo, hi) on both axes (indices in that layer's cells).
 bool window_holds(const MapRunner& runner, int layer, std::int64_t lo, std::int64_t hi) {
   std::int32_t wx = 0, wy = 0;
   runner.layer_window_min(layer, &wx, &wy);
