@@ -179,12 +179,13 @@ TEST(Tiling, CcmCellsEqualADoublePrecisionBatchOfTheirPoints) {
     const double height = m.mean_z - a * m.mean_x - b * m.mean_y;  // eq. (10) at the cell centre
     const std::string where = "cell " + std::to_string(r.ix) + "," + std::to_string(r.iy);
     EXPECT_EQ(r.weight, m.weight) << where;
-    // Float limits: x, y in a 20 m tile frame carry ~1 um, z relative to the origin ~0.3 um; a
-    // 3-point cell's plane amplifies that. 0.1 mm and (0.1 mm)^2 are far below any threshold.
-    EXPECT_NEAR(r.height, height, 1e-4) << where;
-    EXPECT_NEAR(r.slope_x, a, 2e-3 * (1.0 + std::fabs(a))) << where;
-    EXPECT_NEAR(r.slope_y, b, 2e-3 * (1.0 + std::fabs(b))) << where;
-    EXPECT_NEAR(r.normal_var, m.normal_variance(), 1e-3 * m.normal_variance() + 1e-8) << where;
+    // The weight is exact: the cell holds exactly its points. The rest agrees to the core's
+    // precision: CCM positions are formed in Q18 (1.9 um error per coordinate), which a 3-point
+    // cell's plane amplifies (worst seen: 0.14 mm, slope 2.2e-3). Far below any threshold.
+    EXPECT_NEAR(r.height, height, 3e-4) << where;
+    EXPECT_NEAR(r.slope_x, a, 5e-3 * (1.0 + std::fabs(a))) << where;
+    EXPECT_NEAR(r.slope_y, b, 5e-3 * (1.0 + std::fabs(b))) << where;
+    EXPECT_NEAR(r.normal_var, m.normal_variance(), 1e-3 * m.normal_variance() + 5e-8) << where;
   }
 }
 
@@ -281,12 +282,13 @@ void expect_tiled_equals_one_window(const std::string& preset, const std::vector
       const RefRow& e = it->second;
       const std::string where = preset + " layer " + std::to_string(k) + " cell " + std::to_string(r.ix) + "," +
                                 std::to_string(r.iy) + " (x " + std::to_string(r.cx - cx) + " m from the centre)";
+      // The two runs place x, y in different frames (tile corner vs window centre), so the core's
+      // Q18 positions (1.9 um error) of a CCM point differ: worst seen 42 um of height and 1.1e-3
+      // of slope in a cell holding a 25 cm step. Piece-wise constant cells agree to the CSV's 1 um.
       EXPECT_NEAR(r.weight, e.weight, 1e-4 * e.weight) << where;
-      EXPECT_NEAR(r.height, e.height, 1e-5) << where;
-      EXPECT_NEAR(r.slope_x, e.slope_x, 1e-4 * (1.0 + std::fabs(e.slope_x))) << where;
-      EXPECT_NEAR(r.slope_y, e.slope_y, 1e-4 * (1.0 + std::fabs(e.slope_y))) << where;
-      // The two runs round x, y in different float frames (tile corner vs window centre, ~1 um
-      // apart 10 m out): variances agree to (0.1 mm)^2, far below every threshold.
+      EXPECT_NEAR(r.height, e.height, 1e-4) << where;
+      EXPECT_NEAR(r.slope_x, e.slope_x, 3e-3 * (1.0 + std::fabs(e.slope_x))) << where;
+      EXPECT_NEAR(r.slope_y, e.slope_y, 3e-3 * (1.0 + std::fabs(e.slope_y))) << where;
       EXPECT_NEAR(r.normal_var, e.normal_var, 1e-3 * e.normal_var + 1e-8) << where;
       EXPECT_NEAR(r.elev_var, e.elev_var, 1e-3 * e.elev_var + 1e-8) << where;
       EXPECT_EQ(r.cell_class, e.cell_class) << where;
