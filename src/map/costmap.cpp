@@ -1,5 +1,5 @@
 // Non-template parts of the cost raster (map/costmap.hpp): validation, the cost function,
-// rank conversion, inflation and counting.
+// rank conversion, inflation (also for rasters the caller assembles) and counting.
 #include "ccmap/map/costmap.hpp"
 
 #include <cmath>
@@ -61,10 +61,11 @@ void count_costs(std::size_t pixels, const std::uint8_t* cost, CostmapStats* sta
   *stats = s;
 }
 
-void inflate_costmap(const CostmapSpec& spec, std::uint8_t* cost) noexcept {
+void inflate_lethal(std::uint32_t width, std::uint32_t height, float radius_pixels, std::uint8_t* cost) noexcept {
   static_assert(kRankLethal == kCostLethal, "the lethal rank is the lethal cost");
-  const float radius = spec.inflation_radius_m / spec.resolution_m;  // pixels, <= kMaxInflationPixels
-  const auto reach = static_cast<std::int32_t>(std::floor(radius));
+  const float radius = radius_pixels;  // <= kMaxInflationPixels (callers check)
+  auto reach = static_cast<std::int32_t>(std::floor(radius));
+  reach = reach < kMaxInflationPixels ? reach : kMaxInflationPixels;  // the table's size, whatever the rounding
   // half[d]: the largest dx with dx^2 + d^2 <= radius^2 (pixel centres), in integers from one
   // float square root per row offset (+ 1e-4 px: a centre exactly on the circle is inside).
   std::int32_t half[kMaxInflationPixels + 1];
@@ -72,26 +73,27 @@ void inflate_costmap(const CostmapSpec& spec, std::uint8_t* cost) noexcept {
     const float rest = radius * radius - static_cast<float>(d * d);
     half[d] = rest >= 0.0F ? static_cast<std::int32_t>(std::floor(std::sqrt(rest) + 1.0e-4F)) : -1;
   }
-  const auto side = static_cast<std::int32_t>(spec.side);
-  for (std::int32_t y = 0; y < side; ++y) {
-    std::uint8_t* target = cost + static_cast<std::size_t>(y) * spec.side;
+  const auto cols = static_cast<std::int32_t>(width);
+  const auto rows = static_cast<std::int32_t>(height);
+  for (std::int32_t y = 0; y < rows; ++y) {
+    std::uint8_t* target = cost + static_cast<std::size_t>(y) * width;
     for (std::int32_t d = -reach; d <= reach; ++d) {
       const std::int32_t source_y = y + d;
       const std::int32_t h = half[d < 0 ? -d : d];
-      if (source_y < 0 || source_y >= side || h < 0) {
+      if (source_y < 0 || source_y >= rows || h < 0) {
         continue;
       }
-      const std::uint8_t* source = cost + static_cast<std::size_t>(source_y) * spec.side;
+      const std::uint8_t* source = cost + static_cast<std::size_t>(source_y) * width;
       // Sliding count of lethal pixels of the source row in [x - h, x + h]. Marking writes 253
       // into cost pixels only, so lethal pixels (the only ones counted) never change.
       std::int32_t count = 0;
-      for (std::int32_t x = 0; x < h && x < side; ++x) {
+      for (std::int32_t x = 0; x < h && x < cols; ++x) {
         count += source[x] == kCostLethal ? 1 : 0;
       }
-      for (std::int32_t x = 0; x < side; ++x) {
+      for (std::int32_t x = 0; x < cols; ++x) {
         const std::int32_t enter = x + h;
         const std::int32_t leave = x - h - 1;
-        count += (enter < side && source[enter] == kCostLethal) ? 1 : 0;
+        count += (enter < cols && source[enter] == kCostLethal) ? 1 : 0;
         count -= (leave >= 0 && source[leave] == kCostLethal) ? 1 : 0;
         if (count > 0 && target[x] <= kCostMaxTraversable) {
           target[x] = kCostInscribed;
@@ -102,4 +104,21 @@ void inflate_costmap(const CostmapSpec& spec, std::uint8_t* cost) noexcept {
 }
 
 }  // namespace detail
+
+Status inflate_costmap(std::uint8_t* cost, std::size_t capacity, std::uint32_t width, std::uint32_t height,
+                       float radius_pixels) noexcept {
+  if (cost == nullptr || width == 0U || height == 0U || width > kMaxCostmapSide || height > kMaxCostmapSide ||
+      capacity < static_cast<std::size_t>(width) * height) {
+    return Status::kInvalidArgument;
+  }
+  if (!std::isfinite(radius_pixels)) {
+    return Status::kNonFiniteInput;
+  }
+  if (radius_pixels < 0.0F || radius_pixels > static_cast<float>(kMaxInflationPixels)) {
+    return Status::kOutOfRange;
+  }
+  detail::inflate_lethal(width, height, radius_pixels, cost);
+  return Status::kOk;
+}
+
 }  // namespace ccmap

@@ -363,7 +363,7 @@ TEST(Footprint, RefusesBadInputWithAStatus) {
 
 // The worst case of cells read, for CADRE: a map where no cell is known but every cell has
 // weight (so every piece asks every layer above it, each CCM cell pooling its whole subtree),
-// and the largest footprint. Bound (docs/design.md section 5): for each layer k, the cells the
+// and the largest footprint. Bound (docs/design.md section 6): for each layer k, the cells the
 // bounding box touches, n_k = (64 / 2^k + 1)^2, times the reads of one answer there: 1 + 9 for a
 // constant cell, R_k = (4^(k+1) - 1) / 3 for a CCM cell of stack layer k (own cell and every
 // cell below).

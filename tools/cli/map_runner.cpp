@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include "ccmap/map/config.hpp"
-#include "ccmap/map/costmap.hpp"
 #include "ccmap/map/footprint.hpp"
 #include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
@@ -40,6 +39,19 @@ class StackRunner final : public MapRunner {
     const Status status = stack_->init(params);
     if (status != Status::kOk) {
       *error = std::string("the map refused its parameters (") + to_string(status) + ")";
+      return false;
+    }
+    params_ = params;
+    for (int layer = 0; layer < StackType::kLayerCount; ++layer) {
+      params_.normal_variance_threshold[static_cast<std::size_t>(layer)] = stack_->normal_variance_threshold(layer);
+    }
+    return true;
+  }
+
+  bool reset(std::string* error) override {
+    const Status status = stack_->initialised() ? stack_->init(params_) : Status::kNotInitialised;
+    if (status != Status::kOk) {
+      *error = std::string("cannot reset the map (") + to_string(status) + ")";
       return false;
     }
     return true;
@@ -170,24 +182,7 @@ class StackRunner final : public MapRunner {
     return out;
   }
 
-  bool costmap(float cx, float cy, float resolution, int side, float inflation_m, std::vector<std::uint8_t>* cost,
-               std::string* error) const override {
-    cost->assign(static_cast<std::size_t>(side) * static_cast<std::size_t>(side), kCostUnknown);
-    const Status status = fill_costmap(*stack_, CostmapSpec{cx, cy, resolution, static_cast<std::uint32_t>(side), inflation_m},
-                                       cost->data(), cost->size(), nullptr);
-    if (status != Status::kOk) {
-      *error = std::string("the map refused the cost raster (") + to_string(status) + ")";
-      return false;
-    }
-    return true;
-  }
-
-  void layer_window_centre(int layer, float* x, float* y) const override {
-    const CellIndex c = stack_->layer_centre(layer);
-    // The window holds [c - side/2, c + side/2): its centre is the lower edge of cell c.
-    *x = static_cast<float>(c.x) * stack_->layer_cell_width(layer);
-    *y = static_cast<float>(c.y) * stack_->layer_cell_width(layer);
-  }
+  float max_inclination() const override { return stack_->params().max_inclination; }
 
   FrameStats totals() const override { return to_stats(stack_->total_counters()); }
   float weight_limit() const override { return stack_->params().weight_limit; }
@@ -195,6 +190,7 @@ class StackRunner final : public MapRunner {
 
  private:
   std::unique_ptr<StackType> stack_ = std::make_unique<StackType>();  // MBs: never on the stack
+  StackParams params_{};  ///< what init() accepted, thresholds as calibrated (for reset)
   std::vector<PointXYZ> points_;
 };
 

@@ -75,6 +75,10 @@ class MapRunner {
   virtual ~MapRunner() = default;
   /// Configures the stack; false with a one-line reason.
   virtual bool init(const RunnerOptions& options, std::string* error) = 0;
+  /// Empties the map: every cell unobserved, windows centred on the local origin, counters
+  /// zero, the parameters of init() (its calibrated normal-variance thresholds reused, so a
+  /// reset costs a clear of the cells, not a calibration). False before a successful init().
+  virtual bool reset(std::string* error) = 0;
   /// Re-centres the stack on (x, y), local metres.
   virtual bool move_to(float x, float y, std::string* error) = 0;
   /// Folds one frame (xyz interleaved, local metres); sensor origin in local metres. `weights`
@@ -96,12 +100,8 @@ class MapRunner {
   /// The path query along the polyline xy (x0 y0 x1 y1 ...), the body every `step` m.
   virtual LocalPath path(const std::vector<float>& xy, float length, float width, float step,
                          float max_unknown_share) const = 0;
-  /// The cost raster (map/costmap.hpp) of side x side pixels of `resolution` m around (cx, cy),
-  /// row 0 at the lowest y; false with a reason if the library refuses the raster.
-  virtual bool costmap(float cx, float cy, float resolution, int side, float inflation_m,
-                       std::vector<std::uint8_t>* cost, std::string* error) const = 0;
-  /// Centre of a layer's window (local metres).
-  virtual void layer_window_centre(int layer, float* x, float* y) const = 0;
+  /// The stack's maximum inclination (dz/dxy): the steep limit the cost function scales by.
+  virtual float max_inclination() const = 0;
   virtual FrameStats totals() const = 0;
   virtual float weight_limit() const = 0;
   virtual float min_weight() const = 0;

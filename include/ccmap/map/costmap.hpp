@@ -73,6 +73,14 @@ struct CostmapStats {
 [[nodiscard]] std::uint8_t traversable_cost(float inclination, float max_inclination, float normal_variance,
                                             float threshold) noexcept;
 
+/// The inflation of fill_costmap for a raster the caller assembled (width x height pixels,
+/// row-major, costmap_2d values): every pixel of cost 0 .. 252 whose centre lies within
+/// radius_pixels of a lethal pixel's centre becomes 253. Refused (raster untouched):
+/// kInvalidArgument (null, width or height 0 or above kMaxCostmapSide, capacity below
+/// width x height), kNonFiniteInput, kOutOfRange (radius negative or above kMaxInflationPixels).
+[[nodiscard]] Status inflate_costmap(std::uint8_t* cost, std::size_t capacity, std::uint32_t width,
+                                     std::uint32_t height, float radius_pixels) noexcept;
+
 namespace detail {
 
 /// Ranks while the raster is filled (max = worst): costs 0 .. 252, then unknown, then lethal.
@@ -84,9 +92,10 @@ inline constexpr std::uint8_t kRankLethal = 254U;
 /// radius above kMaxInflationPixels pixels).
 [[nodiscard]] Status check_costmap_spec(const CostmapSpec& spec) noexcept;
 
-/// Marks every pixel of cost 0 .. 252 within spec.inflation_radius_m of a lethal pixel (pixel
-/// centres) as inscribed. Exact disc (integer half-widths per row offset), sliding counts per row.
-void inflate_costmap(const CostmapSpec& spec, std::uint8_t* cost) noexcept;
+/// Marks every pixel of cost 0 .. 252 within radius_pixels (0 .. kMaxInflationPixels) of a
+/// lethal pixel (pixel centres) as inscribed, in a width x height raster (row-major). Exact disc
+/// (integer half-widths per row offset), sliding counts per row, in place.
+void inflate_lethal(std::uint32_t width, std::uint32_t height, float radius_pixels, std::uint8_t* cost) noexcept;
 
 /// Converts ranks to costmap values (unknown rank -> 255; lethal and costs keep their value).
 void ranks_to_costs(std::size_t pixels, std::uint8_t* cost) noexcept;
@@ -245,7 +254,7 @@ template <typename Config>
   }
   detail::ranks_to_costs(pixels, cost);
   if (spec.inflation_radius_m > 0.0F) {
-    detail::inflate_costmap(spec, cost);
+    detail::inflate_lethal(spec.side, spec.side, spec.inflation_radius_m / spec.resolution_m, cost);
   }
   if (stats != nullptr) {
     detail::count_costs(pixels, cost, stats);

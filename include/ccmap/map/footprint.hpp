@@ -26,7 +26,7 @@
 //
 // Bounded: the rectangle's axis-aligned bounding box may touch at most kMaxFootprintCells cells
 // of the finest layer (the cells of coarser layers it touches are fewer, ~4^-k as many); larger
-// footprints are refused with kOutOfRange. docs/design.md section 5 gives the worst case of cells
+// footprints are refused with kOutOfRange. docs/design.md section 6 gives the worst case of cells
 // visited for CADRE; tests/map/footprint_test.cpp asserts it.
 //
 // Frames and units: map frame, metres; the heading is a direction vector (the core evaluates
