@@ -164,6 +164,46 @@ TEST(Costmap, InflationMarksTheDiscAroundLethalPixelsAndOnlyCostPixels) {
   }
 }
 
+TEST(Costmap, InflatingACallersRasterMatchesBruteForce) {
+  // A 37 x 23 raster (not square) with scattered lethal, unknown and cost pixels.
+  constexpr std::uint32_t kW = 37, kH = 23;
+  std::vector<std::uint8_t> raster(kW * kH);
+  std::uint32_t h = 7U;
+  for (std::uint8_t& v : raster) {
+    h = h * 1664525U + 1013904223U;
+    const std::uint32_t r = h >> 24;
+    v = r < 6 ? 254 : (r < 30 ? 255 : static_cast<std::uint8_t>(r % 200));
+  }
+  for (const float radius : {0.0F, 1.0F, 2.5F, 4.0F}) {
+    std::vector<std::uint8_t> got = raster;
+    ASSERT_EQ(inflate_costmap(got.data(), got.size(), kW, kH, radius), Status::kOk);
+    int wrong = 0;
+    for (std::uint32_t y = 0; y < kH; ++y) {
+      for (std::uint32_t x = 0; x < kW; ++x) {
+        bool near = false;
+        for (std::uint32_t yy = 0; yy < kH; ++yy)
+          for (std::uint32_t xx = 0; xx < kW; ++xx) {
+            const double d2 = (double(x) - xx) * (double(x) - xx) + (double(y) - yy) * (double(y) - yy);
+            near = near || (raster[yy * kW + xx] == 254 && d2 <= (radius + 1e-4) * (radius + 1e-4));
+          }
+        const std::uint8_t before = raster[y * kW + x];
+        const std::uint8_t want = before <= 252 && near ? 253 : before;
+        wrong += got[y * kW + x] != want ? 1 : 0;
+      }
+    }
+    EXPECT_EQ(wrong, 0) << "radius " << radius << " px";
+  }
+  std::vector<std::uint8_t> untouched = raster;
+  EXPECT_EQ(inflate_costmap(nullptr, 10, kW, kH, 1.0F), Status::kInvalidArgument);
+  EXPECT_EQ(inflate_costmap(untouched.data(), untouched.size() - 1, kW, kH, 1.0F), Status::kInvalidArgument);
+  EXPECT_EQ(inflate_costmap(untouched.data(), untouched.size(), 0U, kH, 1.0F), Status::kInvalidArgument);
+  EXPECT_EQ(inflate_costmap(untouched.data(), untouched.size(), kMaxCostmapSide + 1U, 1U, 1.0F), Status::kInvalidArgument);
+  EXPECT_EQ(inflate_costmap(untouched.data(), untouched.size(), kW, kH, std::nanf("")), Status::kNonFiniteInput);
+  EXPECT_EQ(inflate_costmap(untouched.data(), untouched.size(), kW, kH, -1.0F), Status::kOutOfRange);
+  EXPECT_EQ(inflate_costmap(untouched.data(), untouched.size(), kW, kH, 33.0F), Status::kOutOfRange);
+  EXPECT_EQ(untouched, raster) << "a refused call changed the raster";
+}
+
 TEST(Costmap, OffTheMapIsUnknown) {
   const Cadre& map = terrain_map();
   std::vector<std::uint8_t> cost(50U * 50U);
