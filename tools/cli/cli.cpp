@@ -453,10 +453,9 @@ void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool 
   }
 }
 
-/// A planner query without --poses: the stack centred on (x, y) (map frame), every cloud folded
-/// into it as one frame with the sensor there (at the origin's height), as a rover standing at
-/// (x, y) would map the ground. The origin is that of all clouds, as for tiles.
-void map_centred(const Options& o, MappedClouds& m, double x, double y, std::ostream& out, bool verbose) {
+/// Every cloud read at once (tiles and the centred map need them all), the local origin from
+/// all of them, the header printed.
+std::vector<Cloud> read_all_clouds(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
   std::string error;
   std::vector<Cloud> clouds;
   std::vector<const Cloud*> all;
@@ -468,6 +467,15 @@ void map_centred(const Options& o, MappedClouds& m, double x, double y, std::ost
   for (const Cloud& c : clouds) all.push_back(&c);
   if (!robust_origin(all, o.bounds, m.widths.back(), &m.origin, &error)) fail(error);
   if (verbose) print_header(o, m, out);
+  return clouds;
+}
+
+/// A planner query without --poses: the stack centred on (x, y) (map frame), every cloud folded
+/// into it as one frame with the sensor there (at the origin's height), as a rover standing at
+/// (x, y) would map the ground. The origin is that of all clouds, as for tiles.
+void map_centred(const Options& o, MappedClouds& m, double x, double y, std::ostream& out, bool verbose) {
+  std::string error;
+  const std::vector<Cloud> clouds = read_all_clouds(o, m, out, verbose);
   const double local[2] = {x - m.origin.xyz[0], y - m.origin.xyz[1]};
   if (!(std::fabs(local[0]) <= static_cast<double>(kMaxAbsCoordinateM)) ||
       !(std::fabs(local[1]) <= static_cast<double>(kMaxAbsCoordinateM))) {
@@ -486,16 +494,7 @@ void map_centred(const Options& o, MappedClouds& m, double x, double y, std::ost
 /// covers their whole extent. For a query only the query point's tile is mapped.
 void map_in_tiles(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
   std::string error;
-  std::vector<Cloud> clouds;
-  std::vector<const Cloud*> all;
-  clouds.reserve(o.clouds.size());
-  for (const std::string& path : o.clouds) {
-    clouds.push_back(read_nonempty_cloud(path));
-    m.read += clouds.back().declared;
-  }
-  for (const Cloud& c : clouds) all.push_back(&c);
-  if (!robust_origin(all, o.bounds, m.widths.back(), &m.origin, &error)) fail(error);
-  if (verbose) print_header(o, m, out);
+  const std::vector<Cloud> clouds = read_all_clouds(o, m, out, verbose);
   TilePlan plan;
   if (!plan_tiles(*m.runner, m.widths, 0, &plan, &error)) fail(error);
   m.query.wanted = o.have_at;
