@@ -1,8 +1,9 @@
 // The flight cycle's corridor question (tests/support/flight_cycle.hpp: the rover's 1 m x 2 m
 // corridor 0.3 .. 2.3 m ahead) asked two ways, each in its own icount region, on the maps of the
 // cycle's drive (move_to + update_frame_sensor of cycle_frame(k), not counted):
-//   region 1  the 1,250 point queries, one per 4 cm cell, as run_cycle asks it today
-//   region 2  one query_footprint over the same rectangle (map/footprint.hpp)
+//   region 1  the 1,250 point queries, one per 4 cm cell (test::corridor_queries)
+//   region 2  one query_footprint over the same rectangle (test::corridor_footprint), as
+//             run_cycle asks it
 // and checks that they agree: the footprint's unknown share within 0.05 of the cells' share, and
 // a hazard whenever a cell centre is one (the footprint sees every part, centres or not).
 //
@@ -34,21 +35,11 @@ int main(int argc, char** argv) {
             Status::kOk) {
       return 1;
     }
-    int unknown = 0, hazards = 0;
+    int hazards = 0;
     test::icount_begin<1>();
-    for (int i = 0; i < 50; ++i) {
-      const float ahead = 0.3F + (static_cast<float>(i) + 0.5F) * 0.04F;
-      for (int j = 0; j < 25; ++j) {
-        const float side = -0.5F + (static_cast<float>(j) + 0.5F) * 0.04F;
-        const QueryResult q = stack->query(pose.x + pose.heading_cos * ahead - pose.heading_sin * side,
-                                           pose.y + pose.heading_sin * ahead + pose.heading_cos * side);
-        unknown += q.status != Status::kOk ? 1 : 0;
-        hazards += (q.cell_class == CellClass::kObstacle || q.cell_class == CellClass::kSteep) ? 1 : 0;
-      }
-    }
+    const int unknown = test::corridor_queries(*stack, pose, &hazards);
     test::icount_end<1>();
-    const Footprint corridor{pose.x + 1.3F * pose.heading_cos, pose.y + 1.3F * pose.heading_sin, pose.heading_cos,
-                             pose.heading_sin, 2.0F, 1.0F};
+    const Footprint corridor = test::corridor_footprint(pose);
     test::icount_begin<2>();
     const FootprintResult f = query_footprint(*stack, corridor);
     test::icount_end<2>();

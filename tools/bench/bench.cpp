@@ -72,7 +72,7 @@ void BM_CellCcm(benchmark::State& s) { frame_update<ccmap::SingleCcmConfig>(s, 4
 void BM_CellKalman(benchmark::State& s) { frame_update<ccmap::SingleKalmanConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
 void BM_CellOmg(benchmark::State& s) { frame_update<ccmap::SingleOmgConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
 // The flight cycle of the timing test (tests/support/flight_cycle.hpp): move_to, a sensor-frame
-// frame with 8 % unusable pixels, the 1250 corridor queries; ten frames of the drive, cycled.
+// frame with 8 % unusable pixels, the corridor footprint and the 2 m path; ten frames of the drive, cycled.
 void BM_FlightCycle(benchmark::State& state) {
   static const std::vector<CadreFrame> drive = [] {
     std::vector<CadreFrame> f;
@@ -182,7 +182,7 @@ void BM_Costmap5m(benchmark::State& state) {
   }
 }
 // The flight cycle's corridor (1 m x 2 m, 0.3 .. 2.3 m ahead) after three cycles of the drive:
-// the 1250 per-cell point queries of run_cycle, and one footprint query of the same rectangle.
+// the 1250 per-cell point queries (test::corridor_queries), and the footprint query run_cycle asks.
 const ccmap::Stack<ccmap::CadreConfig>& cycle_map() {
   static std::unique_ptr<ccmap::Stack<ccmap::CadreConfig>> stack = [] {
     auto s = make_stack<ccmap::CadreConfig>(0.04F);
@@ -201,23 +201,14 @@ void BM_CorridorCells(benchmark::State& state) {
   const ccmap::test::CyclePose p = ccmap::test::cycle_pose(2);
   for (auto _ : state) {
     int hazards = 0;
-    for (int i = 0; i < 50; ++i) {
-      const float ahead = 0.3F + (static_cast<float>(i) + 0.5F) * 0.04F;
-      for (int j = 0; j < 25; ++j) {
-        const float side = -0.5F + (static_cast<float>(j) + 0.5F) * 0.04F;
-        const ccmap::QueryResult q = stack.query(p.x + p.heading_cos * ahead - p.heading_sin * side,
-                                                 p.y + p.heading_sin * ahead + p.heading_cos * side);
-        hazards += q.cell_class == ccmap::CellClass::kObstacle ? 1 : 0;
-      }
-    }
+    benchmark::DoNotOptimize(ccmap::test::corridor_queries(stack, p, &hazards));
     benchmark::DoNotOptimize(hazards);
   }
 }
 void BM_CorridorFootprint(benchmark::State& state) {
   const auto& stack = cycle_map();
   const ccmap::test::CyclePose p = ccmap::test::cycle_pose(2);
-  const ccmap::Footprint corridor{p.x + 1.3F * p.heading_cos, p.y + 1.3F * p.heading_sin, p.heading_cos, p.heading_sin,
-                                  2.0F, 1.0F};
+  const ccmap::Footprint corridor = ccmap::test::corridor_footprint(p);
   for (auto _ : state) {
     benchmark::DoNotOptimize(ccmap::query_footprint(stack, corridor));
   }
