@@ -149,6 +149,10 @@ void snapshot_write_header(SnapshotWriter& w, std::size_t total_size, const Snap
   w.u16(kSnapshotFormatVersion);
   w.u16(0U);
   w.u32(static_cast<std::uint32_t>(total_size));
+  snapshot_write_fingerprint(w, f);
+}
+
+void snapshot_write_fingerprint(SnapshotWriter& w, const SnapshotFingerprint& f) noexcept {
   w.u8(f.fine_kind);
   w.u8(f.layer_count);
   w.u16(0U);

@@ -1,5 +1,6 @@
 /* The C API from plain C99: placement in static storage, init, frames (with and without
- * weights, map and sensor frame), queries, export, counters, snapshots, every preset and the
+ * weights, map and sensor frame), queries, export, counters, snapshots, map exchange (deltas and
+ * snapshot merges between two half maps against one map fed everything), every preset and the
  * refusal of NULL pointers, foreign handles and bad enum values. Exits non-zero on failure. */
 #include <math.h>
 #include <stdint.h>
@@ -322,6 +323,137 @@ static void test_single_layer_presets(void) {
   }
 }
 
+static ccmap_cadre_storage g_team_a, g_team_b, g_team_all, g_team_merged;
+static ccmap_cadre_exchange_storage g_exchange_a, g_exchange_b;
+static uint8_t g_delta[CCMAP_CADRE_DELTA_MAX_SIZE];
+static uint8_t g_snapshot_a[CCMAP_CADRE_SNAPSHOT_SIZE];
+static uint8_t g_snapshot_b[CCMAP_CADRE_SNAPSHOT_SIZE];
+static uint8_t g_snapshot_check[CCMAP_CADRE_SNAPSHOT_SIZE];
+
+/* Every `step`-th point of the plane from `first` on, into the map. */
+static void feed_every(ccmap_map* map, size_t n, size_t first, size_t step) {
+  const float sensor[3] = {0.0f, 0.0f, 0.5f};
+  size_t i;
+  for (i = first; i < n; i += step) {
+    ccmap_frame_counters c;
+    CHECK_STATUS(ccmap_update_frame(map, &g_xyz[3 * i], NULL, 1, sensor, &c), CCMAP_OK);
+  }
+}
+
+/* Largest height difference between two maps' answers on a raster (-1: the answers differ in
+ * status or class). */
+static double max_height_difference(const ccmap_map* a, const ccmap_map* b) {
+  double worst = 0.0;
+  float x, y;
+  for (y = -0.95f; y < 0.95f; y += 0.05f) {
+    for (x = -0.95f; x < 0.95f; x += 0.05f) {
+      ccmap_query_result qa, qb;
+      const ccmap_status sa = ccmap_query(a, x, y, &qa);
+      const ccmap_status sb = ccmap_query(b, x, y, &qb);
+      if (sa != sb || qa.cell_class != qb.cell_class || qa.layer != qb.layer) {
+        return -1.0;
+      }
+      if (fabs((double)qa.height_m - (double)qb.height_m) > worst) {
+        worst = fabs((double)qa.height_m - (double)qb.height_m);
+      }
+    }
+  }
+  return worst;
+}
+
+static void test_exchange(void) {
+  ccmap_map *a = NULL, *b = NULL, *all = NULL, *merged = NULL;
+  ccmap_exchange *ex_a = NULL, *ex_b = NULL;
+  ccmap_exchange_params pa, pb;
+  ccmap_export_report er;
+  ccmap_merge_report mr;
+  ccmap_exchange_counters counters;
+  size_t written = 0, delta_size = 0, snapshot_size = 0;
+  const size_t n = make_plane();
+  ccmap_params p = precise_lidar_params(CCMAP_PRESET_CADRE);
+  p.weight_limit = INFINITY; /* no limiter and no effective floor: the merge is exact */
+  p.kalman_min_variance = 1e-30f;
+
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_CADRE) <= CCMAP_CADRE_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_CCM) <= CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size((ccmap_preset)9) == 0u);
+  CHECK(ccmap_delta_max_size(CCMAP_PRESET_CADRE) == CCMAP_CADRE_DELTA_MAX_SIZE);
+  CHECK(ccmap_delta_min_size(CCMAP_PRESET_CADRE) == 152u);
+  CHECK(strcmp(ccmap_status_string(CCMAP_DUPLICATE), "duplicate") == 0);
+  CHECK(strcmp(ccmap_status_string(CCMAP_MISALIGNED), "misaligned") == 0);
+
+  CHECK_STATUS(ccmap_place(&g_team_a, sizeof g_team_a, CCMAP_PRESET_CADRE, &a), CCMAP_OK);
+  CHECK_STATUS(ccmap_place(&g_team_b, sizeof g_team_b, CCMAP_PRESET_CADRE, &b), CCMAP_OK);
+  CHECK_STATUS(ccmap_place(&g_team_all, sizeof g_team_all, CCMAP_PRESET_CADRE, &all), CCMAP_OK);
+  CHECK_STATUS(ccmap_place(&g_team_merged, sizeof g_team_merged, CCMAP_PRESET_CADRE, &merged), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(a, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(b, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(all, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(merged, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_place(&g_exchange_a, ccmap_exchange_storage_size(CCMAP_PRESET_CADRE) - 1u,
+                                     CCMAP_PRESET_CADRE, &ex_a),
+               CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_exchange_place(&g_exchange_a, sizeof g_exchange_a, CCMAP_PRESET_CADRE, &ex_a), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_place(&g_exchange_b, sizeof g_exchange_b, CCMAP_PRESET_CADRE, &ex_b), CCMAP_OK);
+  pa.rover_id = 1u;
+  pa.session = 1u;
+  pa.origin_x_cells = 0;
+  pa.origin_y_cells = 0;
+  pa.origin_z_m = 0.0f;
+  pb = pa;
+  pb.rover_id = 2u;
+  CHECK_STATUS(ccmap_exchange_init(ex_a, (ccmap_map*)(void*)&g_exchange_b, &pa), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_init(ex_a, (ccmap_map*)(void*)&g_ccm_storage, &pa),
+               CCMAP_INVALID_ARGUMENT); /* a single-CCM map (placed above): another preset */
+  CHECK_STATUS(ccmap_exchange_init(ex_a, a, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_init(ex_a, a, &pa), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_init(ex_b, b, &pb), CCMAP_OK);
+
+  feed_every(a, n, 0u, 2u); /* the even points */
+  feed_every(b, n, 1u, 2u); /* the odd points */
+  feed_every(all, n, 0u, 1u);
+  CHECK_STATUS(ccmap_save_snapshot(a, g_snapshot_a, sizeof g_snapshot_a, &snapshot_size), CCMAP_OK);
+  CHECK_STATUS(ccmap_save_snapshot(b, g_snapshot_b, sizeof g_snapshot_b, &snapshot_size), CCMAP_OK);
+
+  /* A -> B, B -> A. */
+  CHECK_STATUS(ccmap_exchange_export(ex_a, g_delta, 100u, 0.0f, &written, &er), CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, g_delta, sizeof g_delta, -1.0f, &written, &er), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, g_delta, sizeof g_delta, 0.0f, &written, &er), CCMAP_OK);
+  CHECK(er.sequence == 1u && er.cells_written > 100u && er.bytes == written && er.cells_pending == 0u);
+  delta_size = written;
+  /* A flipped bit: refused, the map unchanged (its snapshot bytes equal). */
+  g_delta[delta_size / 2u] ^= 0x04u;
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, g_delta, delta_size, &mr), CCMAP_CORRUPT);
+  g_delta[delta_size / 2u] ^= 0x04u;
+  CHECK_STATUS(ccmap_save_snapshot(b, g_snapshot_check, sizeof g_snapshot_check, &written), CCMAP_OK);
+  CHECK(memcmp(g_snapshot_check, g_snapshot_b, written) == 0);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_a, g_delta, delta_size, &mr), CCMAP_DUPLICATE); /* its own */
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, g_delta, delta_size, &mr), CCMAP_OK);
+  CHECK(mr.sender_id == 1u && mr.sequence == 1u && mr.cells_merged == er.cells_written && mr.cells_outside == 0u);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, g_delta, delta_size, &mr), CCMAP_DUPLICATE); /* twice */
+  CHECK_STATUS(ccmap_exchange_export(ex_b, g_delta, sizeof g_delta, 0.0f, &written, &er), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_a, g_delta, written, &mr), CCMAP_OK);
+  CHECK(max_height_difference(a, all) >= 0.0 && max_height_difference(a, all) < 1e-5);
+  CHECK(max_height_difference(b, all) >= 0.0 && max_height_difference(b, all) < 1e-5);
+
+  CHECK_STATUS(ccmap_exchange_get_counters(ex_b, &counters), CCMAP_OK);
+  CHECK(counters.deltas_exported == 1u && counters.deltas_merged == 1u && counters.refused == 2u &&
+        counters.refused_corrupt == 1u && counters.refused_duplicate == 1u);
+  CHECK_STATUS(ccmap_exchange_get_counters(NULL, &counters), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_merge_delta((ccmap_exchange*)(void*)&g_team_a, g_delta, written, &mr),
+               CCMAP_INVALID_ARGUMENT); /* a map handle is not an exchange */
+
+  /* Two snapshots of the half maps merged into an empty map: the map fed everything. */
+  CHECK_STATUS(ccmap_merge_snapshot(merged, g_snapshot_a, snapshot_size, 1, 0, 0.0f, &mr), CCMAP_MISALIGNED);
+  CHECK_STATUS(ccmap_merge_snapshot(merged, g_snapshot_a, snapshot_size, 0, 0, 0.0f, &mr), CCMAP_OK);
+  CHECK_STATUS(ccmap_merge_snapshot(merged, g_snapshot_b, snapshot_size, 0, 0, 0.0f, &mr), CCMAP_OK);
+  CHECK(max_height_difference(merged, all) >= 0.0 && max_height_difference(merged, all) < 1e-5);
+
+  /* Re-initialising the map retires its exchange until it is bound again. */
+  CHECK_STATUS(ccmap_init(a, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, g_delta, sizeof g_delta, 0.0f, &written, &er), CCMAP_NOT_INITIALISED);
+}
+
 int main(void) {
   ccmap_map* map = NULL;
   CHECK(strcmp(ccmap_status_string(CCMAP_OK), "ok") == 0);
@@ -336,6 +468,7 @@ int main(void) {
   test_frames_queries_export(map);
   test_snapshots(map);
   test_single_layer_presets();
+  test_exchange();
 
   printf("ccmap C API: %d checks, %d failed\n", g_checks, g_failures);
   return g_failures == 0 ? 0 : 1;
