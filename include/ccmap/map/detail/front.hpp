@@ -64,6 +64,18 @@ enum : std::uint32_t {
   return u;
 }
 
+/// floor(v) as int64 for 1 <= v < 2^63, from the bit pattern in integer operations only. A
+/// static_cast calls libgcc's __aeabi_f2lz on 32-bit Arm, which converts through double
+/// (__aeabi_f2d, __aeabi_dmul) when the FPU is single precision (Cortex-M7 FPv5-SP): no double
+/// may enter the core's image (tests/baremetal, link.no_soft_double). Per-frame and init-time
+/// constants only.
+[[nodiscard]] inline std::int64_t floor_to_int64(float v) noexcept {
+  const std::uint32_t bits = bits_of(v);
+  const std::int32_t exponent = static_cast<std::int32_t>((bits >> 23) & 0xFFU) - 150;  // v = significand * 2^exponent
+  const std::uint64_t significand = (bits & 0x7FFFFFU) | 0x800000U;  // v >= 1: normal
+  return static_cast<std::int64_t>(exponent >= 0 ? significand << exponent : significand >> -exponent);
+}
+
 /// floor(v * 2^18) for the float with bit pattern `bits`, exact, in integer operations.
 /// Meaningful for finite |v| < 2^17 m (callers compare |bits| with kMaxAbsCoordinateM = 1e5 m);
 /// for other bit patterns the result is some value (the shift is clamped: no undefined
