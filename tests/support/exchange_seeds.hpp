@@ -29,9 +29,13 @@ using SeedExchange = MapExchange<SeedConfig>;
 /// The team of the seeds: senders 1 and 3, receiver 2, all at the team origin.
 inline constexpr std::uint32_t kSeedReceiverId = 2U;
 
+/// Lidar noise and fixed thresholds (calibration at init would dominate a fuzz iteration).
 inline StackParams seed_params() {
   StackParams p = default_stack_params(SeedConfig::kDefaultFinestCellWidthM);
   p.noise = sensor::NoiseModel::lidar(sensor::LidarParams{0.001F, 0.0F});
+  for (std::size_t k = 0; k < 3U; ++k) {
+    p.normal_variance_threshold[k] = 0.01F * static_cast<float>(1U << k);
+  }
   return p;
 }
 
