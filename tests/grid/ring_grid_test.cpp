@@ -423,41 +423,6 @@ TEST(RingGrid, MoveClearsExactlyTheCellsThatLeave) {
   }
 }
 
-TEST(RingGrid, KeptSinceMarkIsTrueExactlyForCellsNoMoveClearedSinceTheMark) {
-  // Brute-force model: every cell of the window at the mark is stamped; a cell is kept iff it
-  // still holds its stamp (a move clears exactly the leaving cells, tested above), i.e. it never
-  // left, even if it came back. Random walks with small and large steps, marks in between.
-  constexpr std::int32_t kSide = 8;
-  auto layer = std::make_unique<RingLayer<std::uint32_t, kSide>>();
-  Rng rng(77);
-  for (int walk = 0; walk < 200; ++walk) {
-    const CellIndex start{static_cast<std::int32_t>(rng.uniform(-50.0, 50.0)),
-                          static_cast<std::int32_t>(rng.uniform(-50.0, 50.0))};
-    ASSERT_EQ(layer->init(1.0F, start), Status::kOk);
-    CellIndex centre = start;
-    for (int step = 0; step < 30; ++step) {
-      if (step % 7 == 0) {
-        layer->mark_kept();
-        layer->for_each([&](CellIndex i, std::uint32_t& cell) { cell = index_stamp(i, start); });
-      }
-      const double reach = rng.uniform(0.0, 1.0) < 0.1 ? 12.0 : 3.0;
-      centre = CellIndex{centre.x + static_cast<std::int32_t>(std::lround(rng.uniform(-reach, reach))),
-                         centre.y + static_cast<std::int32_t>(std::lround(rng.uniform(-reach, reach)))};
-      ASSERT_EQ(layer->move_to(centre), Status::kOk);
-      int disagreements = 0;
-      layer->for_each([&](CellIndex i, const std::uint32_t& cell) {
-        const bool kept = cell != 0U && cell == index_stamp(i, start);
-        disagreements += layer->kept_since_mark(i) == kept ? 0 : 1;
-      });
-      ASSERT_EQ(disagreements, 0) << "walk " << walk << " step " << step << " at " << str(centre);
-    }
-  }
-  layer->clear();
-  EXPECT_FALSE(layer->kept_since_mark(layer->centre())) << "clear() keeps nothing";
-  RingLayer<std::uint32_t, kSide> unbound;
-  EXPECT_FALSE(unbound.kept_since_mark(CellIndex{0, 0})) << "nothing is kept before init";
-}
-
 TEST(RingGrid, MoveOfSideOrMoreOnAnAxisClearsEverything) {
   constexpr std::int32_t kSide = 8;
   auto layer = std::make_unique<RingLayer<std::uint32_t, kSide>>();

@@ -17,6 +17,7 @@
 #include "ccmap/map/snapshot.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/map_state.hpp"
+#include "support/reference.hpp"
 
 namespace ccmap {
 namespace {
@@ -387,6 +388,48 @@ TEST(MapExchange, ACellThatLeftAndReturnedSendsOnlyItsNewPoints) {
   EXPECT_EQ(d.presence_mismatches, 0) << describe(d);
   EXPECT_EQ(d.weight_mismatches, 0) << describe(d);
   EXPECT_LE(d.mean_m, 1e-7) << describe(d);
+}
+
+TEST(KeptWindow, HoldsExactlyTheCellsNoMoveClearedSinceTheMark) {
+  // Brute force: after a mark every cell of every layer is stamped; a move clears exactly the
+  // leaving cells (RingGrid's tests), so a cell is kept iff it still holds its stamp. Random
+  // walks with small and large steps (some beyond a window side), marks in between.
+  auto layers = std::make_unique<detail::LayerSet<TinyConfig>>();
+  test::Rng rng(77);
+  auto stamp = [](CellIndex i) { return static_cast<float>(1 + (i.x + 1000) + 4096 * (i.y + 1000)); };
+  for (int walk = 0; walk < 100; ++walk) {
+    ASSERT_EQ(layers->init(0.5F), Status::kOk);
+    float x = static_cast<float>(rng.uniform(-20.0, 20.0));
+    float y = static_cast<float>(rng.uniform(-20.0, 20.0));
+    for (int step = 0; step < 30; ++step) {
+      if (step % 7 == 0) {
+        for (int k = 0; k < Tiny::kLayerCount; ++k) layers->kept[k].mark(layers->window_min(k), Tiny::layer_side(k));
+        layers->fine.for_each([&](CellIndex i, KalmanCell& c) { c.weight = stamp(i); });
+        for (auto& grid : layers->ccm) grid.for_each([&](CellIndex i, CcmCell& c) { c.weight = stamp(i); });
+      }
+      const double reach = rng.uniform(0.0, 1.0) < 0.1 ? 12.0 : 1.5;
+      x += static_cast<float>(rng.uniform(-reach, reach));
+      y += static_cast<float>(rng.uniform(-reach, reach));
+      for (int k = 0; k < Tiny::kLayerCount; ++k) {
+        const float w2 = 2.0F * layers->widths[k];
+        const CellIndex centre{2 * static_cast<std::int32_t>(std::floor(x / w2 + 0.5F)),
+                               2 * static_cast<std::int32_t>(std::floor(y / w2 + 0.5F))};
+        ASSERT_EQ(layers->move_layer(k, centre), Status::kOk);
+      }
+      int disagreements = 0;
+      layers->fine.for_each([&](CellIndex i, const KalmanCell& c) {
+        disagreements += layers->kept[0].contains(i) == (c.weight == stamp(i)) ? 0 : 1;
+      });
+      for (int c = 0; c < Tiny::kCcmLayerCount; ++c) {
+        layers->ccm[c].for_each([&](CellIndex i, const CcmCell& cell) {
+          disagreements += layers->kept[c + 1].contains(i) == (cell.weight == stamp(i)) ? 0 : 1;
+        });
+      }
+      ASSERT_EQ(disagreements, 0) << "walk " << walk << " step " << step;
+    }
+  }
+  detail::KeptWindow empty{};
+  EXPECT_FALSE(empty.contains(CellIndex{0, 0})) << "a zero KeptWindow (a static stack) keeps nothing";
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -72,7 +72,6 @@ class RingGrid {
     set_window(centre);
     cleared_by_moves_ = 0U;
     clear();
-    mark_kept();
     return Status::kOk;
   }
 
@@ -167,7 +166,7 @@ class RingGrid {
     const std::int64_t dy = std::int64_t{new_min.y} - std::int64_t{old_min.y};
     const std::int64_t side = side_;
     if (dx >= side || dx <= -side || dy >= side || dy <= -side) {
-      clear();  // every cell left: nothing kept since the mark
+      clear();
       cleared_by_moves_ += cell_count();
       set_window(new_centre);
       return Status::kOk;
@@ -201,38 +200,15 @@ class RingGrid {
     const auto side_u = static_cast<std::uint64_t>(side_);
     cleared_by_moves_ += cols * side_u + rows * side_u - cols * rows;
     set_window(new_centre);
-    // The cells kept since the mark: the intersection of every window since then.
-    kept_min_ = CellIndex{kept_min_.x > min_.x ? kept_min_.x : min_.x, kept_min_.y > min_.y ? kept_min_.y : min_.y};
-    const CellIndex end = window_end();
-    kept_end_ = CellIndex{kept_end_.x < end.x ? kept_end_.x : end.x, kept_end_.y < end.y ? kept_end_.y : end.y};
     return Status::kOk;
   }
 
-  /// Sets every cell to Cell{}; the window does not move. Nothing before init. Nothing counts as
-  /// kept since the mark afterwards (kept_since_mark() is false for every index).
+  /// Sets every cell to Cell{}; the window does not move. Nothing before init.
   void clear() noexcept {
     const std::size_t n = cell_count();
     for (std::size_t i = 0; i < n; ++i) {
       storage_[i] = Cell{};
     }
-    kept_end_ = kept_min_;
-  }
-
-  /// Marks the current window: from now on kept_since_mark() tells which of its cells no move
-  /// or clear() has cleared. init() marks the window it binds.
-  void mark_kept() noexcept {
-    kept_min_ = min_;
-    kept_end_ = window_end();
-  }
-
-  /// True if `index` was inside the window at the last mark_kept() and no move or clear() has
-  /// cleared it since: it is inside every window since the mark (their intersection, a
-  /// rectangle, is what the grid keeps: four integers, updated by each move). False for a cell
-  /// that left the window (and maybe re-entered: it then holds only what arrived after its
-  /// return) or entered after the mark. Map exchange (map/exchange.hpp) uses it to know which
-  /// cells still hold what was last sent. False before init.
-  [[nodiscard]] bool kept_since_mark(CellIndex index) const noexcept {
-    return index.x >= kept_min_.x && index.x < kept_end_.x && index.y >= kept_min_.y && index.y < kept_end_.y;
   }
 
   /// Calls fn(CellIndex, Cell&) (fn(CellIndex, const Cell&) on a const grid) once for every
@@ -280,8 +256,6 @@ class RingGrid {
   [[nodiscard]] static CellIndex window_min_for(CellIndex centre, std::int32_t side) noexcept {
     return CellIndex{centre.x - side / 2, centre.y - side / 2};
   }
-  /// One past the highest global index of the window on each axis: window_min + side.
-  [[nodiscard]] CellIndex window_end() const noexcept { return CellIndex{min_.x + side_, min_.y + side_}; }
   void set_window(CellIndex centre) noexcept {
     centre_ = centre;
     min_ = window_min_for(centre, side_);
@@ -308,10 +282,6 @@ class RingGrid {
   CellIndex centre_{0, 0};
   CellIndex min_{0, 0};
   std::uint64_t cleared_by_moves_ = 0U;
-  // Intersection of the windows since mark_kept(): [kept_min_, kept_end_) on each axis; empty
-  // (min >= end) after clear() and before init (all zero: a static grid stays in .bss).
-  CellIndex kept_min_{0, 0};
-  CellIndex kept_end_{0, 0};
 };
 
 /// A layer that owns its storage: capacity in the type (kSide x kSide cells, in place, no heap).

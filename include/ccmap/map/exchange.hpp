@@ -22,8 +22,8 @@
 //    sequence numbers cannot detect that.
 //  - Changed cells are found by comparing each cell with its sent copy (bitwise): the update
 //    path writes nothing extra per point. Moves: a cell that left a window was cleared; the
-//    grid keeps the intersection of its windows since the last export (RingGrid::
-//    kept_since_mark), and every cell outside it has its sent copy cleared before anything is
+//    stack keeps the intersection of each layer's windows since the last export
+//    (detail::KeptWindow), and every cell outside it has its sent copy cleared before anything is
 //    compared, so a cell that left and came back sends only what arrived after its return.
 //  - Saturated cells: once the weight limiter (CCM, OMG: W = W_l) or the variance floor (Kalman)
 //    has acted on a cell, the state is no longer the sum of its parts and the gain is not
@@ -352,15 +352,16 @@ struct ExchangeAccess {
   /// cell in its slot. Changes no cell of the map.
   static void settle(StackType& stack, SentCells& sent) noexcept {
     for (int layer = 0; layer < kLayers; ++layer) {
-      with_layer(stack, &sent, layer, [](auto& grid, auto* copies) {
+      KeptWindow& kept = stack.layers_.kept[layer];
+      with_layer(stack, &sent, layer, [&kept](auto& grid, auto* copies) {
         using Cell = std::remove_reference_t<decltype(*copies)>;
         const std::int32_t side = grid.side();
         grid.for_each([&](CellIndex index, const Cell&) {
-          if (!grid.kept_since_mark(index)) {
+          if (!kept.contains(index)) {
             copies[grid::buffer_offset(index, side)] = Cell{};
           }
         });
-        grid.mark_kept();
+        kept.mark(grid.window_min(), side);
       });
     }
   }

@@ -318,7 +318,8 @@ class Stack {
 
   // save_snapshot / load_snapshot read and restore the private state through this friend only;
   // a new map-state member must be added to the snapshot format (map/snapshot.hpp) as well.
-  // Bookkeeping (accepted_frames_, generation_, the grids' move telemetry) is not map state.
+  // Bookkeeping (accepted_frames_, generation_, the layers' KeptWindows, the grids' move
+  // telemetry) is not map state.
   friend struct detail::SnapshotAccess<Config>;
   // Map exchange reads and folds cells through this friend (map/exchange.hpp).
   friend struct detail::ExchangeAccess<Config>;
