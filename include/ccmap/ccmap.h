@@ -318,9 +318,11 @@ typedef struct ccmap_export_report {
 
 /* Writes a delta of what the map gained since the last export (coarsest layer first, as many
  * cells as fit) and counts it as sent. weight_floor >= 0: cells whose gain weighs less stay
- * pending. report may be NULL. CCMAP_BUFFER_TOO_SMALL: capacity < ccmap_delta_min_size. */
+ * pending; so do the cells of layers finer than finest_layer (0: every layer). report may be
+ * NULL. CCMAP_BUFFER_TOO_SMALL: capacity < ccmap_delta_min_size; CCMAP_INVALID_ARGUMENT: a
+ * negative floor or a layer beyond the map's. */
 ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, size_t capacity, float weight_floor,
-                                   size_t* written, ccmap_export_report* report);
+                                   int32_t finest_layer, size_t* written, ccmap_export_report* report);
 
 typedef struct ccmap_merge_report {
   uint32_t sender_id;      /* 0 for a snapshot */

@@ -655,7 +655,7 @@ ccmap_status ccmap_exchange_init(ccmap_exchange* exchange, ccmap_map* map, const
 }
 
 ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, size_t capacity, float weight_floor,
-                                   size_t* written, ccmap_export_report* report) {
+                                   int32_t finest_layer, size_t* written, ccmap_export_report* report) {
   if (written != nullptr) {
     *written = 0U;
   }
@@ -664,7 +664,7 @@ ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, si
   }
   return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
     ccmap::ExportReport r{};
-    const Status status = ex.export_delta(buffer, capacity, ccmap::ExportOptions{weight_floor}, written, &r);
+    const Status status = ex.export_delta(buffer, capacity, ccmap::ExportOptions{weight_floor, finest_layer}, written, &r);
     if (report != nullptr) {
       *report = ccmap_export_report{r.sequence, r.cells_written, r.cells_saturated, r.cells_pending,
                                     static_cast<std::uint64_t>(r.bytes)};

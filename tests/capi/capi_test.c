@@ -421,9 +421,10 @@ static void test_exchange(void) {
   CHECK_STATUS(ccmap_save_snapshot(b, g_snapshot, sizeof g_snapshot, &snapshot_size), CCMAP_OK);
 
   /* A -> B, B -> A. */
-  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, 100u, 0.0f, &written, &er), CCMAP_BUFFER_TOO_SMALL);
-  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, -1.0f, &written, &er), CCMAP_INVALID_ARGUMENT);
-  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, &written, &er), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, 100u, 0.0f, 0, &written, &er), CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, -1.0f, 0, &written, &er), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 5, &written, &er), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_OK);
   CHECK(er.sequence == 1u && er.cells_written > 100u && er.bytes == written && er.cells_pending == 0u);
   delta_size = written;
   /* A flipped bit is refused and leaves B's map as it was: its snapshot, saved again, has the
@@ -438,7 +439,7 @@ static void test_exchange(void) {
   CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_OK);
   CHECK(mr.sender_id == 1u && mr.sequence == 1u && mr.cells_merged == er.cells_written && mr.cells_outside == 0u);
   CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_DUPLICATE); /* twice */
-  CHECK_STATUS(ccmap_exchange_export(ex_b, delta, delta_capacity, 0.0f, &written, &er), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_export(ex_b, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_OK);
   CHECK(er.cells_pending == 0u);
   CHECK_STATUS(ccmap_exchange_merge_delta(ex_a, delta, written, &mr), CCMAP_OK);
   CHECK(max_height_difference(a, all) >= 0.0f && max_height_difference(a, all) < 1e-5f);
@@ -454,7 +455,7 @@ static void test_exchange(void) {
   /* Re-initialising A retires its exchange; A fed the even points again, plus the snapshot of B's
    * half, is the map fed everything. */
   CHECK_STATUS(ccmap_init(a, &p), CCMAP_OK);
-  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, &written, &er), CCMAP_NOT_INITIALISED);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_NOT_INITIALISED);
   feed_every(a, n, 0u, 2u);
   CHECK_STATUS(ccmap_merge_snapshot(a, g_snapshot, snapshot_size, 1, 0, 0.0f, &mr), CCMAP_MISALIGNED);
   CHECK_STATUS(ccmap_merge_snapshot(a, g_snapshot, snapshot_size - 1u, 0, 0, 0.0f, &mr), CCMAP_CORRUPT);

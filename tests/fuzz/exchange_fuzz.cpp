@@ -36,7 +36,7 @@ bool finite_query(const ccmap::QueryResult& q) {
 std::vector<std::uint8_t> export_of(SeedExchange& ex) {
   std::vector<std::uint8_t> bytes(SeedExchange::max_delta_size());
   std::size_t written = 0;
-  if (ex.export_delta(bytes.data(), bytes.size(), ccmap::ExportOptions{0.0F}, &written, nullptr) != ccmap::Status::kOk) {
+  if (ex.export_delta(bytes.data(), bytes.size(), ccmap::ExportOptions{0.0F, 0}, &written, nullptr) != ccmap::Status::kOk) {
     fail("export failed");
   }
   bytes.resize(written);

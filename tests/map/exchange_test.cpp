@@ -79,7 +79,7 @@ StackParams exact_params() {
 Bytes export_all(CadreExchange& ex, ExportReport* report = nullptr, float floor = 0.0F, std::size_t capacity = 0) {
   Bytes out(capacity > 0 ? capacity : CadreExchange::max_delta_size());
   std::size_t written = 0;
-  EXPECT_EQ(ex.export_delta(out.data(), out.size(), ExportOptions{floor}, &written, report), Status::kOk);
+  EXPECT_EQ(ex.export_delta(out.data(), out.size(), ExportOptions{floor, 0}, &written, report), Status::kOk);
   out.resize(written);
   return out;
 }
@@ -677,6 +677,34 @@ TEST(MapExchange, AFullPeerTableRefusesNewSendersOnly) {
   EXPECT_EQ(test::raw_map_state(*receiver), before);
 }
 
+TEST(MapExchange, LayersFinerThanTheChosenOneWaitForALaterDelta) {
+  TinyPair pair;  // its first delta (all layers) is exported; feed more and export per layer
+  feed(*pair.sender, 0.05F);
+  Bytes coarse(TinyExchange::max_delta_size());
+  std::size_t n = 0;
+  ExportReport report{};
+  ASSERT_EQ(pair.tx.export_delta(coarse.data(), coarse.size(), ExportOptions{0.0F, 1}, &n, &report), Status::kOk);
+  coarse.resize(n);
+  // The Kalman layer is written last: its count is 0, its cells pending.
+  std::size_t at = kFirstLayerAt;
+  std::uint32_t counts[3] = {};
+  for (int k = 0; k < 3; ++k) {
+    counts[k] = get_u32(coarse, at + 8);
+    at += 12U + counts[k] * (1U + (k < 2 ? 36U : 12U));
+  }
+  EXPECT_GT(counts[0] + counts[1], 0U);
+  EXPECT_EQ(counts[2], 0U) << "a Kalman cell was sent with finest_layer 1";
+  EXPECT_GT(report.cells_pending, 0U);
+  Bytes rest(TinyExchange::max_delta_size());
+  ASSERT_EQ(pair.tx.export_delta(rest.data(), rest.size(), ExportOptions{0.0F, 0}, &n, &report), Status::kOk);
+  EXPECT_EQ(report.cells_pending, 0U);
+  EXPECT_GT(report.cells_written, 0U) << "the pending Kalman gains come with the next delta";
+  EXPECT_EQ(pair.tx.export_delta(rest.data(), rest.size(), ExportOptions{0.0F, 3}, &n, nullptr),
+            Status::kInvalidArgument);
+  EXPECT_EQ(pair.tx.export_delta(rest.data(), rest.size(), ExportOptions{0.0F, -1}, &n, nullptr),
+            Status::kInvalidArgument);
+}
+
 TEST(MapExchange, TheOriginsHeightOffsetMovesMergedHeightsAndNothingElse) {
   TinyPair pair;
   // Two empty receivers whose origins lie 0 and 0.5 m below the sender's (dz = 0, +0.5 m).
@@ -740,7 +768,7 @@ TEST(MapExchange, ReinitialisingTheStackOrBindingAnotherExchangeRetiresIt) {
   EXPECT_EQ(second.export_delta(out.data(), TinyExchange::min_delta_size() - 1, ExportOptions{}, &n, nullptr),
             Status::kBufferTooSmall);
   EXPECT_EQ(second.export_delta(nullptr, out.size(), ExportOptions{}, &n, nullptr), Status::kInvalidArgument);
-  EXPECT_EQ(second.export_delta(out.data(), out.size(), ExportOptions{-1.0F}, &n, nullptr), Status::kInvalidArgument);
+  EXPECT_EQ(second.export_delta(out.data(), out.size(), ExportOptions{-1.0F, 0}, &n, nullptr), Status::kInvalidArgument);
   EXPECT_EQ(second.merge_delta(nullptr, 10, nullptr), Status::kInvalidArgument);
   TinyExchange unbound;
   EXPECT_EQ(unbound.merge_delta(pair.delta.data(), pair.delta.size(), nullptr), Status::kNotInitialised);

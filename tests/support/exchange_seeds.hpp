@@ -105,7 +105,7 @@ inline std::vector<std::pair<std::string, std::vector<std::uint8_t>>> seed_delta
   auto export_one = [&out](SeedExchange& ex, const char* name, float floor) {
     std::vector<std::uint8_t> bytes(SeedExchange::max_delta_size());
     std::size_t written = 0;
-    if (ex.export_delta(bytes.data(), bytes.size(), ExportOptions{floor}, &written, nullptr) == Status::kOk) {
+    if (ex.export_delta(bytes.data(), bytes.size(), ExportOptions{floor, 0}, &written, nullptr) == Status::kOk) {
       bytes.resize(written);
       out.emplace_back(name, bytes);
     }

@@ -38,10 +38,11 @@
 //    for that receiver (they were committed as sent).
 //  - Cells a receiver cannot place (outside its windows) are dropped and counted; the receiver
 //    keeps no copy of them.
-//  - Exported cells can be limited by a weight floor and by the buffer: cells whose gain weighs
-//    less than the floor, or for which the buffer has no room, stay pending (not sent, not lost;
-//    a later export sends their then larger gain). Layers are written coarsest first: per byte
-//    a coarse cell covers the most ground.
+//  - Exported cells can be limited by a weight floor, by layer and by the buffer: cells whose
+//    gain weighs less than the floor, of layers finer than ExportOptions::finest_layer, or for
+//    which the buffer has no room, stay pending (not sent, not lost; a later export sends their
+//    then larger gain). Layers are written coarsest first: per byte a coarse cell covers the most
+//    ground, and reaches a team mate farthest away.
 //
 // Alignment: both maps must share the grid: the same finest cell width (bitwise) and origins
 // (ExchangeParams::origin_cells, the map-frame origin in the team frame, in finest cells) whose
@@ -124,6 +125,11 @@ struct ExportOptions {
   /// Cells whose gain weighs less (CCM, OMG: weight; Kalman: new measurements) stay pending.
   /// 0: every changed cell. Negative or NaN: kInvalidArgument.
   float weight_floor;
+  /// Layers finer than this one are not written (their gains stay pending): a receiver keeps
+  /// only what falls inside its own windows, and a fine layer's window reaches a team mate only
+  /// when the rovers are within a few metres (CADRE: 4 cm layer +-1.28 m). 0: every layer;
+  /// beyond the last layer: kInvalidArgument.
+  std::int32_t finest_layer;
 };
 
 /// What an export wrote.
@@ -370,9 +376,10 @@ struct ExchangeAccess {
   /// of what it wrote. Precondition: settle() ran, the writer has room for the layer headers
   /// and the trailer (capacity checked by the caller).
   static void write_layers(StackType& stack, SentCells& sent, SnapshotWriter& w, std::size_t capacity,
-                           float weight_floor, ExportReport& report) noexcept {
+                           const ExportOptions& options, ExportReport& report) noexcept {
     const StackParams& params = stack.params_;
     for (int layer = kLayers - 1; layer >= 0; --layer) {
+      const bool skipped = layer < options.finest_layer;
       const float width = stack.layers_.widths[layer];
       // Room that must stay free for the headers of the layers still to come and the trailer.
       const std::size_t reserve = static_cast<std::size_t>(layer) * kDeltaLayerHeaderBytes + kDeltaTrailerBytes;
@@ -395,7 +402,7 @@ struct ExchangeAccess {
           const std::int64_t position = std::int64_t{index.y - min.y} * side + (index.x - min.x);
           const auto skip = static_cast<std::uint32_t>(position - previous - 1);
           const std::size_t bytes = varint_bytes(skip) + sizeof(Cell);
-          if (exchange_weight(gain) < weight_floor || w.position() + bytes + reserve > capacity) {
+          if (skipped || exchange_weight(gain) < options.weight_floor || w.position() + bytes + reserve > capacity) {
             ++report.cells_pending;
             return;
           }
@@ -625,7 +632,8 @@ class MapExchange {
     if (!initialised()) {
       return Status::kNotInitialised;
     }
-    if (buffer == nullptr || written == nullptr || !(options.weight_floor >= 0.0F)) {
+    if (buffer == nullptr || written == nullptr || !(options.weight_floor >= 0.0F) || options.finest_layer < 0 ||
+        options.finest_layer >= kLayerCount) {
       return Status::kInvalidArgument;
     }
     if (capacity < min_delta_size()) {
@@ -639,7 +647,7 @@ class MapExchange {
                                      frames_at_export_, stack_->accepted_frames(), params_.origin_cells,
                                      params_.origin_z_m};
     detail::delta_write_header(w, detail::SnapshotAccess<Config>::fingerprint(), sender);
-    Access::write_layers(*stack_, sent_, w, capacity, options.weight_floor, r);
+    Access::write_layers(*stack_, sent_, w, capacity, options, r);
     detail::delta_finish(w);
     sequence_ = r.sequence;
     frames_at_export_ = stack_->accepted_frames();
