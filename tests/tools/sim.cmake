@@ -25,3 +25,8 @@ add_executable(ccmap_test_tools_detection ${CMAKE_CURRENT_LIST_DIR}/detection_te
 target_link_libraries(ccmap_test_tools_detection PRIVATE GTest::gtest_main ccmap_sim ccmap_experiments ccmap_host_flags)
 gtest_discover_tests(ccmap_test_tools_detection DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
                      PROPERTIES LABELS "tools" TIMEOUT 300)
+
+add_executable(ccmap_test_tools_team ${CMAKE_CURRENT_LIST_DIR}/team_test.cpp)
+target_link_libraries(ccmap_test_tools_team PRIVATE GTest::gtest_main ccmap_team_lib ccmap_host_flags)
+gtest_discover_tests(ccmap_test_tools_team DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
+                     PROPERTIES LABELS "tools" TIMEOUT 300)

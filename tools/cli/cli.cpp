@@ -18,6 +18,7 @@
 #include "csv_writer.hpp"
 #include "layer_images.hpp"
 #include "map_runner.hpp"
+#include "saved_map.hpp"
 
 namespace ccmap::tools {
 namespace {
@@ -30,11 +31,12 @@ constexpr const char* kMainHelp =
     "commands:\n"
     "  map     map clouds and write per-layer CSV files and pictures\n"
     "  query   map clouds and print the map's answer at one point\n"
+    "  merge   merge maps saved by 'ccmap map --save' (or snapshots) and write the same output\n"
     "\n"
-    "Run 'ccmap map --help' or 'ccmap query --help' for the options.\n";
+    "Run 'ccmap map --help', 'ccmap query --help' or 'ccmap merge --help' for the options.\n";
 
 constexpr const char* kMapHelp =
-    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR\n"
+    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR [--save FILE]\n"
     "                 [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
     "\n"
     "  --preset NAME   cadre: 4 cm piece-wise constant Kalman layer, then 8/16/32/64 cm CCM layers\n"
@@ -55,6 +57,8 @@ constexpr const char* kMapHelp =
     "  --out DIR       writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
     "                  normal_var,class}.png; class colours: unknown grey, traversable green,\n"
     "                  obstacle red, steep orange, unobserved black\n"
+    "  --save FILE     also writes the final map: the library's snapshot followed by the origin\n"
+    "                  below (tools/cli/saved_map.hpp), for 'ccmap merge'\n"
     "\n"
     "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the first\n"
     "cloud's centroid rounded to the coarsest cell width) in double precision before the\n"
@@ -67,6 +71,24 @@ constexpr const char* kQueryHelp =
     "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
     "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
     "variance, elevation variance and class, one 'key: value' per line.\n";
+
+constexpr const char* kMergeHelp =
+    "usage: ccmap merge --preset NAME --in FILE --in FILE [--in FILE ...] [--offset DX,DY] --out DIR\n"
+    "\n"
+    "Merges maps of the same preset and cell width: each --in is a map saved by 'ccmap map --save'\n"
+    "or a snapshot written by flight software (save_snapshot; its origin is then 0). The result\n"
+    "holds the first map's parameters and windows; the cells of the others are merged exactly\n"
+    "(CCM cells as sufficient statistics, Kalman cells in information form, docs/design.md) where\n"
+    "they fall in those windows, and counted as outside otherwise. Writes the same CSV files and\n"
+    "pictures as 'ccmap map', in absolute coordinates (the first map's origin added back).\n"
+    "\n"
+    "  --in FILE       a saved map; give two or more. Merge only maps built independently: a map\n"
+    "                  that already holds another's points counts them twice\n"
+    "  --offset DX,DY  the map origin of every further --in relative to the first's (m): for\n"
+    "                  snapshots without a saved origin; replaces the saved origins' difference.\n"
+    "                  Must be a whole number of coarsest cells (cadre: 0.64 m), or the maps are\n"
+    "                  refused as misaligned\n"
+    "  --out DIR       as for 'ccmap map'\n";
 
 /// Thrown inside this file only, turned into "ccmap: error: ..." by run_cli.
 struct CliError {
@@ -100,6 +122,15 @@ double parse_positive(const std::string& flag, const std::string& text, double m
   return v;
 }
 
+/// "X,Y" into two finite numbers.
+void parse_pair(const std::string& flag, const std::string& value, double* x, double* y) {
+  const std::size_t comma = value.find(',');
+  if (comma == std::string::npos) fail(flag + ": expected X,Y, got '" + value + "'", 2);
+  *x = parse_number(flag, value.substr(0, comma));
+  *y = parse_number(flag, value.substr(comma + 1));
+  if (!std::isfinite(*x) || !std::isfinite(*y)) fail(flag + ": coordinates must be finite", 2);
+}
+
 struct Options {
   std::string command;
   std::string preset;
@@ -108,6 +139,10 @@ struct Options {
   std::vector<std::string> clouds;
   std::string poses;
   std::string out_dir;
+  std::string save;
+  std::vector<std::string> inputs;
+  bool have_offset = false;
+  double offset_x = 0.0, offset_y = 0.0;
   bool have_at = false;
   double at_x = 0.0, at_y = 0.0;
   SensorChoice sensor = SensorChoice::kLidar;
@@ -133,7 +168,8 @@ Options parse_options(int argc, char** argv) {
       arg = arg.substr(0, eq);
       have_value = true;
     }
-    static const char* kKnown[] = {"--preset", "--res", "--wl", "--cloud", "--poses", "--out", "--at", "--sensor", "--sigma"};
+    static const char* kKnown[] = {"--preset", "--res", "--wl", "--cloud", "--poses", "--out", "--at", "--sensor",
+                                   "--sigma", "--save", "--in", "--offset"};
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
       fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
     }
@@ -156,12 +192,17 @@ Options parse_options(int argc, char** argv) {
       if (value.empty()) fail("--out needs a directory", 2);
       o.out_dir = value;
     } else if (arg == "--at") {
-      const std::size_t comma = value.find(',');
-      if (comma == std::string::npos) fail("--at: expected X,Y, got '" + value + "'", 2);
-      o.at_x = parse_number("--at", value.substr(0, comma));
-      o.at_y = parse_number("--at", value.substr(comma + 1));
-      if (!std::isfinite(o.at_x) || !std::isfinite(o.at_y)) fail("--at: coordinates must be finite", 2);
+      parse_pair("--at", value, &o.at_x, &o.at_y);
       o.have_at = true;
+    } else if (arg == "--save") {
+      if (value.empty()) fail("--save needs a file name", 2);
+      o.save = value;
+    } else if (arg == "--in") {
+      if (value.empty()) fail("--in needs a file name", 2);
+      o.inputs.push_back(value);
+    } else if (arg == "--offset") {
+      parse_pair("--offset", value, &o.offset_x, &o.offset_y);
+      o.have_offset = true;
     } else if (arg == "--sensor") {
       if (value == "lidar") o.sensor = SensorChoice::kLidar;
       else if (value == "stereo") o.sensor = SensorChoice::kCadreStereo;
@@ -336,10 +377,8 @@ std::vector<LayerCellRow> layer_rows(const MappedClouds& m, int layer, const std
   return rows;
 }
 
-int run_map(const Options& o, std::ostream& out) {
-  if (o.out_dir.empty()) fail("--out DIR is required", 2);
-  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
-  MappedClouds m = build_map(o, out, true);
+/// The CSV files and pictures of every layer, in absolute coordinates, and a line per layer.
+void write_outputs(const MappedClouds& m, const Options& o, std::ostream& out) {
   std::error_code ec;
   std::filesystem::create_directories(o.out_dir, ec);
   if (ec || !std::filesystem::is_directory(o.out_dir)) {
@@ -379,6 +418,106 @@ int run_map(const Options& o, std::ostream& out) {
   }
   out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
       << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+}
+
+/// Options that belong to one command only.
+void refuse_foreign_options(const Options& o) {
+  if (o.command != "query" && o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  if (o.command != "map" && !o.save.empty()) fail("--save belongs to 'ccmap map'", 2);
+  if (o.command != "merge" && !o.inputs.empty()) fail("--in belongs to 'ccmap merge'", 2);
+  if (o.command != "merge" && o.have_offset) fail("--offset belongs to 'ccmap merge'", 2);
+  if (o.command == "merge" && (!o.clouds.empty() || !o.poses.empty() || o.res > 0.0 || o.wl > 0.0)) {
+    fail("ccmap merge takes --preset, --in, --offset and --out (the maps bring their own parameters)", 2);
+  }
+}
+
+int run_map(const Options& o, std::ostream& out) {
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  MappedClouds m = build_map(o, out, true);
+  write_outputs(m, o, out);
+  if (!o.save.empty()) {
+    std::string error;
+    SavedMap saved;
+    if (!m.runner->save_snapshot(&saved.snapshot, &error)) fail(error);
+    saved.has_origin = true;
+    saved.coarsest_width_m = m.coarsest_width;
+    for (int a = 0; a < 3; ++a) saved.origin_cells[a] = m.origin_cells[a];
+    if (!write_saved_map(o.save, saved, &error)) fail(error);
+    out << "saved: " << o.save << " (" << saved.snapshot.size() + kOriginRecordBytes
+        << " bytes: snapshot and origin)\n";
+  }
+  return 0;
+}
+
+/// metres / width as an exact integer, or fail: the maps do not share the grid.
+std::int64_t whole_cells(double metres, double width, const std::string& what) {
+  const double cells = metres / width;
+  const double rounded = std::round(cells);
+  if (!(std::fabs(cells - rounded) <= 1e-6 * std::max(1.0, std::fabs(rounded))) || std::fabs(rounded) > 1e15) {
+    fail(what + ": " + fmt("%.6f", metres) + " m is not a whole number of " + fmt("%g", width) +
+         " m cells (misaligned)");
+  }
+  return static_cast<std::int64_t>(rounded);
+}
+
+int run_merge(const Options& o, std::ostream& out) {
+  if (o.preset.empty()) fail("--preset is required (cadre, ccm, kf or omg)", 2);
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  if (o.inputs.size() < 2) fail("ccmap merge needs two or more --in FILE", 2);
+  std::string error;
+  MappedClouds m;
+  m.runner = make_map_runner(o.preset, &error);
+  if (!m.runner) fail(error, 2);
+  const int layers = preset_layer_count(o.preset);
+  const std::int64_t coarse_factor = std::int64_t{1} << (layers - 1);  // finest cells per coarsest cell
+  std::vector<SavedMap> maps(o.inputs.size());
+  for (std::size_t i = 0; i < o.inputs.size(); ++i) {
+    if (!read_saved_map(o.inputs[i], m.runner->snapshot_size(), &maps[i], &error)) {
+      fail(error + " (is it a " + o.preset + " map?)");
+    }
+  }
+  if (!m.runner->load_snapshot(maps[0].snapshot, &error)) fail(o.inputs[0] + ": " + error);
+  // Widths: the saved origin's double width (what 'ccmap map' computed with), else the float
+  // width rounded to the decimal a user would type.
+  const SavedMap& first = maps[0];
+  m.coarsest_width = first.has_origin ? first.coarsest_width_m
+                                      : std::round(static_cast<double>(m.runner->layer_cell_width(layers - 1)) * 1e6) / 1e6;
+  for (int k = 0; k < layers; ++k) m.widths.push_back(m.coarsest_width * std::ldexp(1.0, k - (layers - 1)));
+  for (int a = 0; a < 3; ++a) {
+    m.origin_cells[a] = first.origin_cells[a];
+    m.origin[a] = static_cast<double>(first.origin_cells[a]) * m.coarsest_width;
+  }
+  out << "ccmap merge: preset " << o.preset << ", " << o.inputs[0] << " (origin " << fmt("%.3f", m.origin[0]) << ' '
+      << fmt("%.3f", m.origin[1]) << ' ' << fmt("%.3f", m.origin[2]) << (first.has_origin ? "" : ", none saved")
+      << ") holds the parameters and windows\n";
+  for (std::size_t i = 1; i < maps.size(); ++i) {
+    const SavedMap& other = maps[i];
+    if (other.has_origin && std::fabs(other.coarsest_width_m - m.coarsest_width) > 1e-12 * m.coarsest_width) {
+      fail(o.inputs[i] + ": made with " + fmt("%g", other.coarsest_width_m) + " m coarsest cells, the first with " +
+           fmt("%g", m.coarsest_width) + " m (misaligned)");
+    }
+    // The other map's origin minus the first's: in coarsest cells (x, y), metres (z).
+    std::int64_t dx = other.origin_cells[0] - first.origin_cells[0];
+    std::int64_t dy = other.origin_cells[1] - first.origin_cells[1];
+    if (o.have_offset) {
+      dx = whole_cells(o.offset_x, m.coarsest_width, "--offset x");
+      dy = whole_cells(o.offset_y, m.coarsest_width, "--offset y");
+    }
+    const double dz = static_cast<double>(other.origin_cells[2] - first.origin_cells[2]) * m.coarsest_width;
+    const std::int64_t fx = dx * coarse_factor, fy = dy * coarse_factor;
+    if (std::llabs(fx) > 0x3FFFFFFF || std::llabs(fy) > 0x3FFFFFFF || std::fabs(dz) > 1e5) {
+      fail(o.inputs[i] + ": its origin is too far from the first map's to merge");
+    }
+    std::uint64_t merged = 0, outside = 0;
+    if (!m.runner->merge_snapshot(other.snapshot, static_cast<std::int32_t>(fx), static_cast<std::int32_t>(fy),
+                                  static_cast<float>(dz), &merged, &outside, &error)) {
+      fail(o.inputs[i] + ": " + error);
+    }
+    out << "merged " << o.inputs[i] << ": offset " << fmt("%.3f", static_cast<double>(dx) * m.coarsest_width) << ' '
+        << fmt("%.3f", static_cast<double>(dy) * m.coarsest_width) << ' ' << fmt("%.3f", dz) << " m, " << merged
+        << " cells merged, " << outside << " outside the first map's windows (dropped)\n";
+  }
+  write_outputs(m, o, out);
   return 0;
 }
 
@@ -423,12 +562,16 @@ int run_cli(int argc, char** argv, std::ostream& out, std::ostream& err) {
       out << kMainHelp;
       return 0;
     }
-    if (command != "map" && command != "query") fail("unknown command '" + command + "' (expected map or query)", 2);
+    if (command != "map" && command != "query" && command != "merge") {
+      fail("unknown command '" + command + "' (expected map, query or merge)", 2);
+    }
     const Options o = parse_options(argc, argv);
     if (o.help) {
-      out << (command == "map" ? kMapHelp : kQueryHelp);
+      out << (command == "map" ? kMapHelp : (command == "query" ? kQueryHelp : kMergeHelp));
       return 0;
     }
+    refuse_foreign_options(o);
+    if (command == "merge") return run_merge(o, out);
     return command == "map" ? run_map(o, out) : run_query(o, out);
   } catch (const CliError& e) {
     err << "ccmap: error: " << e.message << "\n";
