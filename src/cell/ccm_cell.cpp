@@ -34,15 +34,10 @@ Status ccm_merge(CcmCell& cell, const CcmCell& other, float weight_limit) noexce
 }
 
 Status ccm_unmerge(const CcmCell& total, const CcmCell& part, CcmCell* rest) noexcept {
-  if (rest == nullptr) {
-    return Status::kInvalidArgument;
-  }
-  if (!std::isfinite(total.weight) || !std::isfinite(part.weight) || total.weight < 0.0F || part.weight < 0.0F) {
-    return Status::kBadWeight;
-  }
-  if (!(part.weight > 0.0F)) {
-    *rest = total;
-    return Status::kOk;
+  bool done = false;
+  const Status start = detail::unmerge_start(total, part, rest, &done);
+  if (start != Status::kOk || done) {
+    return start;
   }
   const float weight = total.weight - part.weight;  // W_r
   if (!(weight > 0.0F)) {

@@ -28,22 +28,31 @@ bool finite_all(std::initializer_list<float> values) noexcept {
 
 bool height_in_range(float z) noexcept { return std::fabs(z) <= kMaxAbsCoordinateM; }
 
+/// The gain of a weight-limited cell (CCM, OMG): the whole cell once the limiter has acted on it
+/// (W = W_l: no gain is defined, exchange.hpp), else the unmerge of its sent copy; kNone if that
+/// is refused (the weight did not grow in float: pending until it does) or not a valid cell.
+template <typename Cell>
+GainKind limited_gain(const Cell& cell, const Cell& sent, float weight_limit, float cell_width_m, Cell* gain,
+                      Status (*unmerge)(const Cell&, const Cell&, Cell*) noexcept) noexcept {
+  if (same_bits(cell, sent) || !(cell.weight > 0.0F)) {
+    return GainKind::kNone;
+  }
+  GainKind kind = GainKind::kGain;
+  if (cell.weight >= weight_limit) {
+    *gain = cell;
+    kind = GainKind::kSaturated;
+  } else if (unmerge(cell, sent, gain) != Status::kOk) {
+    return GainKind::kNone;
+  }
+  return exchange_cell_valid(*gain, cell_width_m) ? kind : GainKind::kNone;
+}
+
 }  // namespace
 
 // ---- CCM cells ----
 GainKind exchange_gain(const CcmCell& cell, const CcmCell& sent, const StackParams& params, float cell_width_m,
                        CcmCell* gain) noexcept {
-  if (same_bits(cell, sent) || !(cell.weight > 0.0F)) {
-    return GainKind::kNone;
-  }
-  GainKind kind = GainKind::kGain;
-  if (cell.weight >= params.weight_limit) {
-    *gain = cell;  // the limiter has scaled the cell: no gain is defined (exchange.hpp)
-    kind = GainKind::kSaturated;
-  } else if (ccm_unmerge(cell, sent, gain) != Status::kOk) {
-    return GainKind::kNone;  // the weight did not grow in float: pending until it does
-  }
-  return exchange_cell_valid(*gain, cell_width_m) ? kind : GainKind::kNone;
+  return limited_gain(cell, sent, params.weight_limit, cell_width_m, gain, &ccm_unmerge);
 }
 
 float exchange_weight(const CcmCell& c) noexcept { return c.weight; }
@@ -96,17 +105,7 @@ bool exchange_merge(KalmanCell& cell, const KalmanCell& received, float dz_m, co
 // ---- OMG cells ----
 GainKind exchange_gain(const OmgCell& cell, const OmgCell& sent, const StackParams& params, float cell_width_m,
                        OmgCell* gain) noexcept {
-  if (same_bits(cell, sent) || !(cell.weight > 0.0F)) {
-    return GainKind::kNone;
-  }
-  GainKind kind = GainKind::kGain;
-  if (cell.weight >= params.weight_limit) {
-    *gain = cell;
-    kind = GainKind::kSaturated;
-  } else if (omg_unmerge(cell, sent, gain) != Status::kOk) {
-    return GainKind::kNone;
-  }
-  return exchange_cell_valid(*gain, cell_width_m) ? kind : GainKind::kNone;
+  return limited_gain(cell, sent, params.weight_limit, cell_width_m, gain, &omg_unmerge);
 }
 
 float exchange_weight(const OmgCell& c) noexcept { return c.weight; }
@@ -174,28 +173,12 @@ void delta_finish(SnapshotWriter& w) noexcept {
 
 Status delta_read_header(const std::uint8_t* data, std::size_t size, const SnapshotFingerprint& expected,
                          SnapshotReader& r, DeltaSender* sender) noexcept {
-  if (data == nullptr || size < kDeltaHeaderBytes + kDeltaTrailerBytes) {
-    return data == nullptr ? Status::kInvalidArgument : Status::kCorrupt;
+  const Status envelope = check_envelope(data, size, kDeltaMagic, kDeltaFormatVersion,
+                                         kDeltaHeaderBytes + kDeltaTrailerBytes);
+  if (envelope != Status::kOk) {
+    return envelope;
   }
-  SnapshotReader envelope(data, size);
-  for (const std::uint8_t b : kDeltaMagic) {
-    if (envelope.u8() != b) {
-      return Status::kCorrupt;
-    }
-  }
-  if (envelope.u16() != kDeltaFormatVersion) {
-    return Status::kVersionMismatch;
-  }
-  if (envelope.u16() != 0U || static_cast<std::size_t>(envelope.u32()) != size) {
-    return Status::kCorrupt;
-  }
-  const std::size_t body = size - kDeltaTrailerBytes;
-  envelope.seek(body);
-  const std::uint32_t stored_crc = envelope.u32();
-  if (!envelope.ok() || crc32_update(0U, data, body) != stored_crc) {
-    return Status::kCorrupt;
-  }
-  r.seek(kSnapshotHeaderBytes);  // magic, version, reserved, size: the snapshot's 12 bytes
+  r.seek(kSnapshotHeaderBytes);  // magic, version, reserved, size: the envelope's 12 bytes
   const Status shape = snapshot_check_fingerprint(r, expected);
   if (shape != Status::kOk) {
     return shape;

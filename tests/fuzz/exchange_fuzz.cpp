@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "support/exchange_seeds.hpp"
+#include "support/map_state.hpp"
 
 namespace {
 
@@ -69,20 +70,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (export_of(g_exchange) != export_of(g_twin_exchange)) fail("a refused input changed the map or its sent copies");
     return 0;
   }
-  for (int c = 0; c < SeedStack::kCcmLayerCount; ++c) {
-    g_stack.ccm_layer(c).for_each([](ccmap::CellIndex, const ccmap::CcmCell& cell) {
-      const float f[] = {cell.weight, cell.mean_x, cell.mean_y, cell.mean_z, cell.s_xx,
-                         cell.s_yy,   cell.s_zz,   cell.s_xz,   cell.s_yz};
-      for (const float v : f) {
-        if (!std::isfinite(v)) fail("a merged CCM cell is not finite");
-      }
-    });
-  }
-  g_stack.fine_layer().for_each([](ccmap::CellIndex, const ccmap::KalmanCell& cell) {
-    if (!std::isfinite(cell.height) || !std::isfinite(cell.variance) || !std::isfinite(cell.weight)) {
-      fail("a merged Kalman cell is not finite");
-    }
-  });
+  if (!ccmap::test::all_stored_finite(g_stack)) fail("a merged cell is not finite");
   for (float y = -8.0F; y <= 8.0F; y += 0.7F) {
     for (float x = -8.0F; x <= 8.0F; x += 0.7F) {
       if (!finite_query(g_stack.query(x, y))) fail("a merged map answered a non-finite query");

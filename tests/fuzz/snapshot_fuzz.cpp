@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "support/exchange_seeds.hpp"
+#include "support/map_state.hpp"
 
 namespace {
 
@@ -24,22 +25,11 @@ using ccmap::test::SeedStack;
   std::abort();
 }
 
-/// Raw state: every cell's bytes, every window centre, the counters.
+/// Raw state: every cell's bytes and window centre (support/map_state.hpp), then the counters.
 std::vector<unsigned char> state_of(const SeedStack& s) {
-  std::vector<unsigned char> out;
-  auto append = [&out](const void* p, std::size_t n) {
-    const auto* b = static_cast<const unsigned char*>(p);
-    out.insert(out.end(), b, b + n);
-  };
-  append(s.fine_layer().storage(), s.fine_layer().cell_count() * sizeof(ccmap::KalmanCell));
-  for (int c = 0; c < SeedStack::kCcmLayerCount; ++c) {
-    append(s.ccm_layer(c).storage(), s.ccm_layer(c).cell_count() * sizeof(ccmap::CcmCell));
-  }
-  for (int k = 0; k < SeedStack::kLayerCount; ++k) {
-    const ccmap::CellIndex c = s.layer_centre(k);
-    append(&c, sizeof c);
-  }
-  append(&s.total_counters(), sizeof(ccmap::FrameCounters));
+  std::vector<unsigned char> out = ccmap::test::raw_map_state(s);
+  const auto* counters = reinterpret_cast<const unsigned char*>(&s.total_counters());
+  out.insert(out.end(), counters, counters + sizeof(ccmap::FrameCounters));
   return out;
 }
 
@@ -65,15 +55,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (state_of(g_stack) != before) fail("a refused snapshot changed the stack");
     return 0;
   }
-  for (int c = 0; c < SeedStack::kCcmLayerCount; ++c) {
-    g_stack.ccm_layer(c).for_each([](ccmap::CellIndex, const ccmap::CcmCell& cell) {
-      const float f[] = {cell.weight, cell.mean_x, cell.mean_y, cell.mean_z, cell.s_xx,
-                         cell.s_yy,   cell.s_zz,   cell.s_xz,   cell.s_yz};
-      for (const float v : f) {
-        if (!std::isfinite(v)) fail("a loaded CCM cell is not finite");
-      }
-    });
-  }
+  if (!ccmap::test::all_stored_finite(g_stack)) fail("a loaded cell is not finite");
   for (float y = -8.0F; y <= 8.0F; y += 0.7F) {
     for (float x = -8.0F; x <= 8.0F; x += 0.7F) {
       if (!finite_query(g_stack.query(x, y))) fail("a loaded map answered a non-finite query");

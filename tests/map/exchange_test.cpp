@@ -16,8 +16,10 @@
 #include "ccmap/map/exchange.hpp"
 #include "ccmap/map/snapshot.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/exchange_seeds.hpp"
 #include "support/map_state.hpp"
 #include "support/reference.hpp"
+#include "support/wire_bytes.hpp"
 
 namespace ccmap {
 namespace {
@@ -26,13 +28,9 @@ using Bytes = std::vector<std::uint8_t>;
 using Cadre = Stack<CadreConfig>;
 using CadreExchange = MapExchange<CadreConfig>;
 
-// A small stack (4 x 4 Kalman, two 4 x 4 CCM layers, 0.5 m cells) for exhaustive corruption.
-struct TinyConfig {
-  static constexpr FineKind kFineKind = FineKind::kKalman;
-  static constexpr std::int32_t kFineSide = 4;
-  static constexpr std::array<std::int32_t, 2> kCcmSides{{4, 4}};
-  static constexpr float kDefaultFinestCellWidthM = 0.5F;
-};
+// A small stack (4 x 4 Kalman, two 4 x 4 CCM layers, 0.5 m cells: the fuzz targets' shape) for
+// exhaustive corruption.
+using TinyConfig = test::SeedConfig;
 using Tiny = Stack<TinyConfig>;
 using TinyExchange = MapExchange<TinyConfig>;
 
@@ -466,20 +464,10 @@ struct TinyPair {
   }
 };
 
-std::uint32_t get_u32(const Bytes& b, std::size_t at) {
-  return static_cast<std::uint32_t>(b[at]) | static_cast<std::uint32_t>(b[at + 1]) << 8 |
-         static_cast<std::uint32_t>(b[at + 2]) << 16 | static_cast<std::uint32_t>(b[at + 3]) << 24;
-}
-void put_u32(Bytes& b, std::size_t at, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) b[at + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-void put_f32(Bytes& b, std::size_t at, float v) {
-  std::uint32_t bits = 0;
-  std::memcpy(&bits, &v, 4);
-  put_u32(b, at, bits);
-}
-/// Recomputes the CRC so that a forged field must be caught by validation, not by the CRC.
-void reseal(Bytes& b) { put_u32(b, b.size() - 4, crc32_update(0U, b.data(), b.size() - 4)); }
+using test::get_u32;
+using test::put_f32;
+using test::put_u32;
+using test::reseal;
 
 // Offsets of the format (exchange.hpp).
 constexpr std::size_t kVersionAt = 4, kSidesAt = 16, kWidthAt = 52, kSenderAt = 56, kSessionAt = 60,

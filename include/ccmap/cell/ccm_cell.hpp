@@ -173,6 +173,27 @@ inline void ccm_update_unchecked(CcmCell& cell, float x, float y, float z, float
 /// or non-finite weight (kBadWeight).
 [[nodiscard]] Status ccm_merge(CcmCell& cell, const CcmCell& other, float weight_limit) noexcept;
 
+namespace detail {
+/// The start every unmerge (ccm_, kalman_, omg_unmerge) shares: kInvalidArgument for rest ==
+/// nullptr, kBadWeight for a negative or non-finite weight; for an empty part *rest = total and
+/// *done = true (nothing to take out). Cell: any cell with a float `weight`.
+template <typename Cell>
+[[nodiscard]] Status unmerge_start(const Cell& total, const Cell& part, Cell* rest, bool* done) noexcept {
+  *done = false;
+  if (rest == nullptr) {
+    return Status::kInvalidArgument;
+  }
+  if (!std::isfinite(total.weight) || !std::isfinite(part.weight) || total.weight < 0.0F || part.weight < 0.0F) {
+    return Status::kBadWeight;
+  }
+  if (!(part.weight > 0.0F)) {
+    *rest = total;
+    *done = true;
+  }
+  return Status::kOk;
+}
+}  // namespace detail
+
 /// The inverse of ccm_merge without the limiter: given total = part (+) rest (Chan's merge in
 /// real arithmetic), writes rest:
 ///   W_r = W_t - W_p,  mu_r = mu_t + (mu_t - mu_p) * W_p / W_r,

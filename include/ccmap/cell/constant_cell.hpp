@@ -185,15 +185,10 @@ inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_varia
 /// Refused (*rest untouched): rest == nullptr (kInvalidArgument); a negative or non-finite
 /// weight, n_t <= n_p or P_t >= P_p with a non-empty part: nothing is left (kBadWeight).
 [[nodiscard]] inline Status kalman_unmerge(const KalmanCell& total, const KalmanCell& part, KalmanCell* rest) noexcept {
-  if (rest == nullptr) {
-    return Status::kInvalidArgument;
-  }
-  if (!std::isfinite(total.weight) || !std::isfinite(part.weight) || total.weight < 0.0F || part.weight < 0.0F) {
-    return Status::kBadWeight;
-  }
-  if (!(part.weight > 0.0F)) {
-    *rest = total;
-    return Status::kOk;
+  bool done = false;
+  const Status start = detail::unmerge_start(total, part, rest, &done);
+  if (start != Status::kOk || done) {
+    return start;
   }
   const float gained = part.variance - total.variance;  // P_p - P_t > 0: total knows more
   if (!(total.weight > part.weight) || !(gained > 0.0F) || !(total.variance > 0.0F)) {
@@ -241,15 +236,10 @@ inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_varia
 /// Refused (*rest untouched): rest == nullptr (kInvalidArgument); a negative or non-finite
 /// weight, or W_t <= W_p with a non-empty part (kBadWeight).
 [[nodiscard]] inline Status omg_unmerge(const OmgCell& total, const OmgCell& part, OmgCell* rest) noexcept {
-  if (rest == nullptr) {
-    return Status::kInvalidArgument;
-  }
-  if (!std::isfinite(total.weight) || !std::isfinite(part.weight) || total.weight < 0.0F || part.weight < 0.0F) {
-    return Status::kBadWeight;
-  }
-  if (!(part.weight > 0.0F)) {
-    *rest = total;
-    return Status::kOk;
+  bool done = false;
+  const Status start = detail::unmerge_start(total, part, rest, &done);
+  if (start != Status::kOk || done) {
+    return start;
   }
   const float weight = total.weight - part.weight;
   if (!(weight > 0.0F)) {

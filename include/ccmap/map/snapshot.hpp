@@ -146,7 +146,13 @@ class SnapshotReader {
 void snapshot_write_header(SnapshotWriter& w, std::size_t total_size, const SnapshotFingerprint& f) noexcept;
 /// The fingerprint alone (kSnapshotFingerprintBytes): also the preset field of exchange deltas.
 void snapshot_write_fingerprint(SnapshotWriter& w, const SnapshotFingerprint& f) noexcept;
-/// Magic, version, size field and CRC of data[0..size). Reads nothing else.
+/// The envelope shared by snapshots and exchange deltas: 4 magic bytes, a 16-bit format version,
+/// 16 reserved zero bits, a 32-bit total size, ..., a CRC-32 trailer. kInvalidArgument for null
+/// data; kCorrupt for fewer than min_size bytes, another magic, a non-zero reserved field, a size
+/// field other than size, a CRC mismatch; kVersionMismatch for another version. Reads nothing else.
+[[nodiscard]] Status check_envelope(const std::uint8_t* data, std::size_t size, const std::uint8_t (&magic)[4],
+                                    std::uint16_t version, std::size_t min_size) noexcept;
+/// check_envelope with the snapshot's magic "CCMS" and kSnapshotFormatVersion.
 [[nodiscard]] Status snapshot_check_envelope(const std::uint8_t* data, std::size_t size) noexcept;
 /// Reads the fingerprint (reader positioned after the header): kVersionMismatch if it differs
 /// from `expected`, kCorrupt for a non-zero reserved field.
