@@ -13,9 +13,20 @@ namespace {
 constexpr std::uint8_t kDeltaMagic[4] = {0x43U, 0x43U, 0x4DU, 0x44U};  // "CCMD"
 constexpr std::size_t kDeltaSizeAt = 8U;
 
+/// True if two cells (packed floats) have the same bits: a cell is unchanged since it was sent.
 template <typename Cell>
 bool same_bits(const Cell& a, const Cell& b) noexcept {
-  return std::memcmp(&a, &b, sizeof(Cell)) == 0;
+  static_assert(sizeof(Cell) % sizeof(std::uint32_t) == 0U, "cells are packed floats");
+  constexpr std::size_t kWords = sizeof(Cell) / sizeof(std::uint32_t);
+  std::uint32_t wa[kWords] = {};
+  std::uint32_t wb[kWords] = {};
+  std::memcpy(wa, &a, sizeof(Cell));
+  std::memcpy(wb, &b, sizeof(Cell));
+  bool same = true;
+  for (std::size_t i = 0; i < kWords; ++i) {
+    same = same && wa[i] == wb[i];
+  }
+  return same;
 }
 
 bool finite_all(std::initializer_list<float> values) noexcept {

@@ -475,6 +475,15 @@ constexpr std::size_t kVersionAt = 4, kSidesAt = 16, kWidthAt = 52, kSenderAt = 
 
 TEST(MapExchange, EverySingleBitFlipAndEveryTruncationIsRefusedAndTheMapIsUnchanged) {
   TinyPair pair;
+  // A twin of the receiver (same map, same moves) that sees none of the refused deltas: at the
+  // end both must export the same bytes, so the refusals left the sent copies alone too, even
+  // though a move since the last export gave them something to settle.
+  auto twin = std::make_unique<Tiny>();
+  ASSERT_EQ(twin->init(tiny_params()), Status::kOk);
+  TinyExchange twin_rx;
+  ASSERT_EQ(twin_rx.init(*twin, ExchangeParams{2U, 1U, CellIndex{0, 0}, 0.0F}), Status::kOk);
+  feed(*twin, 0.01F);
+  for (Tiny* s : {pair.receiver.get(), twin.get()}) ASSERT_EQ(s->move_to(2.1F, 0.0F), Status::kOk);
   const auto before = test::raw_map_state(*pair.receiver);
   ASSERT_GT(pair.delta.size(), 150U);
   int refused = 0;
@@ -499,6 +508,13 @@ TEST(MapExchange, EverySingleBitFlipAndEveryTruncationIsRefusedAndTheMapIsUnchan
   EXPECT_EQ(pair.rx.merge_delta(longer.data(), longer.size(), nullptr), Status::kCorrupt);
   EXPECT_EQ(pair.rx.counters().refused, static_cast<std::uint32_t>(refused) + 1U);
   EXPECT_EQ(pair.rx.counters().deltas_merged, 0U);
+  Bytes mine(TinyExchange::max_delta_size()), theirs(TinyExchange::max_delta_size());
+  std::size_t n_mine = 0, n_theirs = 0;
+  ASSERT_EQ(pair.rx.export_delta(mine.data(), mine.size(), ExportOptions{}, &n_mine, nullptr), Status::kOk);
+  ASSERT_EQ(twin_rx.export_delta(theirs.data(), theirs.size(), ExportOptions{}, &n_theirs, nullptr), Status::kOk);
+  mine.resize(n_mine);
+  theirs.resize(n_theirs);
+  EXPECT_EQ(mine, theirs) << "a refused delta changed what the receiver sends";
   // The intact delta still merges (nothing above consumed its sequence number).
   EXPECT_EQ(pair.rx.merge_delta(pair.delta.data(), pair.delta.size(), nullptr), Status::kOk);
   EXPECT_NE(test::raw_map_state(*pair.receiver), before);

@@ -182,10 +182,19 @@ struct ExchangeCounters {
 
 namespace detail {
 
-inline constexpr std::size_t kDeltaHeaderBytes = 12U + kSnapshotFingerprintBytes + 4U + 5U * 4U + 12U;
+inline constexpr std::size_t kDeltaHeaderBytes = 12U + kSnapshotFingerprintBytes + 4U + std::size_t{5} * 4U + 12U;
 inline constexpr std::size_t kDeltaLayerHeaderBytes = 12U;
 inline constexpr std::size_t kDeltaTrailerBytes = 4U;
 static_assert(kDeltaHeaderBytes == 88U, "the delta header is documented as 88 bytes");
+
+/// True if two floats have the same bit pattern (grid alignment: widths must match exactly).
+[[nodiscard]] inline bool same_float_bits(float a, float b) noexcept {
+  std::uint32_t ua = 0U;
+  std::uint32_t ub = 0U;
+  std::memcpy(&ua, &a, sizeof ua);
+  std::memcpy(&ub, &b, sizeof ub);
+  return ua == ub;
+}
 
 /// Bytes of the LEB128 varint of v (1..5).
 [[nodiscard]] constexpr std::size_t varint_bytes(std::uint32_t v) noexcept {
@@ -334,23 +343,23 @@ struct ExchangeAccess {
     if (valid != Status::kOk) {
       return valid;
     }
-    if (std::memcmp(&stored.finest_cell_width_m, &stack.params_.finest_cell_width_m, sizeof(float)) != 0 ||
+    if (!same_float_bits(stored.finest_cell_width_m, stack.params_.finest_cell_width_m) ||
         !exchange_offset_aligned(offset_cells.x, offset_cells.y, kLayers)) {
       return Status::kMisaligned;
     }
     if (!std::isfinite(offset_z_m)) {
       return Status::kInvalidArgument;
     }
+    const Status status = merge_snapshot_cells(stack, sent, data, size, layers_begin, offset_cells.x,
+                                               offset_cells.y, offset_z_m, false, report);
+    if (status != Status::kOk) {
+      return status;
+    }
     if (sent != nullptr) {
-      settle(stack, *sent);
+      settle(stack, *sent);  // after validation: a refused snapshot changes nothing at all
     }
-    Status status = merge_snapshot_cells(stack, sent, data, size, layers_begin, offset_cells.x, offset_cells.y,
-                                         offset_z_m, false, report);
-    if (status == Status::kOk) {
-      status = merge_snapshot_cells(stack, sent, data, size, layers_begin, offset_cells.x, offset_cells.y,
-                                    offset_z_m, true, report);
-    }
-    return status;
+    return merge_snapshot_cells(stack, sent, data, size, layers_begin, offset_cells.x, offset_cells.y, offset_z_m,
+                                true, report);
   }
 
   /// Clears the sent copy of every cell that a move cleared since the last call (outside the
@@ -399,7 +408,7 @@ struct ExchangeAccess {
           if (kind == GainKind::kNone) {
             return;
           }
-          const std::int64_t position = std::int64_t{index.y - min.y} * side + (index.x - min.x);
+          const std::int64_t position = static_cast<std::int64_t>(index.y - min.y) * side + (index.x - min.x);
           const auto skip = static_cast<std::uint32_t>(position - previous - 1);
           const std::size_t bytes = varint_bytes(skip) + sizeof(Cell);
           if (skipped || exchange_weight(gain) < options.weight_floor || w.position() + bytes + reserve > capacity) {
@@ -430,6 +439,7 @@ struct ExchangeAccess {
     Status status = Status::kOk;
     for (int layer = kLayers - 1; layer >= 0 && status == Status::kOk; --layer) {
       const float width = stack.layers_.widths[layer];
+      const KeptWindow& kept = stack.layers_.kept[layer];
       with_layer(stack, sent, layer, [&](auto& grid, auto* copies) {
         using Cell = std::remove_reference_t<decltype(grid.cell_unchecked(CellIndex{}))>;
         const std::int32_t side = grid.side();
@@ -444,8 +454,8 @@ struct ExchangeAccess {
           status = Status::kCorrupt;
           return;
         }
-        const std::int64_t min_x = std::int64_t{centre.x} - side / 2;
-        const std::int64_t min_y = std::int64_t{centre.y} - side / 2;
+        const std::int64_t min_x = static_cast<std::int64_t>(centre.x) - side / 2;
+        const std::int64_t min_y = static_cast<std::int64_t>(centre.y) - side / 2;
         std::uint64_t position = 0U;
         for (std::uint32_t i = 0; i < count; ++i) {
           std::uint32_t skip = 0U;
@@ -463,7 +473,7 @@ struct ExchangeAccess {
           const std::int64_t x = min_x + static_cast<std::int64_t>(position % static_cast<std::uint64_t>(side));
           const std::int64_t y = min_y + static_cast<std::int64_t>(position / static_cast<std::uint64_t>(side));
           ++position;
-          status = merge_one(grid, copies, x + (offset_x >> layer), y + (offset_y >> layer), received, dz_m, params,
+          status = merge_one(grid, copies, kept, x + (offset_x >> layer), y + (offset_y >> layer), received, dz_m, params,
                              width, commit, report);
           if (status != Status::kOk) {
             return;
@@ -486,6 +496,7 @@ struct ExchangeAccess {
         return;
       }
       const float width = stack.layers_.widths[layer];
+      const KeptWindow& kept = stack.layers_.kept[layer];
       with_layer(stack, sent, layer, [&](auto& grid, auto* copies) {
         using Cell = std::remove_reference_t<decltype(grid.cell_unchecked(CellIndex{}))>;
         using Stored = std::remove_cv_t<std::remove_reference_t<decltype(cell)>>;
@@ -494,8 +505,9 @@ struct ExchangeAccess {
             status = Status::kCorrupt;
             return;
           }
-          status = merge_one(grid, copies, std::int64_t{index.x} + (offset_x >> layer),
-                             std::int64_t{index.y} + (offset_y >> layer), cell, dz_m, params, width, commit, report);
+          status = merge_one(grid, copies, kept, static_cast<std::int64_t>(index.x) + (offset_x >> layer),
+                             static_cast<std::int64_t>(index.y) + (offset_y >> layer), cell, dz_m, params, width,
+                             commit, report);
         }
       });
     });
@@ -509,11 +521,13 @@ struct ExchangeAccess {
     }
   }
 
-  /// One received cell at this map's global index (x, y) of a layer.
+  /// One received cell at this map's global index (x, y) of a layer. A sent copy outside the
+  /// layer's KeptWindow counts as empty (what settle() makes it before the commit pass), so the
+  /// validation pass computes exactly what the commit pass writes.
   template <typename Grid, typename Cell>
-  [[nodiscard]] static Status merge_one(Grid& grid, Cell* copies, std::int64_t x, std::int64_t y, const Cell& received,
-                                        float dz_m, const StackParams& params, float width, bool commit,
-                                        MergeReport& report) noexcept {
+  [[nodiscard]] static Status merge_one(Grid& grid, Cell* copies, const KeptWindow& kept, std::int64_t x,
+                                        std::int64_t y, const Cell& received, float dz_m, const StackParams& params,
+                                        float width, bool commit, MergeReport& report) noexcept {
     constexpr std::int64_t kLimit = grid::kMaxCellIndex;
     const bool representable = x >= -kLimit && x <= kLimit && y >= -kLimit && y <= kLimit;
     const CellIndex index{static_cast<std::int32_t>(representable ? x : 0), static_cast<std::int32_t>(representable ? y : 0)};
@@ -527,7 +541,7 @@ struct ExchangeAccess {
       return Status::kOutOfRange;
     }
     Cell* copy = copies != nullptr ? &copies[grid::buffer_offset(index, grid.side())] : nullptr;
-    Cell merged_copy = copy != nullptr ? *copy : Cell{};
+    Cell merged_copy = (copy != nullptr && kept.contains(index)) ? *copy : Cell{};
     if (copy != nullptr && !exchange_merge(merged_copy, received, dz_m, params, width)) {
       return Status::kOutOfRange;
     }
@@ -741,7 +755,7 @@ class MapExchange {
     const StackParams& params = Access::params(*stack_);
     std::int64_t offset_x = 0;
     std::int64_t offset_y = 0;
-    if (std::memcmp(&sender.finest_cell_width_m, &params.finest_cell_width_m, sizeof(float)) != 0 ||
+    if (!detail::same_float_bits(sender.finest_cell_width_m, params.finest_cell_width_m) ||
         detail::exchange_offset(sender.origin_cells, params_.origin_cells, kLayerCount, &offset_x, &offset_y) !=
             Status::kOk) {
       return Status::kMisaligned;
@@ -754,7 +768,6 @@ class MapExchange {
       return status;
     }
     const float dz = sender.origin_z_m - params_.origin_z_m;
-    Access::settle(*stack_, sent_);
     const std::size_t cells_begin = reader.position();
     status = Access::merge_delta_cells(*stack_, &sent_, reader, offset_x, offset_y, dz, false, r);
     if (status == Status::kOk && (!reader.ok() || reader.position() != size - detail::kDeltaTrailerBytes)) {
@@ -763,6 +776,7 @@ class MapExchange {
     if (status != Status::kOk) {
       return status;
     }
+    Access::settle(*stack_, sent_);  // after validation: a refused delta changes nothing at all
     reader.seek(cells_begin);
     (void)Access::merge_delta_cells(*stack_, &sent_, reader, offset_x, offset_y, dz, true, r);
     peers_[slot] = detail::PeerRecord{sender.rover_id, sender.session, sender.sequence, 1U};
