@@ -70,8 +70,9 @@
 //                   the cell in the snapshot's cell codec (snapshot_write_cell: CCM 36 bytes,
 //                   Kalman and OMG 12 bytes)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib) of every byte before it
-// Size: 88 + 12 per layer + 4 bytes of frame (152 for CADRE), and per cell 37-38 bytes (CCM) or
-// 13-14 bytes (Kalman, OMG); docs/integration.md gives typical exchanges.
+// Size: 88 + 12 per layer + 4 bytes of frame (152 for CADRE), and per cell the varint (1 byte for
+// a gap below 128 positions, 2 below 16,384: every gap of a 64 x 64 layer, 3 in a 256 x 256 one)
+// and 36 bytes (CCM) or 12 (Kalman, OMG); docs/integration.md gives typical exchanges.
 //
 // Statuses of merge_delta, all before anything is written (on any refusal the map and the sent
 // copy are bitwise unchanged; the refusal is counted in counters()):

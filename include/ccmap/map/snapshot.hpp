@@ -10,7 +10,8 @@
 // life-time counters. Loading re-initialises the stack from the stored parameters and restores
 // windows and cells, so the loaded stack answers every query and export bitwise identically to
 // the saved one (routing table and thresholds are recomputed by init(), deterministically).
-// Not stored: RingGrid::cells_cleared_by_moves() (restarts at 0 on load).
+// Not stored: RingGrid::cells_cleared_by_moves() and Stack::accepted_frames() (restart at 0 on
+// load) and map exchange's bookkeeping (a load retires a bound MapExchange, map/exchange.hpp).
 //
 // Format (version 1). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
