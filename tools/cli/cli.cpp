@@ -330,6 +330,30 @@ void print_frame(const std::string& path, const Cloud& cloud, std::size_t f, con
   }
 }
 
+/// The cloud's points in range and bounds as local-frame floats (the origin subtracted in double,
+/// then rounded: |difference| <= 1e5 m) and their weights; the others counted in *kept_back as
+/// out of range or outside map.
+void local_frame_points(const Cloud& cloud, const LocalOrigin& origin, const AreaBounds& bounds,
+                        std::vector<float>* xyz, std::vector<float>* weights, FrameStats* kept_back) {
+  xyz->clear();
+  weights->clear();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], origin, bounds);
+    if (fate == PointFate::kOutOfRange) {
+      ++kept_back->rejected_out_of_range;
+      continue;
+    }
+    if (fate == PointFate::kOutsideBounds) {
+      ++kept_back->outside_map;
+      continue;
+    }
+    xyz->push_back(static_cast<float>(cloud.x[i] - origin.xyz[0]));
+    xyz->push_back(static_cast<float>(cloud.y[i] - origin.xyz[1]));
+    xyz->push_back(static_cast<float>(cloud.z[i] - origin.xyz[2]));
+    if (cloud.has_weight) weights->push_back(weight_to_float(cloud.w[i]));
+  }
+}
+
 /// With --poses: the stack follows the poses, one frame per cloud, read and mapped one at a time.
 void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
   std::string error;
@@ -363,24 +387,7 @@ void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool 
     FrameStats stats;
     stats.received = cloud.size() + cloud.skipped_non_finite;
     stats.rejected_non_finite = cloud.skipped_non_finite;
-    xyz.clear();
-    weights.clear();
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], m.origin, o.bounds);
-      if (fate == PointFate::kOutOfRange) {
-        ++stats.rejected_out_of_range;
-        continue;
-      }
-      if (fate == PointFate::kOutsideBounds) {
-        ++stats.outside_map;
-        continue;
-      }
-      // Subtract the origin in double, then round to float (|difference| <= 1e5 m).
-      xyz.push_back(static_cast<float>(cloud.x[i] - m.origin.xyz[0]));
-      xyz.push_back(static_cast<float>(cloud.y[i] - m.origin.xyz[1]));
-      xyz.push_back(static_cast<float>(cloud.z[i] - m.origin.xyz[2]));
-      if (cloud.has_weight) weights.push_back(weight_to_float(cloud.w[i]));
-    }
+    local_frame_points(cloud, m.origin, o.bounds, &xyz, &weights, &stats);
     FrameStats lib;
     const auto t0 = std::chrono::steady_clock::now();
     if (!m.runner->update_frame(xyz, weights, sensor, &lib, &error)) fail(o.clouds[f] + ": " + error);
@@ -546,20 +553,8 @@ void fold_one_window(const Options& o, MappedClouds& m, std::ostream& out) {
   std::vector<float> xyz, weights;
   for (const std::string& path : o.clouds) {
     const Cloud cloud = read_nonempty_cloud(path);
-    xyz.clear();
-    weights.clear();
     FrameStats kept_back;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], m.origin, o.bounds);
-      if (fate != PointFate::kMapped) {
-        ++(fate == PointFate::kOutOfRange ? kept_back.rejected_out_of_range : kept_back.outside_map);
-        continue;
-      }
-      xyz.push_back(static_cast<float>(cloud.x[i] - m.origin.xyz[0]));
-      xyz.push_back(static_cast<float>(cloud.y[i] - m.origin.xyz[1]));
-      xyz.push_back(static_cast<float>(cloud.z[i] - m.origin.xyz[2]));
-      if (cloud.has_weight) weights.push_back(weight_to_float(cloud.w[i]));
-    }
+    local_frame_points(cloud, m.origin, o.bounds, &xyz, &weights, &kept_back);
     FrameStats stats;
     if (!m.runner->update_frame(xyz, weights, sensor, &stats, &error)) fail(path + ": " + error);
     totals.add(stats);
