@@ -47,6 +47,8 @@ typedef enum ccmap_status {
   CCMAP_NOT_INITIALISED = 8,   /* map used before a successful ccmap_init or ccmap_load_snapshot */
   CCMAP_CORRUPT = 9,           /* snapshot failed its integrity or validity checks */
   CCMAP_VERSION_MISMATCH = 10, /* snapshot of another format version or another preset */
+  CCMAP_DUPLICATE = 11,        /* map exchange: delta already merged (sender, sequence) or this map's own */
+  CCMAP_MISALIGNED = 12,       /* map exchange: another cell width, or an origin offset off the coarsest grid */
   CCMAP_STATUS_MAX_ENUM_ = 0x7FFFFFFF /* not a status: keeps the enum 32 bits wide */
 } ccmap_status;
 
@@ -394,6 +396,102 @@ ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t c
 /* All-or-nothing restore (the map may be uninitialised): CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH
  * (another format version or a snapshot of another preset), CCMAP_INVALID_ARGUMENT. */
 ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size);
+
+/* ---- map exchange between rovers (include/ccmap/map/exchange.hpp: rules and byte format) ---- */
+/* An exchange holds one copy of its map's cells (what it last sent) and a table of 8 peers; it
+ * lives in caller storage like the map. Sizes: upper bounds with headroom, exact figures from
+ * ccmap_exchange_storage_size(). */
+#define CCMAP_CADRE_EXCHANGE_STORAGE_SIZE 434176u          /* 424 KiB */
+#define CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE 2375680u    /* 2320 KiB */
+#define CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE 802816u  /* 784 KiB */
+#define CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE 802816u     /* 784 KiB */
+CCMAP_DEFINE_STORAGE_(ccmap_cadre_exchange_storage, CCMAP_CADRE_EXCHANGE_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_ccm_exchange_storage, CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_kalman_exchange_storage, CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_omg_exchange_storage, CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE);
+
+/* Largest delta of a preset (every cell) and the smallest (no cell); 0 for a bad preset. */
+#define CCMAP_CADRE_DELTA_MAX_SIZE 432280u
+size_t ccmap_delta_max_size(ccmap_preset preset);
+size_t ccmap_delta_min_size(ccmap_preset preset);
+
+typedef struct ccmap_exchange ccmap_exchange; /* opaque: lives at the start of the caller's storage */
+
+/* Exact bytes and alignment an exchange of `preset` needs; 0 for a bad preset. */
+size_t ccmap_exchange_storage_size(ccmap_preset preset);
+size_t ccmap_exchange_storage_align(ccmap_preset preset);
+/* Constructs an unbound exchange of `preset` in storage (as ccmap_place). */
+ccmap_status ccmap_exchange_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_exchange** out);
+
+/* Who this map is in the team, and where its map frame lies in the team frame. */
+typedef struct ccmap_exchange_params {
+  uint32_t rover_id;       /* unique per rover */
+  uint32_t session;        /* new value on every restart of this rover's map (e.g. a boot counter) */
+  int32_t origin_x_cells;  /* map-frame origin in the team frame, in finest-layer cells */
+  int32_t origin_y_cells;
+  float origin_z_m;        /* map-frame origin height in the team frame (m) */
+} ccmap_exchange_params;
+
+/* Binds the exchange to an initialised map of the same preset and starts afresh (nothing counts
+ * as sent: the first export sends the whole map). Re-initialising or re-loading the map retires
+ * the exchange (CCMAP_NOT_INITIALISED) until it is bound again. CCMAP_INVALID_ARGUMENT: NULL,
+ * bad handles, another preset, a bad origin. */
+ccmap_status ccmap_exchange_init(ccmap_exchange* exchange, ccmap_map* map, const ccmap_exchange_params* params);
+
+typedef struct ccmap_export_report {
+  uint32_t sequence;         /* the delta's sequence number */
+  uint32_t cells_written;
+  uint32_t cells_saturated;  /* of those, sent whole: weight limit or variance floor engaged */
+  uint32_t cells_pending;    /* changed, not written (below the floor or no room): sent later */
+  uint64_t bytes;
+} ccmap_export_report;
+
+/* Writes a delta of what the map gained since the last export (coarsest layer first, as many
+ * cells as fit) and counts it as sent. weight_floor >= 0: cells whose gain weighs less stay
+ * pending; so do the cells of layers finer than finest_layer (0: every layer). report may be
+ * NULL. CCMAP_BUFFER_TOO_SMALL: capacity < ccmap_delta_min_size; CCMAP_INVALID_ARGUMENT: a
+ * negative floor or a layer beyond the map's. */
+ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, size_t capacity, float weight_floor,
+                                   int32_t finest_layer, size_t* written, ccmap_export_report* report);
+
+typedef struct ccmap_merge_report {
+  uint32_t sender_id;      /* 0 for a snapshot */
+  uint32_t sequence;       /* 0 for a snapshot */
+  uint32_t cells_merged;
+  uint32_t cells_outside;  /* outside this map's windows: dropped */
+  uint32_t deltas_missed;  /* sequence numbers of this sender lost before this delta */
+} ccmap_merge_report;
+
+/* Folds another rover's delta into the map, all-or-nothing: CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH,
+ * CCMAP_MISALIGNED, CCMAP_DUPLICATE, CCMAP_BUFFER_TOO_SMALL (peer table full), CCMAP_OUT_OF_RANGE;
+ * on any of them the map is bitwise unchanged. report may be NULL. */
+ccmap_status ccmap_exchange_merge_delta(ccmap_exchange* exchange, const uint8_t* data, size_t size,
+                                        ccmap_merge_report* report);
+/* Folds a snapshot of an independently built map (its origin minus this one's: finest cells, m). */
+ccmap_status ccmap_exchange_merge_snapshot(ccmap_exchange* exchange, const uint8_t* data, size_t size,
+                                           int32_t offset_x_cells, int32_t offset_y_cells, float offset_z_m,
+                                           ccmap_merge_report* report);
+/* The same into a map without an exchange (e.g. merging saved maps on the ground). */
+ccmap_status ccmap_merge_snapshot(ccmap_map* map, const uint8_t* data, size_t size, int32_t offset_x_cells,
+                                  int32_t offset_y_cells, float offset_z_m, ccmap_merge_report* report);
+
+/* Life-time counters of an exchange (ccmap::ExchangeCounters). */
+typedef struct ccmap_exchange_counters {
+  uint32_t deltas_exported;
+  uint32_t deltas_merged;
+  uint32_t snapshots_merged;
+  uint32_t refused;
+  uint32_t refused_corrupt;
+  uint32_t refused_duplicate;
+  uint32_t refused_misaligned;
+  uint32_t deltas_missed;
+  uint64_t bytes_exported;
+  uint64_t bytes_merged;
+  uint64_t cells_exported;
+  uint64_t cells_merged;
+  uint64_t cells_outside;
+} ccmap_exchange_counters;
+ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_exchange_counters* out);
 
 /* Name of the linked platform implementation ("posix", "baremetal"). */
 const char* ccmap_platform_name(void);

@@ -1,7 +1,8 @@
 /* The C API from plain C99: placement in static storage, init, frames (with and without
- * weights, map and sensor frame), queries, export, counters, snapshots, every preset, the planner
- * queries (footprint, path, arc, cost raster), uncertain moves, and the refusal of NULL pointers,
- * foreign handles and bad enum values.
+ * weights, map and sensor frame), queries, export, counters, snapshots, map exchange (two half
+ * maps exchanging deltas, and a snapshot merge, against one map fed everything), every preset, the
+ * planner queries (footprint, path, arc, cost raster), uncertain moves, and the refusal of NULL
+ * pointers, foreign handles and bad enum values.
  *
  * One case of the portable harness (tests/baremetal/harness.h; capi_case.cpp registers it), so
  * the same file runs on the host, on aarch64 Linux and on the bare-metal board. No stdio and no
@@ -439,6 +440,157 @@ static void test_single_layer_presets(void) {
   }
 }
 
+/* Every `step`-th point of the plane from `first` on, into the map, one point per frame. */
+static void feed_every(ccmap_map* map, size_t n, size_t first, size_t step) {
+  const float sensor[3] = {0.0f, 0.0f, 0.5f};
+  size_t i;
+  for (i = first; i < n; i += step) {
+    ccmap_frame_counters c;
+    CHECK_STATUS(ccmap_update_frame(map, &g_xyz[3 * i], NULL, 1, sensor, &c), CCMAP_OK);
+  }
+}
+
+/* Largest height difference between two maps' answers on a raster; -1 if the answers differ in
+ * status, layer or class anywhere. */
+static float max_height_difference(const ccmap_map* a, const ccmap_map* b) {
+  float worst = 0.0f;
+  float x, y;
+  for (y = -0.95f; y < 0.95f; y += 0.05f) {
+    for (x = -0.95f; x < 0.95f; x += 0.05f) {
+      ccmap_query_result qa, qb;
+      const ccmap_status sa = ccmap_query(a, x, y, &qa);
+      const ccmap_status sb = ccmap_query(b, x, y, &qb);
+      if (sa != sb || qa.cell_class != qb.cell_class || qa.layer != qb.layer) {
+        return -1.0f;
+      }
+      if (fabsf(qa.height_m - qb.height_m) > worst) {
+        worst = fabsf(qa.height_m - qb.height_m);
+      }
+    }
+  }
+  return worst;
+}
+
+/* Rounds a pointer into g_single up to the storage alignment. */
+static unsigned char* aligned_in_single(size_t offset) {
+  const uintptr_t base = (uintptr_t)(void*)&g_single.bytes[offset];
+  const uintptr_t align = CCMAP_STORAGE_ALIGN;
+  return &g_single.bytes[offset + (size_t)((align - base % align) % align)];
+}
+
+/* Two half maps (the even and the odd points of the plane, maps A and B in the CADRE storages)
+ * exchange deltas and must then answer as a map fed every point (the reference, placed with the
+ * two exchanges and the delta buffer in the single-layer storage, free by now). No limiter and no
+ * effective floor: the merge is exact up to float rounding. */
+static void test_exchange(void) {
+  const size_t exchange_size = ccmap_exchange_storage_size(CCMAP_PRESET_CADRE) + CCMAP_STORAGE_ALIGN;
+  const size_t map_size = ccmap_storage_size(CCMAP_PRESET_CADRE) + CCMAP_STORAGE_ALIGN;
+  const size_t delta_capacity = 131072u;
+  unsigned char* ex_a_storage = aligned_in_single(0u);
+  unsigned char* ex_b_storage = aligned_in_single(exchange_size);
+  unsigned char* all_storage = aligned_in_single(2u * exchange_size);
+  unsigned char* delta = aligned_in_single(2u * exchange_size + map_size);
+  ccmap_map *a = NULL, *b = NULL, *all = NULL;
+  ccmap_exchange *ex_a = NULL, *ex_b = NULL;
+  ccmap_exchange_params pa, pb;
+  ccmap_export_report er;
+  ccmap_merge_report mr;
+  ccmap_exchange_counters counters;
+  size_t written = 0, delta_size = 0, snapshot_size = 0;
+  unsigned char crc_before[4];
+  const size_t n = make_plane();
+  ccmap_params p = precise_lidar_params(CCMAP_PRESET_CADRE);
+  p.weight_limit = (float)INFINITY;
+  p.kalman_min_variance = 1e-30f;
+
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_CADRE) <= CCMAP_CADRE_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_CCM) <= CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_KALMAN) <= CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_OMG) <= CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size((ccmap_preset)9) == 0u);
+  CHECK(ccmap_delta_max_size(CCMAP_PRESET_CADRE) == CCMAP_CADRE_DELTA_MAX_SIZE);
+  CHECK(ccmap_delta_min_size(CCMAP_PRESET_CADRE) == 152u);
+  CHECK(strcmp(ccmap_status_string(CCMAP_DUPLICATE), "duplicate") == 0);
+  CHECK(strcmp(ccmap_status_string(CCMAP_MISALIGNED), "misaligned") == 0);
+  if ((size_t)(delta + delta_capacity - g_single.bytes) > sizeof g_single) {
+    ccmap_test_note("  map exchange skipped (two exchanges and a map do not fit this target's RAM)");
+    return;
+  }
+
+  CHECK_STATUS(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, &a), CCMAP_OK);
+  CHECK_STATUS(ccmap_place(&g_storage_copy, sizeof g_storage_copy, CCMAP_PRESET_CADRE, &b), CCMAP_OK);
+  CHECK_STATUS(ccmap_place(all_storage, map_size, CCMAP_PRESET_CADRE, &all), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(a, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(b, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(all, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_place(ex_a_storage, ccmap_exchange_storage_size(CCMAP_PRESET_CADRE) - 1u,
+                                    CCMAP_PRESET_CADRE, &ex_a),
+               CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_exchange_place(ex_a_storage, exchange_size, (ccmap_preset)7, &ex_a), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_place(ex_a_storage, exchange_size, CCMAP_PRESET_CADRE, &ex_a), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_place(ex_b_storage, exchange_size, CCMAP_PRESET_CADRE, &ex_b), CCMAP_OK);
+  pa.rover_id = 1u;
+  pa.session = 1u;
+  pa.origin_x_cells = 0;
+  pa.origin_y_cells = 0;
+  pa.origin_z_m = 0.0f;
+  pb = pa;
+  pb.rover_id = 2u;
+  CHECK_STATUS(ccmap_exchange_init(ex_a, (ccmap_map*)(void*)ex_b_storage, &pa), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_init(ex_a, a, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_init(NULL, a, &pa), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_init(ex_a, a, &pa), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_init(ex_b, b, &pb), CCMAP_OK);
+
+  feed_every(a, n, 0u, 2u); /* the even points */
+  feed_every(b, n, 1u, 2u); /* the odd points */
+  feed_every(all, n, 0u, 1u);
+  CHECK_STATUS(ccmap_save_snapshot(b, g_snapshot, sizeof g_snapshot, &snapshot_size), CCMAP_OK);
+
+  /* A -> B, B -> A. */
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, 100u, 0.0f, 0, &written, &er), CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, -1.0f, 0, &written, &er), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 5, &written, &er), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_OK);
+  CHECK(er.sequence == 1u && er.cells_written > 100u && er.bytes == written && er.cells_pending == 0u);
+  delta_size = written;
+  /* A flipped bit is refused and leaves B's map as it was: its snapshot, saved again, has the
+   * same CRC-32 trailer (no frame ran in between, so even the timing field is the same). */
+  memcpy(crc_before, &g_snapshot[snapshot_size - 4u], 4u);
+  delta[delta_size / 2u] ^= 0x04u;
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_CORRUPT);
+  delta[delta_size / 2u] ^= 0x04u;
+  CHECK_STATUS(ccmap_save_snapshot(b, g_snapshot, sizeof g_snapshot, &written), CCMAP_OK);
+  CHECK(written == snapshot_size && memcmp(crc_before, &g_snapshot[snapshot_size - 4u], 4u) == 0);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_a, delta, delta_size, &mr), CCMAP_DUPLICATE); /* its own */
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_OK);
+  CHECK(mr.sender_id == 1u && mr.sequence == 1u && mr.cells_merged == er.cells_written && mr.cells_outside == 0u);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_DUPLICATE); /* twice */
+  CHECK_STATUS(ccmap_exchange_export(ex_b, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_OK);
+  CHECK(er.cells_pending == 0u);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_a, delta, written, &mr), CCMAP_OK);
+  CHECK(max_height_difference(a, all) >= 0.0f && max_height_difference(a, all) < 1e-5f);
+  CHECK(max_height_difference(b, all) >= 0.0f && max_height_difference(b, all) < 1e-5f);
+
+  CHECK_STATUS(ccmap_exchange_get_counters(ex_b, &counters), CCMAP_OK);
+  CHECK(counters.deltas_exported == 1u && counters.deltas_merged == 1u && counters.refused == 2u &&
+        counters.refused_corrupt == 1u && counters.refused_duplicate == 1u);
+  CHECK_STATUS(ccmap_exchange_get_counters(NULL, &counters), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_merge_delta((ccmap_exchange*)(void*)&g_storage, delta, written, &mr),
+               CCMAP_INVALID_ARGUMENT); /* a map handle is not an exchange */
+
+  /* Re-initialising A retires its exchange; A fed the even points again, plus the snapshot of B's
+   * half, is the map fed everything. */
+  CHECK_STATUS(ccmap_init(a, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_NOT_INITIALISED);
+  feed_every(a, n, 0u, 2u);
+  CHECK_STATUS(ccmap_merge_snapshot(a, g_snapshot, snapshot_size, 1, 0, 0.0f, &mr), CCMAP_MISALIGNED);
+  CHECK_STATUS(ccmap_merge_snapshot(a, g_snapshot, snapshot_size - 1u, 0, 0, 0.0f, &mr), CCMAP_CORRUPT);
+  CHECK_STATUS(ccmap_merge_snapshot(a, g_snapshot, snapshot_size, 0, 0, 0.0f, &mr), CCMAP_OK);
+  CHECK(mr.cells_merged > 100u && mr.sender_id == 0u);
+  CHECK(max_height_difference(a, all) >= 0.0f && max_height_difference(a, all) < 1e-5f);
+}
+
 /* The whole C API test: one case (capi_case.cpp). CCMAP_TEST_PLATFORM_NAME: the platform
  * library the build links ("posix" or "baremetal"). */
 void ccmap_capi_test(void) {
@@ -456,4 +608,5 @@ void ccmap_capi_test(void) {
   test_snapshots(map);
   test_planner_queries(map);
   test_single_layer_presets();
+  test_exchange();
 }

@@ -823,3 +823,165 @@ TEST(CliRealData, LoneStarCropAndScan) {
     }
   }
 }
+
+// =============================================================================================
+// Saving and merging maps
+// =============================================================================================
+
+namespace {
+
+/// Rows of a layer CSV keyed by their absolute cell index.
+std::map<std::pair<long long, long long>, LayerCellRow> by_index(const std::vector<LayerCellRow>& rows) {
+  std::map<std::pair<long long, long long>, LayerCellRow> out;
+  for (const LayerCellRow& r : rows) out[{r.ix, r.iy}] = r;
+  return out;
+}
+
+/// Every cell of `got` is in `want` and agrees in weight and class exactly, in height, slope and
+/// normal variance within float rounding (the merge adds in another order).
+void expect_same_layer(const std::vector<LayerCellRow>& got_rows, const std::vector<LayerCellRow>& want_rows,
+                       const std::string& what) {
+  const auto got = by_index(got_rows), want = by_index(want_rows);
+  ASSERT_EQ(got.size(), want.size()) << what;
+  for (const auto& [index, g] : got) {
+    const auto it = want.find(index);
+    ASSERT_NE(it, want.end()) << what << ": cell (" << index.first << ", " << index.second << ") only in the merge";
+    const LayerCellRow& w = it->second;
+    ASSERT_EQ(g.weight, w.weight) << what;
+    ASSERT_EQ(g.cell_class, w.cell_class) << what << " at (" << g.cx << ", " << g.cy << ")";
+    ASSERT_NEAR(g.height, w.height, 2e-5) << what << " at (" << g.cx << ", " << g.cy << ")";
+    ASSERT_NEAR(g.slope_x, w.slope_x, 1e-4 * (1.0 + std::fabs(w.slope_x))) << what;
+    ASSERT_NEAR(g.slope_y, w.slope_y, 1e-4 * (1.0 + std::fabs(w.slope_y))) << what;
+    ASSERT_NEAR(g.normal_var, w.normal_var, 1e-7 + 1e-4 * w.normal_var) << what;
+  }
+}
+
+}  // namespace
+
+TEST(CliMerge, TwoHalvesSavedAndMergedEqualOneMapOfBothInAbsoluteCoordinates) {
+  // West and east halves of the scene at UTM-sized coordinates: their centroids, and so the
+  // origins each 'ccmap map' subtracts, lie 1.6 m apart. Merged through the saved origins they
+  // must give the map of both clouds made in one run.
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "west.ply", s, -kHalfSide, 0.0);
+  write_scene_ply(dir / "east.ply", s, 0.0, kHalfSide);
+  const CliRun west = run({"map", "--preset", "ccm", "--cloud", (dir / "west.ply").string(), "--out",
+                           (dir / "west").string(), "--save", (dir / "west.map").string()});
+  ASSERT_EQ(west.code, 0) << west.err;
+  EXPECT_NE(west.out.find("saved: "), std::string::npos) << west.out;
+  const CliRun east = run({"map", "--preset", "ccm", "--cloud", (dir / "east.ply").string(), "--out",
+                           (dir / "east").string(), "--save", (dir / "east.map").string()});
+  ASSERT_EQ(east.code, 0) << east.err;
+  EXPECT_EQ(fs::file_size(dir / "west.map"), 2359488U + 48U) << "the single-CCM snapshot and the origin record";
+  const CliRun both = run({"map", "--preset", "ccm", "--cloud", (dir / "west.ply").string(), "--cloud",
+                           (dir / "east.ply").string(), "--out", (dir / "both").string()});
+  ASSERT_EQ(both.code, 0) << both.err;
+  const CliRun merged = run({"merge", "--preset", "ccm", "--in", (dir / "west.map").string(), "--in",
+                             (dir / "east.map").string(), "--out", (dir / "merged").string()});
+  ASSERT_EQ(merged.code, 0) << merged.err;
+  EXPECT_NE(merged.out.find(" 0 outside the first map's windows"), std::string::npos) << merged.out;
+  const std::vector<LayerCellRow> rows = read_rows(dir / "merged" / "layer_0.csv");
+  check_ccm_layer(rows, s, 0.08, 40U * 40U);  // absolute coordinates, the whole square
+  expect_same_layer(rows, read_rows(dir / "both" / "layer_0.csv"), "merged halves vs one run");
+  EXPECT_TRUE(fs::exists(dir / "merged" / "layer_0_class.png"));
+}
+
+TEST(CliMerge, CadreHalvesMergeWhereTheFirstMapsWindowsReach) {
+  // Without --poses a saved CADRE map is one stack at the origin (the CSV files cover every
+  // tile): the 4 cm layer holds +-1.28 m of it, the 64 cm layer +-10.24 m. Merged into the west
+  // map, the east map's coarse cells land in the west map's windows, its fine cells beyond them
+  // are counted as outside.
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "west.ply", s, -kHalfSide, 0.0);
+  write_scene_ply(dir / "east.ply", s, 0.0, kHalfSide);
+  for (const char* half : {"west", "east"}) {
+    const CliRun r = run({"map", "--preset", "cadre", "--cloud", (dir / (std::string(half) + ".ply")).string(), "--out",
+                          (dir / half).string(), "--save", (dir / (std::string(half) + ".map")).string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("saved map: one stack at the origin"), std::string::npos) << r.out;
+  }
+  const CliRun merged = run({"merge", "--preset", "cadre", "--in", (dir / "west.map").string(), "--in",
+                             (dir / "east.map").string(), "--out", (dir / "merged").string()});
+  ASSERT_EQ(merged.code, 0) << merged.err;
+  long long merged_cells = 0, outside = 0;
+  const std::size_t at = merged.out.find("cells merged, ");
+  ASSERT_NE(at, std::string::npos) << merged.out;
+  ASSERT_EQ(std::sscanf(merged.out.c_str() + merged.out.rfind(", ", at - 1) + 2, "%lld cells merged, %lld outside",
+                        &merged_cells, &outside),
+            2)
+      << merged.out;
+  EXPECT_GT(merged_cells, 0);
+  EXPECT_GT(outside, 0) << "the east map's 4 cm cells beyond the west map's 4 cm window";
+  // The 64 cm layer knows both halves.
+  bool west_cell = false, east_cell = false;
+  for (const LayerCellRow& row : read_rows(dir / "merged" / "layer_4.csv")) {
+    west_cell = west_cell || row.cx < s.x0 - 0.64;
+    east_cell = east_cell || row.cx > s.x0 + 0.64;
+  }
+  EXPECT_TRUE(west_cell && east_cell) << "the merged 64 cm layer does not span both halves";
+}
+
+TEST(CliMerge, RefusalsSayWhy) {
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.0, 0.0, 0.0};
+  write_scene_ply(dir / "scene.ply", s);
+  ASSERT_EQ(run({"map", "--preset", "ccm", "--cloud", (dir / "scene.ply").string(), "--out", (dir / "a").string(),
+                 "--save", (dir / "a.map").string()})
+                .code,
+            0);
+  ASSERT_EQ(run({"map", "--preset", "ccm", "--res", "0.16", "--cloud", (dir / "scene.ply").string(), "--out",
+                 (dir / "b").string(), "--save", (dir / "coarse.map").string()})
+                .code,
+            0);
+  const std::string a = (dir / "a.map").string(), out = (dir / "m").string();
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--out", out}), "two or more --in", "one input");
+  expect_one_line_error(run({"merge", "--preset", "cadre", "--in", a, "--in", a, "--out", out}), "is it a cadre map",
+                        "another preset");
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", (dir / "coarse.map").string(), "--out", out}),
+                        "misaligned", "another cell width");
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", a, "--offset", "0.05,0", "--out", out}),
+                        "misaligned", "an offset off the grid");
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", a, "--cloud", "x.ply", "--out", out}),
+                        "bring their own parameters", "a cloud");
+  expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", (dir / "scene.ply").string(), "--in", a, "--out", out}),
+                        "--in belongs to 'ccmap merge'", "--in with map");
+  // A corrupt origin record, a truncated file, a flipped snapshot byte.
+  std::vector<char> bytes;
+  {
+    std::ifstream in(a, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  auto write = [&](const std::string& name, const std::vector<char>& b) {
+    std::ofstream o(dir / name, std::ios::binary);
+    o.write(b.data(), static_cast<std::streamsize>(b.size()));
+    return (dir / name).string();
+  };
+  std::vector<char> bad = bytes;
+  bad[bad.size() - 30] ^= 1;
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", write("bad_origin.map", bad), "--out", out}),
+                        "origin record after the snapshot is corrupt", "a corrupt origin record");
+  expect_one_line_error(
+      run({"merge", "--preset", "ccm", "--in", a, "--in",
+           write("short.map", std::vector<char>(bytes.begin(), bytes.end() - 10)), "--out", out}),
+      "expected a snapshot of this preset", "a truncated file");
+  bad = bytes;
+  bad[1000] ^= 1;
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", write("bad_snapshot.map", bad), "--out", out}),
+                        "does not merge (corrupt)", "a flipped snapshot byte");
+  // A plain snapshot (flight software's, no origin record) has its origin at 0: --offset places
+  // it in x and y; its heights are relative to 0, the first map's to its origin, so z moves by
+  // minus the first map's origin height.
+  const std::string plain = write("plain.snap", std::vector<char>(bytes.begin(), bytes.end() - 48));
+  const CliRun r = run({"merge", "--preset", "ccm", "--in", a, "--in", plain, "--offset", "0.08,-0.16", "--out", out});
+  ASSERT_EQ(r.code, 0) << r.err;
+  double ox = 0.0, oy = 0.0, oz = 0.0, dz = 1.0;
+  const std::size_t origin_at = r.out.find("(origin ");
+  const std::size_t offset_at = r.out.find("offset 0.080 -0.160 ");
+  ASSERT_NE(origin_at, std::string::npos) << r.out;
+  ASSERT_NE(offset_at, std::string::npos) << r.out;
+  ASSERT_EQ(std::sscanf(r.out.c_str() + origin_at, "(origin %lf %lf %lf", &ox, &oy, &oz), 3) << r.out;
+  ASSERT_EQ(std::sscanf(r.out.c_str() + offset_at, "offset 0.080 -0.160 %lf", &dz), 1) << r.out;
+  EXPECT_NEAR(dz, -oz, 1e-9) << r.out;
+}

@@ -23,6 +23,7 @@
 #include "map_runner.hpp"
 #include "origin.hpp"
 #include "png.hpp"
+#include "saved_map.hpp"
 #include "tiling.hpp"
 
 namespace ccmap::tools {
@@ -36,11 +37,12 @@ constexpr const char* kMainHelp =
     "commands:\n"
     "  map     map clouds and write per-layer CSV files and pictures\n"
     "  query   map clouds and print the map's answer at one point\n"
+    "  merge   merge maps saved by 'ccmap map --save' (or snapshots) and write the same output\n"
     "\n"
-    "Run 'ccmap map --help' or 'ccmap query --help' for the options.\n";
+    "Run 'ccmap map --help', 'ccmap query --help' or 'ccmap merge --help' for the options.\n";
 
 constexpr const char* kMapHelp =
-    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR\n"
+    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR [--save FILE]\n"
     "                 [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
     "                 [--bounds XMIN,YMIN,XMAX,YMAX]\n"
     "\n"
@@ -72,6 +74,10 @@ constexpr const char* kMapHelp =
     "                  relief against the layer's limits), 253 inscribed, 254 lethal (obstacle or\n"
     "                  steep), 255 unknown or unobserved\n"
     "  --inflate M     with --costmap: cost pixels within M metres of a lethal one are inscribed\n"
+    "  --save FILE     also writes a map for 'ccmap merge': the library's snapshot followed by the\n"
+    "                  origin below (tools/cli/saved_map.hpp). With --poses, the final map; without,\n"
+    "                  the map of one stack at the origin holding the points that fall in its\n"
+    "                  windows (what a rover there holds; the CSV files cover every tile)\n"
     "\n"
     "Without --poses the whole of every cloud is mapped: the tool sweeps the stack over the\n"
     "clouds in tiles (move the stack to a tile, fold the tile's points, export the tile's cells),\n"
@@ -119,6 +125,24 @@ constexpr const char* kQueryHelp =
     "as outside map, and the point answer of --at comes from the same map. With --poses the\n"
     "queries read the map at the last pose.\n";
 
+constexpr const char* kMergeHelp =
+    "usage: ccmap merge --preset NAME --in FILE --in FILE [--in FILE ...] [--offset DX,DY] --out DIR\n"
+    "\n"
+    "Merges maps of the same preset and cell width: each --in is a map saved by 'ccmap map --save'\n"
+    "or a snapshot written by flight software (save_snapshot; its origin is then 0). The result\n"
+    "holds the first map's parameters and windows; the cells of the others are merged exactly\n"
+    "(CCM cells as sufficient statistics, Kalman cells in information form, docs/design.md) where\n"
+    "they fall in those windows, and counted as outside otherwise. Writes the same CSV files and\n"
+    "pictures as 'ccmap map', in absolute coordinates (the first map's origin added back).\n"
+    "\n"
+    "  --in FILE       a saved map; give two or more. Merge only maps built independently: a map\n"
+    "                  that already holds another's points counts them twice\n"
+    "  --offset DX,DY  the map origin of every further --in relative to the first's (m): for\n"
+    "                  snapshots without a saved origin; replaces the saved origins' difference.\n"
+    "                  Must be a whole number of coarsest cells (cadre: 0.64 m), or the maps are\n"
+    "                  refused as misaligned\n"
+    "  --out DIR       as for 'ccmap map'\n";
+
 /// Thrown inside this file only, turned into "ccmap: error: ..." by run_cli.
 struct CliError {
   std::string message;
@@ -149,6 +173,15 @@ double parse_positive(const std::string& flag, const std::string& text, double m
          2);
   }
   return v;
+}
+
+/// "X,Y" into two finite numbers.
+void parse_pair(const std::string& flag, const std::string& value, double* x, double* y) {
+  const std::size_t comma = value.find(',');
+  if (comma == std::string::npos) fail(flag + ": expected X,Y, got '" + value + "'", 2);
+  *x = parse_number(flag, value.substr(0, comma));
+  *y = parse_number(flag, value.substr(comma + 1));
+  if (!std::isfinite(*x) || !std::isfinite(*y)) fail(flag + ": coordinates must be finite", 2);
 }
 
 /// --bounds XMIN,YMIN,XMAX,YMAX: four finite numbers, minimum below maximum on both axes.
@@ -182,6 +215,10 @@ struct Options {
   std::vector<std::string> clouds;
   std::string poses;
   std::string out_dir;
+  std::string save;
+  std::vector<std::string> inputs;
+  bool have_offset = false;
+  double offset_x = 0.0, offset_y = 0.0;
   bool have_at = false;
   double at_x = 0.0, at_y = 0.0;
   SensorChoice sensor = SensorChoice::kLidar;
@@ -238,7 +275,8 @@ Options parse_options(int argc, char** argv) {
     }
     static const char* kKnown[] = {"--preset", "--res",    "--wl",   "--cloud", "--poses",
                                    "--out",    "--at",     "--sensor", "--sigma", "--bounds",
-                                   "--footprint", "--path", "--step", "--max-unknown-share", "--inflate"};
+                                   "--footprint", "--path", "--step", "--max-unknown-share", "--inflate",
+                                   "--save",   "--in",     "--offset"};
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
       fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
     }
@@ -261,12 +299,17 @@ Options parse_options(int argc, char** argv) {
       if (value.empty()) fail("--out needs a directory", 2);
       o.out_dir = value;
     } else if (arg == "--at") {
-      const std::size_t comma = value.find(',');
-      if (comma == std::string::npos) fail("--at: expected X,Y, got '" + value + "'", 2);
-      o.at_x = parse_number("--at", value.substr(0, comma));
-      o.at_y = parse_number("--at", value.substr(comma + 1));
-      if (!std::isfinite(o.at_x) || !std::isfinite(o.at_y)) fail("--at: coordinates must be finite", 2);
+      parse_pair("--at", value, &o.at_x, &o.at_y);
       o.have_at = true;
+    } else if (arg == "--save") {
+      if (value.empty()) fail("--save needs a file name", 2);
+      o.save = value;
+    } else if (arg == "--in") {
+      if (value.empty()) fail("--in needs a file name", 2);
+      o.inputs.push_back(value);
+    } else if (arg == "--offset") {
+      parse_pair("--offset", value, &o.offset_x, &o.offset_y);
+      o.have_offset = true;
     } else if (arg == "--sensor") {
       if (value == "lidar") o.sensor = SensorChoice::kLidar;
       else if (value == "stereo") o.sensor = SensorChoice::kCadreStereo;
@@ -383,32 +426,39 @@ void print_frame(const std::string& path, const Cloud& cloud, std::size_t f, con
   }
 }
 
+/// The cloud's points in range and bounds as local-frame floats (the origin subtracted in double,
+/// then rounded: |difference| <= 1e5 m) and their weights; the others counted in *kept_back as
+/// out of range or outside map.
+void local_frame_points(const Cloud& cloud, const LocalOrigin& origin, const AreaBounds& bounds,
+                        std::vector<float>* xyz, std::vector<float>* weights, FrameStats* kept_back) {
+  xyz->clear();
+  weights->clear();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], origin, bounds);
+    if (fate == PointFate::kOutOfRange) {
+      ++kept_back->rejected_out_of_range;
+      continue;
+    }
+    if (fate == PointFate::kOutsideBounds) {
+      ++kept_back->outside_map;
+      continue;
+    }
+    xyz->push_back(static_cast<float>(cloud.x[i] - origin.xyz[0]));
+    xyz->push_back(static_cast<float>(cloud.y[i] - origin.xyz[1]));
+    xyz->push_back(static_cast<float>(cloud.z[i] - origin.xyz[2]));
+    if (cloud.has_weight) weights->push_back(weight_to_float(cloud.w[i]));
+  }
+}
+
 /// Folds cloud number f as one frame, the sensor at `sensor` (local metres): the points the tool
-/// maps (classify_point) in local float coordinates, the others counted.
+/// maps (local_frame_points), the others counted.
 void fold_cloud(const Options& o, MappedClouds& m, const Cloud& cloud, std::size_t f, const float sensor[3],
                 std::vector<float>* xyz, std::vector<float>* weights, std::ostream& out, bool verbose) {
   std::string error;
   FrameStats stats;
   stats.received = cloud.size() + cloud.skipped_non_finite;
   stats.rejected_non_finite = cloud.skipped_non_finite;
-  xyz->clear();
-  weights->clear();
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], m.origin, o.bounds);
-    if (fate == PointFate::kOutOfRange) {
-      ++stats.rejected_out_of_range;
-      continue;
-    }
-    if (fate == PointFate::kOutsideBounds) {
-      ++stats.outside_map;
-      continue;
-    }
-    // Subtract the origin in double, then round to float (|difference| <= 1e5 m).
-    xyz->push_back(static_cast<float>(cloud.x[i] - m.origin.xyz[0]));
-    xyz->push_back(static_cast<float>(cloud.y[i] - m.origin.xyz[1]));
-    xyz->push_back(static_cast<float>(cloud.z[i] - m.origin.xyz[2]));
-    if (cloud.has_weight) weights->push_back(weight_to_float(cloud.w[i]));
-  }
+  local_frame_points(cloud, m.origin, o.bounds, xyz, weights, &stats);
   FrameStats lib;
   const auto t0 = std::chrono::steady_clock::now();
   if (!m.runner->update_frame(*xyz, *weights, sensor, &lib, &error)) fail(o.clouds[f] + ": " + error);
@@ -620,13 +670,9 @@ std::vector<std::uint8_t> layer_costmap(const MappedClouds& m, int k, const std:
   return cost;
 }
 
-int run_map(const Options& o, std::ostream& out) {
-  if (o.out_dir.empty()) fail("--out DIR is required", 2);
-  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
-  if (o.have_footprint || !o.path.empty()) fail("--footprint and --path belong to 'ccmap query'", 2);
-  if (o.step > 0.0 || o.max_unknown_share != 0.1) fail("--step and --max-unknown-share belong to 'ccmap query'", 2);
-  if (o.inflate > 0.0 && !o.costmap) fail("--inflate needs --costmap", 2);
-  MappedClouds m = build_map(o, out, true);
+/// The CSV files and pictures of every layer, in absolute coordinates, and a line per layer: the
+/// tiles' rows of a tiled map, else the runner's current state.
+void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
   std::error_code ec;
   std::filesystem::create_directories(o.out_dir, ec);
   if (ec || !std::filesystem::is_directory(o.out_dir)) {
@@ -687,6 +733,134 @@ int run_map(const Options& o, std::ostream& out) {
   }
   out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
       << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+}
+
+/// Options that belong to one command only.
+void refuse_foreign_options(const Options& o) {
+  if (o.command != "query" && o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  if (o.command != "map" && !o.save.empty()) fail("--save belongs to 'ccmap map'", 2);
+  if (o.command != "merge" && !o.inputs.empty()) fail("--in belongs to 'ccmap merge'", 2);
+  if (o.command != "merge" && o.have_offset) fail("--offset belongs to 'ccmap merge'", 2);
+  if (o.command == "merge" && (!o.clouds.empty() || !o.poses.empty() || o.res > 0.0 || o.wl > 0.0 || o.bounds.set)) {
+    fail("ccmap merge takes --preset, --in, --offset and --out (the maps bring their own parameters)", 2);
+  }
+}
+
+/// A tiled map has no single stack: the saved map is that of one stack at the origin, every cloud
+/// one frame (sensor at the origin, as in the tiles), holding the points its windows hold.
+void fold_one_window(const Options& o, MappedClouds& m, std::ostream& out) {
+  std::string error;
+  if (!m.runner->reset(&error) || !m.runner->move_to(0.0F, 0.0F, &error)) fail(error);
+  const float sensor[3] = {0.0F, 0.0F, 0.0F};
+  FrameStats totals;
+  std::vector<float> xyz, weights;
+  for (const std::string& path : o.clouds) {
+    const Cloud cloud = read_nonempty_cloud(path);
+    FrameStats kept_back;
+    local_frame_points(cloud, m.origin, o.bounds, &xyz, &weights, &kept_back);
+    FrameStats stats;
+    if (!m.runner->update_frame(xyz, weights, sensor, &stats, &error)) fail(path + ": " + error);
+    totals.add(stats);
+    totals.add(kept_back);
+  }
+  out << "saved map: one stack at the origin, " << totals.used << " points in its windows, " << totals.outside_map
+      << " outside them\n";
+}
+
+int run_map(const Options& o, std::ostream& out) {
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  if (o.have_footprint || !o.path.empty()) fail("--footprint and --path belong to 'ccmap query'", 2);
+  if (o.step > 0.0 || o.max_unknown_share != 0.1) fail("--step and --max-unknown-share belong to 'ccmap query'", 2);
+  if (o.inflate > 0.0 && !o.costmap) fail("--inflate needs --costmap", 2);
+  MappedClouds m = build_map(o, out, true);
+  write_outputs(m, o, out);
+  if (!o.save.empty()) {
+    if (m.tiled) fold_one_window(o, m, out);
+    std::string error;
+    SavedMap saved;
+    if (!m.runner->save_snapshot(&saved.snapshot, &error)) fail(error);
+    saved.has_origin = true;
+    saved.coarsest_width_m = m.origin.coarsest_width;
+    for (int a = 0; a < 3; ++a) saved.origin_cells[a] = m.origin.cells[a];
+    if (!write_saved_map(o.save, saved, &error)) fail(error);
+    out << "saved: " << o.save << " (" << saved.snapshot.size() + kOriginRecordBytes
+        << " bytes: snapshot and origin)\n";
+  }
+  return 0;
+}
+
+/// metres / width as an exact integer, or fail: the maps do not share the grid.
+std::int64_t whole_cells(double metres, double width, const std::string& what) {
+  const double cells = metres / width;
+  const double rounded = std::round(cells);
+  if (!(std::fabs(cells - rounded) <= 1e-6 * std::max(1.0, std::fabs(rounded))) || std::fabs(rounded) > 1e15) {
+    fail(what + ": " + fmt("%.6f", metres) + " m is not a whole number of " + fmt("%g", width) +
+         " m cells (misaligned)");
+  }
+  return static_cast<std::int64_t>(rounded);
+}
+
+int run_merge(const Options& o, std::ostream& out) {
+  if (o.preset.empty()) fail("--preset is required (cadre, ccm, kf or omg)", 2);
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  if (o.inputs.size() < 2) fail("ccmap merge needs two or more --in FILE", 2);
+  std::string error;
+  MappedClouds m;
+  m.runner = make_map_runner(o.preset, &error);
+  if (!m.runner) fail(error, 2);
+  const int layers = preset_layer_count(o.preset);
+  const std::int64_t coarse_factor = std::int64_t{1} << (layers - 1);  // finest cells per coarsest cell
+  std::vector<SavedMap> maps(o.inputs.size());
+  for (std::size_t i = 0; i < o.inputs.size(); ++i) {
+    if (!read_saved_map(o.inputs[i], m.runner->snapshot_size(), &maps[i], &error)) {
+      fail(error + " (is it a " + o.preset + " map?)");
+    }
+  }
+  if (!m.runner->load_snapshot(maps[0].snapshot, &error)) fail(o.inputs[0] + ": " + error);
+  // Widths: the saved origin's double width (what 'ccmap map' computed with), else the float
+  // width rounded to the decimal a user would type.
+  const SavedMap& first = maps[0];
+  const double coarsest = first.has_origin
+                              ? first.coarsest_width_m
+                              : std::round(static_cast<double>(m.runner->layer_cell_width(layers - 1)) * 1e6) / 1e6;
+  for (int k = 0; k < layers; ++k) m.widths.push_back(coarsest * std::ldexp(1.0, k - (layers - 1)));
+  m.origin.coarsest_width = coarsest;
+  for (int a = 0; a < 3; ++a) {
+    m.origin.cells[a] = first.origin_cells[a];
+    m.origin.xyz[a] = static_cast<double>(first.origin_cells[a]) * coarsest;
+  }
+  out << "ccmap merge: preset " << o.preset << ", " << o.inputs[0] << " (origin " << fmt("%.3f", m.origin.xyz[0])
+      << ' ' << fmt("%.3f", m.origin.xyz[1]) << ' ' << fmt("%.3f", m.origin.xyz[2])
+      << (first.has_origin ? "" : ", none saved") << ") holds the parameters and windows\n";
+  for (std::size_t i = 1; i < maps.size(); ++i) {
+    const SavedMap& other = maps[i];
+    if (other.has_origin && std::fabs(other.coarsest_width_m - coarsest) > 1e-12 * coarsest) {
+      fail(o.inputs[i] + ": made with " + fmt("%g", other.coarsest_width_m) + " m coarsest cells, the first with " +
+           fmt("%g", coarsest) + " m (misaligned)");
+    }
+    // The other map's origin minus the first's: in coarsest cells (x, y), metres (z).
+    std::int64_t dx = other.origin_cells[0] - first.origin_cells[0];
+    std::int64_t dy = other.origin_cells[1] - first.origin_cells[1];
+    if (o.have_offset) {
+      dx = whole_cells(o.offset_x, coarsest, "--offset x");
+      dy = whole_cells(o.offset_y, coarsest, "--offset y");
+    }
+    const double dz = static_cast<double>(other.origin_cells[2] - first.origin_cells[2]) * coarsest;
+    const std::int64_t fx = dx * coarse_factor, fy = dy * coarse_factor;
+    if (std::llabs(fx) > 0x3FFFFFFF || std::llabs(fy) > 0x3FFFFFFF || std::fabs(dz) > 1e5) {
+      fail(o.inputs[i] + ": its origin is too far from the first map's to merge");
+    }
+    std::uint64_t merged = 0, outside = 0;
+    if (!m.runner->merge_snapshot(other.snapshot, static_cast<std::int32_t>(fx), static_cast<std::int32_t>(fy),
+                                  static_cast<float>(dz), &merged, &outside, &error)) {
+      fail(o.inputs[i] + ": " + error);
+    }
+    out << "merged " << o.inputs[i] << ": offset " << fmt("%.3f", static_cast<double>(dx) * coarsest) << ' '
+        << fmt("%.3f", static_cast<double>(dy) * coarsest) << ' ' << fmt("%.3f", dz) << " m, " << merged
+        << " cells merged, " << outside << " outside the first map's windows (dropped)\n";
+  }
+  write_outputs(m, o, out);
   return 0;
 }
 
@@ -783,12 +957,16 @@ int run_cli(int argc, char** argv, std::ostream& out, std::ostream& err) {
       out << kMainHelp;
       return 0;
     }
-    if (command != "map" && command != "query") fail("unknown command '" + command + "' (expected map or query)", 2);
+    if (command != "map" && command != "query" && command != "merge") {
+      fail("unknown command '" + command + "' (expected map, query or merge)", 2);
+    }
     const Options o = parse_options(argc, argv);
     if (o.help) {
-      out << (command == "map" ? kMapHelp : kQueryHelp);
+      out << (command == "map" ? kMapHelp : (command == "query" ? kQueryHelp : kMergeHelp));
       return 0;
     }
+    refuse_foreign_options(o);
+    if (command == "merge") return run_merge(o, out);
     return command == "map" ? run_map(o, out) : run_query(o, out);
   } catch (const CliError& e) {
     err << "ccmap: error: " << e.message << "\n";

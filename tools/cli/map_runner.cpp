@@ -5,6 +5,8 @@
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/footprint.hpp"
 #include "ccmap/map/path_query.hpp"
+#include "ccmap/map/exchange.hpp"
+#include "ccmap/map/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
@@ -187,6 +189,42 @@ class StackRunner final : public MapRunner {
   FrameStats totals() const override { return to_stats(stack_->total_counters()); }
   float weight_limit() const override { return stack_->params().weight_limit; }
   float min_weight() const override { return stack_->params().min_weight; }
+
+  std::size_t snapshot_size() const override { return ccmap::snapshot_size<Config>(); }
+
+  bool save_snapshot(std::vector<std::uint8_t>* bytes, std::string* error) const override {
+    bytes->assign(ccmap::snapshot_size<Config>(), 0U);
+    std::size_t written = 0;
+    const Status status = ccmap::save_snapshot(*stack_, bytes->data(), bytes->size(), &written);
+    if (status != Status::kOk) {
+      *error = std::string("cannot save the map (") + to_string(status) + ")";
+      return false;
+    }
+    return true;
+  }
+
+  bool load_snapshot(const std::vector<std::uint8_t>& bytes, std::string* error) override {
+    const Status status = ccmap::load_snapshot(*stack_, bytes.data(), bytes.size());
+    if (status != Status::kOk) {
+      *error = std::string("the map does not load (") + to_string(status) + ")";
+      return false;
+    }
+    return true;
+  }
+
+  bool merge_snapshot(const std::vector<std::uint8_t>& bytes, std::int32_t offset_x_cells, std::int32_t offset_y_cells,
+                      float offset_z_m, std::uint64_t* merged, std::uint64_t* outside, std::string* error) override {
+    MergeReport report{};
+    const Status status = ccmap::merge_snapshot(*stack_, bytes.data(), bytes.size(),
+                                                CellIndex{offset_x_cells, offset_y_cells}, offset_z_m, &report);
+    if (status != Status::kOk) {
+      *error = std::string("the map does not merge (") + to_string(status) + ")";
+      return false;
+    }
+    *merged = report.cells_merged;
+    *outside = report.cells_outside;
+    return true;
+  }
 
  private:
   std::unique_ptr<StackType> stack_ = std::make_unique<StackType>();  // MBs: never on the stack

@@ -105,6 +105,17 @@ class MapRunner {
   virtual FrameStats totals() const = 0;
   virtual float weight_limit() const = 0;
   virtual float min_weight() const = 0;
+  /// Bytes of a snapshot of this preset.
+  virtual std::size_t snapshot_size() const = 0;
+  /// The library's snapshot of the map (save_snapshot).
+  virtual bool save_snapshot(std::vector<std::uint8_t>* bytes, std::string* error) const = 0;
+  /// Replaces the map by a snapshot (load_snapshot: parameters, windows, cells).
+  virtual bool load_snapshot(const std::vector<std::uint8_t>& bytes, std::string* error) = 0;
+  /// Folds a snapshot of another map into this one (merge_snapshot); offset: that map's origin
+  /// minus this one's, in finest cells (a multiple of the coarsest layer's) and metres (z).
+  virtual bool merge_snapshot(const std::vector<std::uint8_t>& bytes, std::int32_t offset_x_cells,
+                              std::int32_t offset_y_cells, float offset_z_m, std::uint64_t* merged,
+                              std::uint64_t* outside, std::string* error) = 0;
 };
 
 /// Preset names, in the order shown by --help.

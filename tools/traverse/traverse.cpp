@@ -16,6 +16,7 @@
 #include "sim/path.hpp"
 #include "sim/stereo.hpp"
 #include "sim/terrain.hpp"
+#include "traverse/scene.hpp"
 
 namespace ccmap::traverse {
 
@@ -23,97 +24,8 @@ namespace {
 
 using experiments::format;
 using experiments::Rgb;
-using Map = Stack<CadreConfig>;
 
-constexpr double kMaxSlopeDeg = 20.0;
-constexpr double kObstacleFraction = 0.75;
 constexpr double kFootprintStepM = 0.02;
-
-/// The terrain of the traverse: lunar-like ground (tools/sim lunar_terrain_params) over
-/// [0, 30] m^2, its rocks cleared from a 0.45 m corridor around the path (the rover does not
-/// drive over rocks; its camera height follows the ground), plus placed rocks and a box
-/// beside the path, some above the 5 m-range minimum size of 48 cm.
-std::unique_ptr<sim::ProceduralTerrain> make_terrain(std::uint64_t seed, const std::vector<sim::PathPose>& path) {
-  const sim::Rect area{0.0, 0.0, 30.0, 30.0};
-  const sim::TerrainParams params = sim::lunar_terrain_params(area, seed);
-  const sim::ProceduralTerrain generated(params);
-  sim::TerrainParams no_rocks = params;
-  no_rocks.rocks.density_per_m2 = 0.0;  // independent streams: waves and craters stay the same
-  auto terrain = std::make_unique<sim::ProceduralTerrain>(no_rocks);
-  auto path_distance = [&](double x, double y) {
-    double best = 1e300;
-    for (const sim::PathPose& p : path) best = std::min(best, std::hypot(p.pose.x - x, p.pose.y - y));
-    return best;
-  };
-  for (const sim::Rock& r : generated.rocks()) {
-    if (path_distance(r.x, r.y) - 0.5 * r.diameter_m > 0.45) terrain->add_rock(r);
-  }
-  // Placed obstacles (x, y, diameter, height): beside the first straight, in the turn and
-  // beside/after the last straight.
-  const sim::Rock placed[] = {
-      {9.5, 9.3, 1.0, 0.50},   {11.0, 6.3, 0.7, 0.35}, {16.0, 12.5, 1.1, 0.55}, {13.0, 16.6, 1.2, 0.60},
-      {8.0, 8.95, 0.25, 0.12}, {10.2, 7.2, 0.16, 0.08}, {15.0, 11.4, 0.3, 0.15}, {13.4, 13.2, 0.22, 0.10},
-      {12.2, 4.8, 1.0, 0.50},
-  };
-  for (const sim::Rock& r : placed) terrain->add_rock(r);
-  terrain->add_box(sim::Box{7.8, 6.6, 8.2, 7.0, 0.20});
-  return terrain;
-}
-
-/// Rotation sensor (optical) -> map of the camera at heading yaw: columns = the optical axes
-/// in the map frame.
-Pose camera_pose(const sim::StereoCamera& camera, const sim::Point3& position, double yaw) {
-  Pose pose{};
-  const sim::Point3 zero{0.0, 0.0, 0.0};
-  const sim::Point3 axes[3] = {camera.sensor_to_world(sim::Point3{1.0, 0.0, 0.0}, zero, yaw),
-                               camera.sensor_to_world(sim::Point3{0.0, 1.0, 0.0}, zero, yaw),
-                               camera.sensor_to_world(sim::Point3{0.0, 0.0, 1.0}, zero, yaw)};
-  for (int c = 0; c < 3; ++c) {
-    pose.rotation[0][c] = static_cast<float>(axes[c].x);
-    pose.rotation[1][c] = static_cast<float>(axes[c].y);
-    pose.rotation[2][c] = static_cast<float>(axes[c].z);
-  }
-  pose.translation = PointXYZ{static_cast<float>(position.x), static_cast<float>(position.y),
-                              static_cast<float>(position.z)};
-  return pose;
-}
-
-bool is_hazard(CellClass c) { return c == CellClass::kObstacle || c == CellClass::kSteep; }
-
-void count(DetectionAreas& a, bool truth_hazard, CellClass map_class, double area) {
-  if (map_class == CellClass::kUnknown) {
-    a.unknown += area;
-    return;
-  }
-  const bool map_hazard = is_hazard(map_class);
-  (truth_hazard ? a.truth_hazard_known : a.truth_free_known) += area;
-  if (map_hazard == truth_hazard) a.correct += area;
-  else if (truth_hazard) a.missed += area;
-  else a.false_obstacle += area;
-}
-
-struct LayerTruth {
-  sim::HazardGrid grid;
-  CellIndex min{0, 0};
-  int side = 0;
-  double width = 0.0;
-  const sim::CellHazard* at(double x, double y) const {
-    const int ix = static_cast<int>(std::floor((x - grid.origin_x) / width));
-    const int iy = static_cast<int>(std::floor((y - grid.origin_y) / width));
-    if (ix < 0 || iy < 0 || ix >= grid.nx || iy >= grid.ny) return nullptr;
-    return &grid.at(ix, iy);
-  }
-};
-
-/// The layer whose cell gave the class of a stack answer (query() takes the class of a
-/// constant-layer answer from the first CCM layer when that one knows the point).
-int classifying_layer(const Map& map, const QueryResult& q, float x, float y) {
-  if (q.status == Status::kOk && !Map::layer_is_ccm(q.layer) && Map::kCcmLayerCount > 0 &&
-      map.query_layer(Map::kFineLayerCount, x, y).status == Status::kOk) {
-    return Map::kFineLayerCount;
-  }
-  return q.layer;
-}
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -269,13 +181,6 @@ bool write_layer_picture(const std::string& path, const Map& map, int layer, con
   experiments::draw_text(img, gap + 2 * (pix + gap), ly + 18, "BLACK: NEVER OBSERVED", experiments::kBlack);
   return tools::write_png(path, img, error);
 }
-
-struct QueryRaster {
-  double x0 = 0.0, y0 = 0.0, step = 0.04;
-  int n = 0;
-  std::vector<CellClass> map_class;
-  std::vector<signed char> truth;  ///< -1 invalid, 0 free, 1 obstacle, 2 steep
-};
 
 Rgb truth_rgb(signed char t) {
   if (t == 1) return class_rgb(CellClass::kObstacle);
@@ -470,7 +375,7 @@ TraverseResult run_traverse(const TraverseConfig& cfg) {
   result.body_length_m = cfg.body_length_m;
   result.body_width_m = cfg.body_width_m;
   result.path_length_m = route.back().distance_m;
-  const std::unique_ptr<sim::ProceduralTerrain> terrain = make_terrain(cfg.seed, route);
+  const std::unique_ptr<sim::ProceduralTerrain> terrain = make_terrain(cfg.seed, {route});
   result.rocks = terrain->rocks().size();
   result.boxes = terrain->boxes().size();
   const clock_t r0 = std::clock();
@@ -570,22 +475,14 @@ TraverseResult run_traverse(const TraverseConfig& cfg) {
   for (double m : ms) result.update_ms_mean += m / static_cast<double>(ms.size());
 
   // ---- per-layer ground truth and evaluation ----
-  std::vector<LayerTruth> truths(Map::kLayerCount);
+  std::vector<LayerTruth> truths;
   for (int layer = 0; layer < Map::kLayerCount; ++layer) {
-    LayerTruth& t = truths[static_cast<std::size_t>(layer)];
-    t.width = map->layer_cell_width(layer);
-    t.side = Map::layer_side(layer);
-    const CellIndex c = map->layer_centre(layer);
-    t.min = CellIndex{c.x - t.side / 2, c.y - t.side / 2};
-    sim::HazardParams hp;
-    hp.min_obstacle_height_m = kObstacleFraction * t.width;
-    hp.max_slope_deg = kMaxSlopeDeg;
-    hp.sample_spacing_m = 0.01;
-    t.grid = sim::compute_hazard_grid(*terrain, t.min.x * t.width, t.min.y * t.width, t.width, t.side, t.side, hp);
+    truths.push_back(layer_truth(*map, *terrain, layer));
+    const LayerTruth& t = truths.back();
     LayerReport rep;
     rep.layer = layer;
     rep.cell_width_m = t.width;
-    rep.min_obstacle_m = hp.min_obstacle_height_m;
+    rep.min_obstacle_m = kObstacleFraction * t.width;
     rep.ccm = Map::layer_is_ccm(layer);
     for (int iy = 0; iy < t.side; ++iy) {
       for (int ix = 0; ix < t.side; ++ix) {
@@ -607,31 +504,7 @@ TraverseResult run_traverse(const TraverseConfig& cfg) {
   }
 
   // ---- stack query on a fine raster over the coarsest window ----
-  const LayerTruth& coarse = truths.back();
-  QueryRaster qr;
-  qr.step = cfg.query_step_m;
-  qr.x0 = coarse.min.x * coarse.width;
-  qr.y0 = coarse.min.y * coarse.width;
-  qr.n = static_cast<int>(std::lround(coarse.side * coarse.width / qr.step));
-  qr.map_class.assign(static_cast<std::size_t>(qr.n) * static_cast<std::size_t>(qr.n), CellClass::kUnknown);
-  qr.truth.assign(qr.map_class.size(), -1);
-  const double area = qr.step * qr.step;
-  for (int j = 0; j < qr.n; ++j) {
-    for (int i = 0; i < qr.n; ++i) {
-      const double x = qr.x0 + (i + 0.5) * qr.step, y = qr.y0 + (j + 0.5) * qr.step;
-      const float fx = static_cast<float>(x), fy = static_cast<float>(y);
-      const QueryResult q = map->query(fx, fy);
-      const int layer = classifying_layer(*map, q, fx, fy);
-      const std::size_t k = static_cast<std::size_t>(i) + static_cast<std::size_t>(qr.n) * static_cast<std::size_t>(j);
-      const CellClass cls = q.status == Status::kOk ? q.cell_class : CellClass::kUnknown;
-      qr.map_class[k] = cls;
-      if (layer < 0) continue;
-      const sim::CellHazard* h = truths[static_cast<std::size_t>(layer)].at(x, y);
-      if (h == nullptr || !h->valid) continue;
-      qr.truth[k] = static_cast<signed char>(h->obstacle ? 1 : (h->steep ? 2 : 0));
-      count(result.stack, h->hazard(), cls, area);
-    }
-  }
+  const QueryRaster qr = query_raster(*map, truths, cfg.query_step_m, &result.stack);
 
   // ---- objects ----
   const double bin_edges[] = {0.04, 0.12, 0.24, result.min_size_5m_m, 1e9};

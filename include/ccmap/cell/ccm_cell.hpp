@@ -182,6 +182,40 @@ inline void ccm_update_unchecked(CcmCell& cell, float x, float y, float z, float
 /// or non-finite weight (kBadWeight).
 [[nodiscard]] Status ccm_merge(CcmCell& cell, const CcmCell& other, float weight_limit) noexcept;
 
+namespace detail {
+/// The start every unmerge (ccm_, kalman_, omg_unmerge) shares: kInvalidArgument for rest ==
+/// nullptr, kBadWeight for a negative or non-finite weight; for an empty part *rest = total and
+/// *done = true (nothing to take out). Cell: any cell with a float `weight`.
+template <typename Cell>
+[[nodiscard]] Status unmerge_start(const Cell& total, const Cell& part, Cell* rest, bool* done) noexcept {
+  *done = false;
+  if (rest == nullptr) {
+    return Status::kInvalidArgument;
+  }
+  if (!std::isfinite(total.weight) || !std::isfinite(part.weight) || total.weight < 0.0F || part.weight < 0.0F) {
+    return Status::kBadWeight;
+  }
+  if (!(part.weight > 0.0F)) {
+    *rest = total;
+    *done = true;
+  }
+  return Status::kOk;
+}
+}  // namespace detail
+
+/// The inverse of ccm_merge without the limiter: given total = part (+) rest (Chan's merge in
+/// real arithmetic), writes rest:
+///   W_r = W_t - W_p,  mu_r = mu_t + (mu_t - mu_p) * W_p / W_r,
+///   S_r,ij = S_t,ij - S_p,ij - d_i * d_j * W_p * W_r / W_t,  d = mu_r - mu_p,
+/// the diagonal clamped at 0 (rounding). An empty `part` gives rest = total. Map exchange uses it
+/// to take what a cell gained since it was last sent (map/exchange.hpp).
+/// Precision: a cancellation. Relative to float rounding of `total`, the error of mu_r grows
+/// like W_t / W_r and that of S_r like (W_t / W_r) * S_t / S_r; it is exact only in real
+/// arithmetic, and meaningless once the limiter has scaled `total` (the caller must not ask).
+/// Refused (*rest untouched): rest == nullptr (kInvalidArgument); a negative or non-finite
+/// weight, or W_t <= W_p with a non-empty part: nothing is left (kBadWeight).
+[[nodiscard]] Status ccm_unmerge(const CcmCell& total, const CcmCell& part, CcmCell* rest) noexcept;
+
 /// Folds n points (x[i], y[i] relative to the cell centre, z[i] map frame) into the cell in one
 /// step: a two-pass weighted mean/co-moment of the batch followed by ccm_merge. `weights` may
 /// be nullptr (every point then weighs `constant_weight`). Invalid points are skipped and

@@ -54,6 +54,8 @@ template <typename Config>
 struct SnapshotAccess;  // map/snapshot.hpp: save/load read and restore the raw state
 template <typename Config>
 struct PlannerAccess;   // map/detail/region_walk.hpp: the planner queries read the query view
+template <typename Config>
+struct ExchangeAccess;  // map/exchange.hpp: delta export and merge read and fold cells
 }  // namespace detail
 
 template <typename Config>
@@ -107,6 +109,8 @@ class Stack {
     rejected_moves_ = 0U;
     rejected_frames_ = 0U;
     last_update_ns_ = 0U;
+    accepted_frames_ = 0U;
+    ++generation_;
     initialised_ = true;
     return Status::kOk;
   }
@@ -335,6 +339,9 @@ class Stack {
   [[nodiscard]] std::uint32_t rejected_frames() const noexcept { return rejected_frames_; }
   /// Duration of the last accepted frame update (platform monotonic clock, ns).
   [[nodiscard]] std::uint64_t last_update_ns() const noexcept { return last_update_ns_; }
+  /// Frame updates accepted since init (wraps at 2^32): the sequence number that map exchange
+  /// (map/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().
+  [[nodiscard]] std::uint32_t accepted_frames() const noexcept { return accepted_frames_; }
   /// Raw CCM layer `ccm_index` (0 = first CCM layer), read-only, for serialisation, pictures and
   /// tests. Contract: 0 <= ccm_index < kCcmLayerCount; a violation is reported to the assert
   /// hook and answered with an empty, uninitialised grid (every accessor safe, no cells).
@@ -346,11 +353,15 @@ class Stack {
   [[nodiscard]] const RingGrid<FineCell>& fine_layer() const noexcept { return layers_.fine; }
 
   // save_snapshot / load_snapshot read and restore the private state through this friend only;
-  // a new state member must be added to the snapshot format (map/snapshot.hpp) as well.
+  // a new map-state member must be added to the snapshot format (map/snapshot.hpp) as well.
+  // Bookkeeping (accepted_frames_, generation_, the layers' KeptWindows, the grids' move
+  // telemetry) is not map state.
   friend struct detail::SnapshotAccess<Config>;
   // The planner queries (map/footprint.hpp, map/path_query.hpp, map/costmap.hpp) read the layers
   // through the query view, and only that, through this friend.
   friend struct detail::PlannerAccess<Config>;
+  // Map exchange reads and folds cells through this friend (map/exchange.hpp).
+  friend struct detail::ExchangeAccess<Config>;
 
  private:
   [[nodiscard]] detail::QueryView<Config> view() const noexcept {
@@ -386,6 +397,7 @@ class Stack {
 
   void finish_frame(const FrameCounters& frame, std::uint64_t start, FrameCounters* counters) noexcept {
     detail::accumulate(totals_, frame);
+    ++accepted_frames_;
     const std::uint64_t end = platform::monotonic_ns();
     last_update_ns_ = end >= start ? end - start : 0U;
     write_counters(frame, counters);
@@ -414,6 +426,10 @@ class Stack {
   std::uint32_t rejected_moves_ = 0U;
   std::uint32_t rejected_frames_ = 0U;
   std::uint64_t last_update_ns_ = 0U;
+  std::uint32_t accepted_frames_ = 0U;  ///< accepted frame updates since init (bookkeeping)
+  /// Changes on every init() and every binding of a MapExchange: an exchange bound to an older
+  /// generation refuses to run (its record of what was sent no longer describes these cells).
+  std::uint32_t generation_ = 0U;
   bool initialised_ = false;
   RingGrid<CcmCell> no_grid_{};  ///< the safe answer of ccm_layer() to a bad index
   // ---- update-path scratch and derived constants (not map state: not in snapshots) ----
