@@ -157,38 +157,5 @@ TEST(ChangeRule, TheDocumentedCases) {
   }
 }
 
-TEST(OmgCell, MergeEqualsTheSequentialUpdatesInDouble) {
-  test::Rng rng(9);
-  OmgCell a{}, b{};
-  double w = 0.0, h = 0.0, s = 0.0;  // the sequential reference in double, over both sets
-  auto reference = [&](double z, double r, double wt) {
-    const double total = w + wt, d = z - h;
-    h += wt / total * d;
-    s += wt * r + wt * d * (z - h);
-    w = total;
-  };
-  for (int i = 0; i < 30; ++i) {
-    const double z = 0.2 + 0.01 * rng.normal(), r = 1e-5, wt = 0.5 + rng.uniform(0.0, 1.0);
-    ASSERT_EQ(omg_update(a, static_cast<float>(z), static_cast<float>(r), static_cast<float>(wt)), Status::kOk);
-    reference(z, r, wt);
-  }
-  for (int i = 0; i < 12; ++i) {
-    const double z = 0.35 + 0.01 * rng.normal(), r = 2e-5, wt = 0.5 + rng.uniform(0.0, 1.0);
-    ASSERT_EQ(omg_update(b, static_cast<float>(z), static_cast<float>(r), static_cast<float>(wt)), Status::kOk);
-    reference(z, r, wt);
-  }
-  detail::omg_merge_unchecked(a, b, kNoWeightLimit);
-  EXPECT_NEAR(a.weight, w, 1e-4 * w);
-  EXPECT_NEAR(a.height, h, 1e-6) << "merged height";
-  EXPECT_NEAR(omg_variance(a), s / w, 1e-3 * s / w) << "merged mixture variance";
-  // The limiter after the merge: W = W_l, variance unchanged.
-  OmgCell limited = a;
-  detail::omg_merge_unchecked(limited, b, 10.0F);
-  EXPECT_EQ(limited.weight, 10.0F);
-  OmgCell empty{};
-  detail::omg_merge_unchecked(a, empty, kNoWeightLimit);
-  EXPECT_NEAR(a.weight, w, 1e-4 * w) << "an empty cell merged changes nothing";
-}
-
 }  // namespace
 }  // namespace ccmap

@@ -11,32 +11,23 @@
 //
 // The markers bracket the call, so the call's argument set-up (a handful of instructions) may
 // be counted too; against thousands of points per frame that is noise.
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/count_arg.hpp"
 #include "support/icount_marker.hpp"
 
-namespace {
-bool parse(const char* text, int max, int* value) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < 1 || v > max) {
-    return false;
-  }
-  *value = static_cast<int>(v);
-  return true;
-}
-}  // namespace
-
 int main(int argc, char** argv) {
+  using ccmap::test::parse_count;
   int frames = 3;
   int width_px = 80;
   int height_px = 50;
-  if (argc != 1 && (argc != 4 || !parse(argv[1], 1000, &frames) || !parse(argv[2], 4000, &width_px) ||
-                    !parse(argv[3], 4000, &height_px))) {
+  if (argc != 1 && (argc != 4 || !parse_count(argv[1], 1000, &frames) || !parse_count(argv[2], 4000, &width_px) ||
+                    !parse_count(argv[3], 4000, &height_px))) {
     std::fprintf(stderr, "usage: icount_stack_example [frames (1..1000) width_px height_px (1..4000)]\n");
     return 2;
   }
@@ -56,9 +47,12 @@ int main(int argc, char** argv) {
     const ccmap::Status status =
         stack->update_frame(frame.map_points.data(), frame.map_points.size(), frame.sensor_origin, &counters);
     ccmap::test::icount_end<1>();
-    if (status != ccmap::Status::kOk || counters.used != points) {
-      std::fprintf(stderr, "icount_stack_example: frame %d: status %d, %u of %zu points used\n", k,
-                   static_cast<int>(status), counters.used, points);
+    // Every point folded in or judged by the outlier gate (a rock's edge in a cell): none refused.
+    const std::uint32_t judged =
+        counters.gated_finer + counters.gated_occluded + counters.gated_held + counters.gated_pool_full;
+    if (status != ccmap::Status::kOk || counters.used + judged != points) {
+      std::fprintf(stderr, "icount_stack_example: frame %d: status %d, %u of %zu points used, %u judged by the gate\n",
+                   k, static_cast<int>(status), counters.used, points, judged);
       return 1;
     }
   }

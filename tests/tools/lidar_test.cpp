@@ -1,4 +1,4 @@
-// CI check of the real laser scan experiment (tools/experiments/lidar) on the 10 x 10 m Lone
+// CI check of the real laser scan experiment (tools/experiments/lidar.cpp) on the 10 x 10 m Lone
 // Star crop: with the outlier cut, CCM's sub-cell height predicts held-out points better (RMS)
 // than the piece-wise constant maps at the same resolution; with every point (raw), the +10 m
 // returns dominate the RMS and CCM is worse there, but its median error stays lower. Skipped

@@ -8,16 +8,23 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
 #include <system_error>
 #include <vector>
 
+#include "ccmap/cell/ccm_cell.hpp"
 #include "cloud_reader.hpp"
 #include "csv_writer.hpp"
 #include "layer_images.hpp"
+#include "ccmap/map/costmap.hpp"
 #include "map_runner.hpp"
+#include "origin.hpp"
+#include "png.hpp"
+#include "saved_map.hpp"
+#include "tiling.hpp"
 
 namespace ccmap::tools {
 namespace {
@@ -30,43 +37,115 @@ constexpr const char* kMainHelp =
     "commands:\n"
     "  map     map clouds and write per-layer CSV files and pictures\n"
     "  query   map clouds and print the map's answer at one point\n"
+    "  merge   merge maps saved by 'ccmap map --save' (or snapshots) and write the same output\n"
     "\n"
-    "Run 'ccmap map --help' or 'ccmap query --help' for the options.\n";
+    "Run 'ccmap map --help', 'ccmap query --help' or 'ccmap merge --help' for the options.\n";
 
 constexpr const char* kMapHelp =
-    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR\n"
+    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR [--save FILE]\n"
     "                 [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
+    "                 [--bounds XMIN,YMIN,XMAX,YMAX] [--gate K]\n"
     "\n"
     "  --preset NAME   cadre: 4 cm piece-wise constant Kalman layer, then 8/16/32/64 cm CCM layers\n"
     "                  ccm, kf, omg: one 256 x 256 layer of CCM, Kalman or OMG cells\n"
     "  --res METRES    finest cell width (default 0.04 for cadre, 0.08 otherwise); the layers of\n"
     "                  cadre keep their 1:2:4:8:16 ratios\n"
     "  --wl W_L        weight limit W_l of CCM and OMG cells (default 1000)\n"
+    "  --gate K        the library's outlier gate at K standard deviations (1..100) with its change\n"
+    "                  rule (docs/design.md, 'Outlier gate and change'); default 0: off, every\n"
+    "                  point trusted. Each file is one frame and the gate judges at most 512 cells\n"
+    "                  per pool and frame: held points beyond that are dropped (counted)\n"
     "  --cloud FILE    one frame, map-frame coordinates: .ply (ascii/binary), .las (1.0-1.4,\n"
     "                  uncompressed) or text 'x y z [w]' per line; repeat for more frames,\n"
     "                  applied in order. A per-point weight (PLY property, 4th text column)\n"
     "                  replaces the sensor model's weight for CCM and OMG cells (Kalman cells\n"
     "                  weigh by range variance); weights <= 0 or non-finite are counted as bad.\n"
     "  --poses FILE    one line 'x y z yaw' per frame: the sensor position in the map frame; the\n"
-    "                  map is re-centred on (x, y) before the frame. Without it the map stays\n"
-    "                  centred on the first cloud's centroid.\n"
+    "                  map is re-centred on (x, y) before the frame and follows the poses like a\n"
+    "                  rover's map: points beyond its windows count as outside map.\n"
     "  --sensor NAME   lidar (default): constant range noise --sigma (default 0.005 m);\n"
-    "                  stereo: the CADRE stereo model (noise grows with range^2 from the pose)\n"
+    "                  stereo: the CADRE stereo model (noise grows with range^2 from the pose;\n"
+    "                  without --poses, from the local origin)\n"
+    "  --bounds XMIN,YMIN,XMAX,YMAX\n"
+    "                  map only the points inside this map-frame rectangle (absolute coordinates,\n"
+    "                  edges included); the others count as outside map\n"
     "  --out DIR       writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
     "                  normal_var,class}.png; class colours: unknown grey, traversable green,\n"
     "                  obstacle red, steep orange, unobserved black\n"
+    "  --costmap       also writes DIR/costmap_<k>.png and .pgm per layer: a planner's cost raster\n"
+    "                  of layer k's cells (one pixel per cell of the picture's area, north up) in\n"
+    "                  costmap_2d values as grey levels: 0 free .. 252 cost (inclination and\n"
+    "                  relief against the layer's limits), 253 inscribed, 254 lethal (obstacle or\n"
+    "                  steep), 255 unknown or unobserved\n"
+    "  --inflate M     with --costmap: cost pixels within M metres of a lethal one are inscribed\n"
+    "  --save FILE     also writes a map for 'ccmap merge': the library's snapshot followed by the\n"
+    "                  origin below (tools/cli/saved_map.hpp). With --poses, the final map; without,\n"
+    "                  the map of one stack at the origin holding the points that fall in its\n"
+    "                  windows (what a rover there holds; the CSV files cover every tile)\n"
     "\n"
-    "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the first\n"
-    "cloud's centroid rounded to the coarsest cell width) in double precision before the\n"
-    "float library sees them, and adds it back to every output coordinate and height.\n";
+    "Without --poses the whole of every cloud is mapped: the tool sweeps the stack over the\n"
+    "clouds in tiles (move the stack to a tile, fold the tile's points, export the tile's cells),\n"
+    "so every layer covers the clouds' extent and every point's cell appears once in each layer's\n"
+    "CSV, with all the points that fall in it. While its tile is mapped a point lies inside every\n"
+    "layer's window, so only its range noise routes it: with the lidar model every point goes to\n"
+    "the finest layer its noise allows (cadre: the Kalman layer while --sigma <= res / (4 sqrt 3),\n"
+    "5.8 mm for 4 cm cells) and the coarser layers answer by pooling their 2 x 2 children (paper\n"
+    "Section IV-F), as the cells next to a rover do. A progress line follows every tenth of the\n"
+    "tiles.\n"
+    "\n"
+    "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the per-axis\n"
+    "median of the points, rounded to the coarsest cell width; with --poses, of the first cloud)\n"
+    "in double precision before the float library sees them, and adds it back to every output\n"
+    "coordinate and height. Points beyond +-1e9 m, or farther than 1e5 m (the library's range)\n"
+    "from the origin on an axis, are counted as out of range.\n";
 
 constexpr const char* kQueryHelp =
     "usage: ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --at X,Y\n"
+    "                   [--footprint LENGTH,WIDTH[,YAW_DEG]] [--max-unknown-share F]\n"
+    "       ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --path X1,Y1:X2,Y2[:...]\n"
+    "                   --footprint LENGTH,WIDTH [--step METRES] [--max-unknown-share F]\n"
     "                   [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
+    "                   [--bounds XMIN,YMIN,XMAX,YMAX] [--gate K]\n"
     "\n"
     "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
     "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
-    "variance, elevation variance and class, one 'key: value' per line.\n";
+    "variance, elevation variance and class, one 'key: value' per line. Without --poses only the\n"
+    "tile that holds (X, Y) is mapped (the answer is the whole map's); a point whose tile holds no\n"
+    "point of the clouds is outside the map (status: outside_map).\n"
+    "\n"
+    "  --footprint L,W[,YAW_DEG]  with --at: also the rover body, an L x W m rectangle centred\n"
+    "                  there, its length along YAW_DEG (degrees from +x, default 0): adds\n"
+    "                  footprint_class (traversable|obstacle|steep|unknown), footprint_unknown_share,\n"
+    "                  footprint_max_step_m, footprint_max_inclination_deg\n"
+    "  --path X1,Y1:X2,Y2[:...]  the body swept along this polyline (map frame, 2 .. 256 points),\n"
+    "                  its length along each segment: prints first_hazard_m (obstacle or steep)\n"
+    "                  and first_unknown_m, each a distance along the path or 'none'\n"
+    "  --step M        distance between the body's poses along --path (default: the finest cell)\n"
+    "  --max-unknown-share F  a footprint with a larger unknown share is unknown (default 0.1)\n"
+    "\n"
+    "With --footprint (or --path) and without --poses the clouds are not tiled: the stack is\n"
+    "centred on the footprint's centre (the path's first point) and every cloud folded into it as\n"
+    "one frame, as a rover standing there would map the ground; points beyond its windows count\n"
+    "as outside map, and the point answer of --at comes from the same map. With --poses the\n"
+    "queries read the map at the last pose.\n";
+
+constexpr const char* kMergeHelp =
+    "usage: ccmap merge --preset NAME --in FILE --in FILE [--in FILE ...] [--offset DX,DY] --out DIR\n"
+    "\n"
+    "Merges maps of the same preset and cell width: each --in is a map saved by 'ccmap map --save'\n"
+    "or a snapshot written by flight software (save_snapshot; its origin is then 0). The result\n"
+    "holds the first map's parameters and windows; the cells of the others are merged exactly\n"
+    "(CCM cells as sufficient statistics, Kalman cells in information form, docs/design.md) where\n"
+    "they fall in those windows, and counted as outside otherwise. Writes the same CSV files and\n"
+    "pictures as 'ccmap map', in absolute coordinates (the first map's origin added back).\n"
+    "\n"
+    "  --in FILE       a saved map; give two or more. Merge only maps built independently: a map\n"
+    "                  that already holds another's points counts them twice\n"
+    "  --offset DX,DY  the map origin of every further --in relative to the first's (m): for\n"
+    "                  snapshots without a saved origin; replaces the saved origins' difference.\n"
+    "                  Must be a whole number of coarsest cells (cadre: 0.64 m), or the maps are\n"
+    "                  refused as misaligned\n"
+    "  --out DIR       as for 'ccmap map'\n";
 
 /// Thrown inside this file only, turned into "ccmap: error: ..." by run_cli.
 struct CliError {
@@ -100,20 +179,82 @@ double parse_positive(const std::string& flag, const std::string& text, double m
   return v;
 }
 
+/// "X,Y" into two finite numbers.
+void parse_pair(const std::string& flag, const std::string& value, double* x, double* y) {
+  const std::size_t comma = value.find(',');
+  if (comma == std::string::npos) fail(flag + ": expected X,Y, got '" + value + "'", 2);
+  *x = parse_number(flag, value.substr(0, comma));
+  *y = parse_number(flag, value.substr(comma + 1));
+  if (!std::isfinite(*x) || !std::isfinite(*y)) fail(flag + ": coordinates must be finite", 2);
+}
+
+/// --bounds XMIN,YMIN,XMAX,YMAX: four finite numbers, minimum below maximum on both axes.
+AreaBounds parse_bounds(const std::string& text) {
+  double v[4] = {0.0, 0.0, 0.0, 0.0};
+  std::size_t at = 0;
+  for (int i = 0; i < 4; ++i) {
+    const std::size_t comma = i < 3 ? text.find(',', at) : text.size();
+    if (comma == std::string::npos || (i == 3 && text.find(',', at) != std::string::npos)) {
+      fail("--bounds: expected XMIN,YMIN,XMAX,YMAX, got '" + text + "'", 2);
+    }
+    v[i] = parse_number("--bounds", text.substr(at, comma - at));
+    if (!std::isfinite(v[i])) fail("--bounds: coordinates must be finite", 2);
+    at = comma + 1;
+  }
+  if (!(v[0] < v[2]) || !(v[1] < v[3])) fail("--bounds: XMIN < XMAX and YMIN < YMAX expected, got '" + text + "'", 2);
+  AreaBounds b;
+  b.set = true;
+  b.x_min = v[0];
+  b.y_min = v[1];
+  b.x_max = v[2];
+  b.y_max = v[3];
+  return b;
+}
+
 struct Options {
   std::string command;
   std::string preset;
   double res = 0.0;
   double wl = 0.0;
+  double gate = 0.0;  ///< outlier gate, standard deviations; 0 = off
   std::vector<std::string> clouds;
   std::string poses;
   std::string out_dir;
+  std::string save;
+  std::vector<std::string> inputs;
+  bool have_offset = false;
+  double offset_x = 0.0, offset_y = 0.0;
   bool have_at = false;
   double at_x = 0.0, at_y = 0.0;
   SensorChoice sensor = SensorChoice::kLidar;
   double sigma = 0.005;
+  AreaBounds bounds;
   bool help = false;
+  bool have_footprint = false;
+  double footprint_length = 0.0, footprint_width = 0.0, footprint_yaw_deg = 0.0;
+  bool footprint_has_yaw = false;
+  std::vector<double> path;  ///< x0 y0 x1 y1 ... (map frame, as given)
+  double step = 0.0;         ///< <= 0: the finest cell width
+  double max_unknown_share = 0.1;
+  bool costmap = false;
+  double inflate = 0.0;
+  /// A planner query (--footprint or --path) without --poses: a map centred on it, not tiles.
+  [[nodiscard]] bool centred_map() const { return (have_footprint || !path.empty()) && poses.empty(); }
 };
+
+
+/// "A,B[,C]" -> numbers; `what` names the option in errors.
+std::vector<double> parse_list(const std::string& flag, const std::string& text, char separator) {
+  std::vector<double> out;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = text.find(separator, start);
+    out.push_back(parse_number(flag, text.substr(start, end == std::string::npos ? std::string::npos : end - start)));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return out;
+}
 
 Options parse_options(int argc, char** argv) {
   Options o;
@@ -126,6 +267,10 @@ Options parse_options(int argc, char** argv) {
       o.help = true;
       continue;
     }
+    if (arg == "--costmap") {
+      o.costmap = true;
+      continue;
+    }
     if (arg.rfind("--", 0) != 0) fail("unexpected argument '" + arg + "' (options start with --)", 2);
     const std::size_t eq = arg.find('=');
     if (eq != std::string::npos) {
@@ -133,7 +278,10 @@ Options parse_options(int argc, char** argv) {
       arg = arg.substr(0, eq);
       have_value = true;
     }
-    static const char* kKnown[] = {"--preset", "--res", "--wl", "--cloud", "--poses", "--out", "--at", "--sensor", "--sigma"};
+    static const char* kKnown[] = {"--preset", "--res",    "--wl",   "--cloud", "--poses",
+                                   "--out",    "--at",     "--sensor", "--sigma", "--bounds",
+                                   "--footprint", "--path", "--step", "--max-unknown-share", "--inflate",
+                                   "--save",   "--in",     "--offset", "--gate"};
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
       fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
     }
@@ -147,6 +295,12 @@ Options parse_options(int argc, char** argv) {
       o.res = parse_positive(arg, value, 100.0);
     } else if (arg == "--wl") {
       o.wl = parse_positive(arg, value, 1e30, /*allow_inf=*/true);
+    } else if (arg == "--gate") {
+      o.gate = parse_number(arg, value);
+      const bool off = o.gate >= 0.0 && o.gate <= 0.0;  // exactly 0 (no float ==)
+      if (!off && !(o.gate >= 1.0 && o.gate <= 100.0)) {
+        fail("--gate: " + value + " is out of range (expected 0 or a number in 1..100)", 2);
+      }
     } else if (arg == "--cloud") {
       if (value.empty()) fail("--cloud needs a file name", 2);
       o.clouds.push_back(value);
@@ -156,18 +310,63 @@ Options parse_options(int argc, char** argv) {
       if (value.empty()) fail("--out needs a directory", 2);
       o.out_dir = value;
     } else if (arg == "--at") {
-      const std::size_t comma = value.find(',');
-      if (comma == std::string::npos) fail("--at: expected X,Y, got '" + value + "'", 2);
-      o.at_x = parse_number("--at", value.substr(0, comma));
-      o.at_y = parse_number("--at", value.substr(comma + 1));
-      if (!std::isfinite(o.at_x) || !std::isfinite(o.at_y)) fail("--at: coordinates must be finite", 2);
+      parse_pair("--at", value, &o.at_x, &o.at_y);
       o.have_at = true;
+    } else if (arg == "--save") {
+      if (value.empty()) fail("--save needs a file name", 2);
+      o.save = value;
+    } else if (arg == "--in") {
+      if (value.empty()) fail("--in needs a file name", 2);
+      o.inputs.push_back(value);
+    } else if (arg == "--offset") {
+      parse_pair("--offset", value, &o.offset_x, &o.offset_y);
+      o.have_offset = true;
     } else if (arg == "--sensor") {
       if (value == "lidar") o.sensor = SensorChoice::kLidar;
       else if (value == "stereo") o.sensor = SensorChoice::kCadreStereo;
       else fail("--sensor: unknown sensor '" + value + "' (expected lidar or stereo)", 2);
     } else if (arg == "--sigma") {
       o.sigma = parse_positive(arg, value, 10.0);
+    } else if (arg == "--bounds") {
+      o.bounds = parse_bounds(value);
+    } else if (arg == "--footprint") {
+      const std::vector<double> v = parse_list(arg, value, ',');
+      if (v.size() < 2 || v.size() > 3) fail("--footprint: expected LENGTH,WIDTH[,YAW_DEG], got '" + value + "'", 2);
+      for (std::size_t k = 0; k < v.size(); ++k) {
+        if (!std::isfinite(v[k]) || (k < 2 && !(v[k] > 0.0))) {
+          fail("--footprint: '" + value + "': length and width must be > 0, all finite", 2);
+        }
+      }
+      o.footprint_length = v[0];
+      o.footprint_width = v[1];
+      o.footprint_has_yaw = v.size() == 3;
+      o.footprint_yaw_deg = o.footprint_has_yaw ? v[2] : 0.0;
+      o.have_footprint = true;
+    } else if (arg == "--path") {
+      o.path.clear();
+      std::size_t start = 0;
+      while (true) {
+        const std::size_t end = value.find(':', start);
+        const std::string point = value.substr(start, end == std::string::npos ? std::string::npos : end - start);
+        const std::vector<double> xy = parse_list(arg, point, ',');
+        if (xy.size() != 2 || !std::isfinite(xy[0]) || !std::isfinite(xy[1])) {
+          fail("--path: expected X1,Y1:X2,Y2[:...] (finite), got '" + point + "'", 2);
+        }
+        o.path.insert(o.path.end(), xy.begin(), xy.end());
+        if (end == std::string::npos) break;
+        start = end + 1;
+      }
+      if (o.path.size() < 4) fail("--path: at least two points X1,Y1:X2,Y2", 2);
+    } else if (arg == "--step") {
+      o.step = parse_positive(arg, value, 100.0);
+    } else if (arg == "--max-unknown-share") {
+      o.max_unknown_share = parse_number(arg, value);
+      if (!(o.max_unknown_share >= 0.0 && o.max_unknown_share <= 1.0)) {
+        fail("--max-unknown-share: " + value + " is out of range (expected 0 .. 1)", 2);
+      }
+    } else if (arg == "--inflate") {
+      o.inflate = parse_number(arg, value);
+      if (!(o.inflate >= 0.0) || !std::isfinite(o.inflate)) fail("--inflate: " + value + " is out of range (expected >= 0)", 2);
     }
   }
   return o;
@@ -178,19 +377,209 @@ std::string base_name(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-/// A mapped sequence: the runner, the local origin and the per-frame accounting.
+/// A mapped sequence: the runner, the local origin, the per-frame accounting and, for a tiled
+/// map, the exported rows.
 struct MappedClouds {
   std::unique_ptr<MapRunner> runner;
-  double origin[3] = {0.0, 0.0, 0.0};  ///< map-frame position of the local origin (m)
-  std::int64_t origin_cells[3] = {0, 0, 0};  ///< origin / coarsest cell width (exact integers)
-  double coarsest_width = 0.0;
+  LocalOrigin origin;
   std::vector<double> widths;          ///< requested cell width per layer (m), finest first
   FrameStats totals;
-  std::uint64_t read = 0, reader_non_finite = 0;
+  std::uint64_t read = 0;
+  bool tiled = false;                  ///< no --poses: the stack was swept over the clouds
+  std::vector<std::vector<LayerCellRow>> rows;  ///< tiled: the rows of every layer
+  TileQuery query;                     ///< tiled query: where the answer is
 };
 
 const char* sensor_name(const Options& o) {
   return o.sensor == SensorChoice::kLidar ? "lidar" : "stereo (CADRE model)";
+}
+
+Cloud read_nonempty_cloud(const std::string& path) {
+  Cloud cloud = read_cloud(path);
+  if (!cloud.ok()) fail(cloud.error);
+  if (cloud.size() == 0) {
+    fail(path + ": empty cloud (" + std::to_string(cloud.declared) + " points, " +
+         std::to_string(cloud.skipped_non_finite) + " of them non-finite)");
+  }
+  return cloud;
+}
+
+void print_header(const Options& o, const MappedClouds& m, std::ostream& out) {
+  out << "ccmap " << o.command << ": preset " << o.preset << ", " << m.widths.size() << " layer(s), cell widths";
+  for (double w : m.widths) out << ' ' << fmt("%g", w);
+  out << " m, W_l " << fmt("%g", m.runner->weight_limit()) << ", min weight " << fmt("%g", m.runner->min_weight())
+      << ", sensor " << sensor_name(o);
+  if (o.sensor == SensorChoice::kLidar) out << " (sigma " << fmt("%g", o.sigma) << " m)";
+  out << "\n";
+  out << "origin (map frame): " << fmt("%.3f", m.origin.xyz[0]) << ' ' << fmt("%.3f", m.origin.xyz[1]) << ' '
+      << fmt("%.3f", m.origin.xyz[2]) << "  (per-axis median of the " << (o.poses.empty() ? "" : "first cloud's ")
+      << "points in range, rounded to " << fmt("%g", m.origin.coarsest_width) << " m)\n";
+  if (o.bounds.set) {
+    out << "bounds: x " << fmt("%.3f", o.bounds.x_min) << " .. " << fmt("%.3f", o.bounds.x_max) << ", y "
+        << fmt("%.3f", o.bounds.y_min) << " .. " << fmt("%.3f", o.bounds.y_max)
+        << " (points outside are counted as outside map)\n";
+  }
+}
+
+std::string counts_text(const FrameStats& s) {
+  return "used " + std::to_string(s.used) + ", rejected: non-finite " + std::to_string(s.rejected_non_finite) +
+         ", out of range " + std::to_string(s.rejected_out_of_range) + ", bad weight " +
+         std::to_string(s.rejected_weight) + ", outside map " + std::to_string(s.outside_map) + ", too noisy " +
+         std::to_string(s.too_noisy) +
+         (s.gated > 0 ? ", outlier gate " + std::to_string(s.gated) + " (admitted later " +
+                            std::to_string(s.gated_admitted) + ")"
+                      : std::string());
+}
+
+void print_frame(const std::string& path, const Cloud& cloud, std::size_t f, const FrameStats& stats, double ms,
+                 std::ostream& out) {
+  out << "frame " << (f + 1) << ": " << base_name(path) << " [" << cloud.format << "]: " << cloud.declared
+      << " points, " << counts_text(stats) << "; " << fmt("%.1f", ms) << " ms\n";
+  if (cloud.has_weight) {
+    out << "note: " << base_name(path) << ": per-point weights from the file replace the sensor model's\n";
+  }
+}
+
+/// The cloud's points in range and bounds as local-frame floats (the origin subtracted in double,
+/// then rounded: |difference| <= 1e5 m) and their weights; the others counted in *kept_back as
+/// out of range or outside map.
+void local_frame_points(const Cloud& cloud, const LocalOrigin& origin, const AreaBounds& bounds,
+                        std::vector<float>* xyz, std::vector<float>* weights, FrameStats* kept_back) {
+  xyz->clear();
+  weights->clear();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], origin, bounds);
+    if (fate == PointFate::kOutOfRange) {
+      ++kept_back->rejected_out_of_range;
+      continue;
+    }
+    if (fate == PointFate::kOutsideBounds) {
+      ++kept_back->outside_map;
+      continue;
+    }
+    xyz->push_back(static_cast<float>(cloud.x[i] - origin.xyz[0]));
+    xyz->push_back(static_cast<float>(cloud.y[i] - origin.xyz[1]));
+    xyz->push_back(static_cast<float>(cloud.z[i] - origin.xyz[2]));
+    if (cloud.has_weight) weights->push_back(weight_to_float(cloud.w[i]));
+  }
+}
+
+/// Folds cloud number f as one frame, the sensor at `sensor` (local metres): the points the tool
+/// maps (local_frame_points), the others counted.
+void fold_cloud(const Options& o, MappedClouds& m, const Cloud& cloud, std::size_t f, const float sensor[3],
+                std::vector<float>* xyz, std::vector<float>* weights, std::ostream& out, bool verbose) {
+  std::string error;
+  FrameStats stats;
+  stats.received = cloud.size() + cloud.skipped_non_finite;
+  stats.rejected_non_finite = cloud.skipped_non_finite;
+  local_frame_points(cloud, m.origin, o.bounds, xyz, weights, &stats);
+  FrameStats lib;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!m.runner->update_frame(*xyz, *weights, sensor, &lib, &error)) fail(o.clouds[f] + ": " + error);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  lib.received = 0;  // counted above, with the points the tool kept back
+  stats.add(lib);
+  m.totals.add(stats);
+  if (verbose) print_frame(o.clouds[f], cloud, f, stats, ms, out);
+}
+
+/// With --poses: the stack follows the poses, one frame per cloud, read and mapped one at a time.
+void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
+  std::string error;
+  std::vector<Pose> poses;
+  if (!read_poses(o.poses, &poses, &error)) fail(error);
+  if (poses.size() != o.clouds.size()) {
+    fail(o.poses + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(o.clouds.size()) +
+         " clouds (one line per --cloud expected)");
+  }
+  std::vector<float> xyz, weights;
+  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
+    const Cloud cloud = read_nonempty_cloud(o.clouds[f]);
+    m.read += cloud.declared;
+    if (f == 0) {
+      if (!robust_origin({&cloud}, o.bounds, m.widths.back(), &m.origin, &error)) fail(o.clouds[f] + ": " + error);
+      if (verbose) print_header(o, m, out);
+    }
+    // Pose: re-centre, and the sensor origin for the noise model (local frame).
+    const Pose& p = poses[f];
+    const double pose_local[3] = {p.x - m.origin.xyz[0], p.y - m.origin.xyz[1], p.z - m.origin.xyz[2]};
+    for (double v : pose_local) {
+      if (!(std::fabs(v) <= static_cast<double>(kMaxAbsCoordinateM))) {
+        fail(o.poses + ": pose " + std::to_string(f + 1) + " lies beyond +-1e5 m of the origin; is it in the clouds' frame?");
+      }
+    }
+    const float sensor[3] = {static_cast<float>(pose_local[0]), static_cast<float>(pose_local[1]),
+                             static_cast<float>(pose_local[2])};
+    if (!m.runner->move_to(sensor[0], sensor[1], &error)) {
+      fail(o.poses + ": pose " + std::to_string(f + 1) + ": " + error + "; is it in the clouds' frame?");
+    }
+    fold_cloud(o, m, cloud, f, sensor, &xyz, &weights, out, verbose);
+  }
+}
+
+/// Every cloud read at once (tiles and the centred map need them all), the local origin from
+/// all of them, the header printed.
+std::vector<Cloud> read_all_clouds(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
+  std::string error;
+  std::vector<Cloud> clouds;
+  std::vector<const Cloud*> all;
+  clouds.reserve(o.clouds.size());
+  for (const std::string& path : o.clouds) {
+    clouds.push_back(read_nonempty_cloud(path));
+    m.read += clouds.back().declared;
+  }
+  for (const Cloud& c : clouds) all.push_back(&c);
+  if (!robust_origin(all, o.bounds, m.widths.back(), &m.origin, &error)) fail(error);
+  if (verbose) print_header(o, m, out);
+  return clouds;
+}
+
+/// A planner query without --poses: the stack centred on (x, y) (map frame), every cloud folded
+/// into it as one frame with the sensor there (at the origin's height), as a rover standing at
+/// (x, y) would map the ground. The origin is that of all clouds, as for tiles.
+void map_centred(const Options& o, MappedClouds& m, double x, double y, std::ostream& out, bool verbose) {
+  std::string error;
+  const std::vector<Cloud> clouds = read_all_clouds(o, m, out, verbose);
+  const double local[2] = {x - m.origin.xyz[0], y - m.origin.xyz[1]};
+  if (!(std::fabs(local[0]) <= static_cast<double>(kMaxAbsCoordinateM)) ||
+      !(std::fabs(local[1]) <= static_cast<double>(kMaxAbsCoordinateM))) {
+    fail("the query lies beyond +-1e5 m of the clouds' origin", 2);
+  }
+  const float sensor[3] = {static_cast<float>(local[0]), static_cast<float>(local[1]), 0.0F};
+  if (!m.runner->move_to(sensor[0], sensor[1], &error)) fail(error);
+  if (verbose) {
+    out << "map centred on the query (" << fmt("%.3f", x) << ", " << fmt("%.3f", y) << "), every cloud one frame\n";
+  }
+  std::vector<float> xyz, weights;
+  for (std::size_t f = 0; f < clouds.size(); ++f) fold_cloud(o, m, clouds[f], f, sensor, &xyz, &weights, out, verbose);
+}
+
+/// Without --poses: the stack is swept over all clouds in tiles (tiling.hpp), so every layer
+/// covers their whole extent. For a query only the query point's tile is mapped.
+void map_in_tiles(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
+  std::string error;
+  const std::vector<Cloud> clouds = read_all_clouds(o, m, out, verbose);
+  TilePlan plan;
+  if (!plan_tiles(*m.runner, m.widths, 0, &plan, &error)) fail(error);
+  m.query.wanted = o.have_at;
+  m.query.x = o.at_x;
+  m.query.y = o.at_y;
+  if (verbose && !o.have_at) {
+    out << "tiles: " << plan.tile_cells << " x " << plan.tile_cells << " cells of " << fmt("%g", m.widths[0])
+        << " m (" << fmt("%g", plan.tile_cells * m.widths[0]) << " m), each mapped alone"
+        << (plan.margin_cells > 0 ? " with its 1-cell ring of neighbours" : "") << "; every layer covers the clouds\n";
+  }
+  TiledMap map;
+  if (!map_tiled(*m.runner, plan, clouds, m.origin, o.bounds, verbose ? &out : nullptr, &m.query, &map, &error)) {
+    fail(error);
+  }
+  m.tiled = true;
+  m.rows = std::move(map.layers);
+  for (std::size_t f = 0; f < clouds.size(); ++f) {
+    m.totals.add(map.frames[f]);
+    if (verbose) print_frame(o.clouds[f], clouds[f], f, map.frames[f], map.frame_ms[f], out);
+  }
+  if (verbose && !o.have_at) out << "tiles mapped: " << map.tiles << "\n";
 }
 
 MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
@@ -204,142 +593,101 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
   const int layers = preset_layer_count(o.preset);
   const double finest = o.res > 0.0 ? o.res : preset_default_cell_width(o.preset);
   for (int k = 0; k < layers; ++k) m.widths.push_back(finest * std::ldexp(1.0, k));
-  m.coarsest_width = m.widths.back();
 
   RunnerOptions ro;
   ro.preset = o.preset;
   ro.finest_cell_width_m = finest;
   ro.weight_limit = o.wl;
+  ro.outlier_gate_sigma = o.gate;
   ro.sensor = o.sensor;
   ro.lidar_sigma_m = o.sigma;
   if (!m.runner->init(ro, &error)) fail(error);
 
-  std::vector<Pose> poses;
-  if (!o.poses.empty()) {
-    if (!read_poses(o.poses, &poses, &error)) fail(error);
-    if (poses.size() != o.clouds.size()) {
-      fail(o.poses + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(o.clouds.size()) +
-           " clouds (one line per --cloud expected)");
-    }
+  if (o.centred_map()) {
+    const bool path = !o.path.empty();
+    map_centred(o, m, path ? o.path[0] : o.at_x, path ? o.path[1] : o.at_y, out, verbose);
+  } else if (o.poses.empty()) {
+    map_in_tiles(o, m, out, verbose);
+  } else {
+    map_along_poses(o, m, out, verbose);
   }
-
-  std::vector<float> xyz;
-
-  std::vector<float> weights;
-  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
-    const Cloud cloud = read_cloud(o.clouds[f]);
-    if (!cloud.ok()) fail(cloud.error);
-    if (cloud.size() == 0) {
-      fail(o.clouds[f] + ": empty cloud (" + std::to_string(cloud.declared) + " points, " +
-           std::to_string(cloud.skipped_non_finite) + " of them non-finite)");
-    }
-    m.read += cloud.declared;
-    m.reader_non_finite += cloud.skipped_non_finite;
-    if (f == 0) {
-      // Local origin: the centroid (double), rounded to the coarsest cell width so that every
-      // layer's cell grid stays aligned with whole map-frame cells.
-      double sum[3] = {0.0, 0.0, 0.0};
-      const std::vector<double>* axes[3] = {&cloud.x, &cloud.y, &cloud.z};
-      for (int a = 0; a < 3; ++a) {
-        for (double v : *axes[a]) sum[a] += v;
-        const double centroid = sum[a] / static_cast<double>(cloud.size());
-        m.origin_cells[a] = std::llround(centroid / m.coarsest_width);
-        m.origin[a] = static_cast<double>(m.origin_cells[a]) * m.coarsest_width;
-      }
-      if (verbose) {
-        out << "ccmap " << o.command << ": preset " << o.preset << ", " << layers << " layer(s), cell widths";
-        for (double w : m.widths) out << ' ' << fmt("%g", w);
-        out << " m, W_l " << fmt("%g", m.runner->weight_limit()) << ", min weight "
-            << fmt("%g", m.runner->min_weight()) << ", sensor " << sensor_name(o);
-        if (o.sensor == SensorChoice::kLidar) out << " (sigma " << fmt("%g", o.sigma) << " m)";
-        out << "\n";
-        out << "origin (map frame): " << fmt("%.3f", m.origin[0]) << ' ' << fmt("%.3f", m.origin[1]) << ' '
-            << fmt("%.3f", m.origin[2]) << "  (first cloud's centroid rounded to " << fmt("%g", m.coarsest_width)
-            << " m)\n";
-      }
-    }
-    // Pose: re-centre, and the sensor origin for the noise model (local frame).
-    float sensor[3] = {0.0F, 0.0F, 0.0F};
-    if (!poses.empty()) {
-      const Pose& p = poses[f];
-      sensor[0] = static_cast<float>(p.x - m.origin[0]);
-      sensor[1] = static_cast<float>(p.y - m.origin[1]);
-      sensor[2] = static_cast<float>(p.z - m.origin[2]);
-      if (!m.runner->move_to(sensor[0], sensor[1], &error)) {
-        fail(o.poses + ": pose " + std::to_string(f + 1) + ": " + error + "; is it in the clouds' frame?");
-      }
-    } else if (f == 0) {
-      if (!m.runner->move_to(0.0F, 0.0F, &error)) fail(error);
-    }
-    xyz.resize(3U * cloud.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      // Subtract the origin in double, then round to float.
-      xyz[3 * i] = static_cast<float>(cloud.x[i] - m.origin[0]);
-      xyz[3 * i + 1] = static_cast<float>(cloud.y[i] - m.origin[1]);
-      xyz[3 * i + 2] = static_cast<float>(cloud.z[i] - m.origin[2]);
-    }
-    weights.clear();
-    if (cloud.has_weight) {
-      weights.reserve(cloud.size());
-      for (std::size_t i = 0; i < cloud.size(); ++i) weights.push_back(static_cast<float>(cloud.w[i]));
-    }
-    FrameStats stats;
-    const auto t0 = std::chrono::steady_clock::now();
-    if (!m.runner->update_frame(xyz, weights, sensor, &stats, &error)) fail(o.clouds[f] + ": " + error);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    stats.rejected_non_finite += cloud.skipped_non_finite;
-    stats.received += cloud.skipped_non_finite;
-    m.totals.add(stats);
-    if (verbose) {
-      out << "frame " << (f + 1) << ": " << base_name(o.clouds[f]) << " [" << cloud.format << "]: " << cloud.declared
-          << " points, used " << stats.used << ", rejected: non-finite " << stats.rejected_non_finite
-          << ", out of range " << stats.rejected_out_of_range << ", bad weight " << stats.rejected_weight
-          << ", outside map " << stats.outside_map << ", too noisy " << stats.too_noisy << "; "
-          << fmt("%.1f", ms) << " ms\n";
-      if (cloud.has_weight) {
-        out << "note: " << base_name(o.clouds[f]) << ": per-point weights from the file replace the sensor model's\n";
-      }
-    }
-  }
-  if (verbose) {
-    const FrameStats& t = m.totals;
-    out << "points: read " << m.read << ", used " << t.used << ", rejected: non-finite " << t.rejected_non_finite
-        << ", out of range " << t.rejected_out_of_range << ", bad weight " << t.rejected_weight << ", outside map "
-        << t.outside_map << ", too noisy " << t.too_noisy << "\n";
-  }
+  if (verbose) out << "points: read " << m.read << ", " << counts_text(m.totals) << "\n";
   return m;
 }
 
-/// Layer rows in the map frame (origin added back in double).
+/// Layer rows of the runner's current state in the map frame (origin added back in double).
 std::vector<LayerCellRow> layer_rows(const MappedClouds& m, int layer, const std::vector<LocalCell>& cells) {
   const double res = m.widths[static_cast<std::size_t>(layer)];
   const std::int64_t scale = std::int64_t{1} << (static_cast<int>(m.widths.size()) - 1 - layer);
   std::vector<LayerCellRow> rows;
   rows.reserve(cells.size());
   for (const LocalCell& c : cells) {
-    LayerCellRow r;
-    r.layer = layer;
-    r.ix = static_cast<std::int64_t>(c.ix) + m.origin_cells[0] * scale;
-    r.iy = static_cast<std::int64_t>(c.iy) + m.origin_cells[1] * scale;
-    r.cx = (static_cast<double>(r.ix) + 0.5) * res;
-    r.cy = (static_cast<double>(r.iy) + 0.5) * res;
-    r.res = res;
-    r.weight = c.weight;
-    r.height = static_cast<double>(c.height) + m.origin[2];
-    r.slope_x = c.slope_x;
-    r.slope_y = c.slope_y;
-    r.normal_var = c.normal_variance;
-    r.elev_var = c.elevation_variance;
-    r.cell_class = c.cell_class;
-    rows.push_back(std::move(r));
+    rows.push_back(make_row(layer, static_cast<std::int64_t>(c.ix) + m.origin.cells[0] * scale,
+                            static_cast<std::int64_t>(c.iy) + m.origin.cells[1] * scale, res, m.origin.xyz[2], c));
   }
   return rows;
 }
 
-int run_map(const Options& o, std::ostream& out) {
-  if (o.out_dir.empty()) fail("--out DIR is required", 2);
-  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
-  MappedClouds m = build_map(o, out, true);
+/// Writes a cost raster (width x height, row 0 at the lowest y) as a binary PGM and a grey PNG,
+/// north up.
+void write_costmap_images(const std::string& prefix, const std::vector<std::uint8_t>& cost, int width, int height) {
+  std::string error;
+  RgbImage image(width, height);
+  std::vector<unsigned char> rows;
+  rows.reserve(cost.size());
+  for (int row = 0; row < height; ++row) {
+    const int iy = height - 1 - row;  // north up
+    for (int ix = 0; ix < width; ++ix) {
+      const std::uint8_t v = cost[static_cast<std::size_t>(iy) * static_cast<std::size_t>(width) + static_cast<std::size_t>(ix)];
+      const std::uint8_t grey[3] = {v, v, v};
+      image.set(ix, row, grey);
+      rows.push_back(v);
+    }
+  }
+  if (!write_png(prefix + ".png", image, &error)) fail(error);
+  std::ofstream pgm(prefix + ".pgm", std::ios::binary);
+  pgm << "P5\n" << width << ' ' << height << "\n255\n";
+  pgm.write(reinterpret_cast<const char*>(rows.data()), static_cast<std::streamsize>(rows.size()));
+  if (!pgm) fail("cannot write " + prefix + ".pgm");
+}
+
+/// The cost raster of layer k's cells over `extent` (one pixel per cell): lethal for obstacle
+/// and steep cells, unknown for unknown or unobserved ones, else the library's cost function of
+/// the cell's inclination and normal variance against layer k's threshold; then the inflation.
+std::vector<std::uint8_t> layer_costmap(const MappedClouds& m, int k, const std::vector<LayerCellRow>& rows,
+                                        const LayerWindow& extent, double inflate_m) {
+  std::vector<std::uint8_t> cost(static_cast<std::size_t>(extent.nx) * static_cast<std::size_t>(extent.ny), kCostUnknown);
+  const float threshold = m.runner->layer_normal_variance_threshold(k);
+  const float max_inclination = m.runner->max_inclination();
+  for (const LayerCellRow& r : rows) {
+    const std::int64_t ix = r.ix - extent.ix_min, iy = r.iy - extent.iy_min;
+    if (ix < 0 || iy < 0 || ix >= extent.nx || iy >= extent.ny) continue;
+    std::uint8_t v = kCostUnknown;
+    if (r.cell_class == "obstacle" || r.cell_class == "steep") {
+      v = kCostLethal;
+    } else if (r.cell_class == "traversable") {
+      v = traversable_cost(static_cast<float>(std::hypot(r.slope_x, r.slope_y)), max_inclination,
+                           static_cast<float>(r.normal_var), threshold);
+    }
+    cost[static_cast<std::size_t>(iy) * static_cast<std::size_t>(extent.nx) + static_cast<std::size_t>(ix)] = v;
+  }
+  if (inflate_m > 0.0) {
+    const Status status = inflate_costmap(cost.data(), cost.size(), static_cast<std::uint32_t>(extent.nx),
+                                          static_cast<std::uint32_t>(extent.ny),
+                                          static_cast<float>(inflate_m / m.widths[static_cast<std::size_t>(k)]));
+    if (status != Status::kOk) {
+      fail("--inflate: " + fmt("%g", inflate_m) + " m is " + fmt("%g", inflate_m / m.widths[static_cast<std::size_t>(k)]) +
+               " cells of layer " + std::to_string(k) + " (" + to_string(status) + ": at most " +
+               std::to_string(kMaxInflationPixels) + ")",
+           2);
+    }
+  }
+  return cost;
+}
+
+/// The CSV files and pictures of every layer, in absolute coordinates, and a line per layer: the
+/// tiles' rows of a tiled map, else the runner's current state.
+void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
   std::error_code ec;
   std::filesystem::create_directories(o.out_dir, ec);
   if (ec || !std::filesystem::is_directory(o.out_dir)) {
@@ -347,22 +695,43 @@ int run_map(const Options& o, std::ostream& out) {
   }
   std::string error;
   for (int k = 0; k < m.runner->layer_count(); ++k) {
-    std::vector<LocalCell> cells;
-    if (!m.runner->export_layer(k, &cells, &error)) fail(error);
-    const std::vector<LayerCellRow> rows = layer_rows(m, k, cells);
+    std::vector<LayerCellRow> rows;
+    if (m.tiled) {
+      rows = std::move(m.rows[static_cast<std::size_t>(k)]);
+    } else {
+      std::vector<LocalCell> cells;
+      if (!m.runner->export_layer(k, &cells, &error)) fail(error);
+      rows = layer_rows(m, k, cells);
+    }
     const std::string prefix = o.out_dir + "/layer_" + std::to_string(k);
     if (!write_layer_csv(prefix + ".csv", rows, &error)) fail(error);
     // Pictures show the bounding box of the observed cells (a small scan in a large layer
-    // would otherwise be a speck); a layer with no observed cell is drawn whole, black.
+    // would otherwise be a speck); a layer with no observed cell is drawn as its window around
+    // the origin, black.
+    const std::int64_t scale = std::int64_t{1} << (static_cast<int>(m.widths.size()) - 1 - k);
+    const int side = m.runner->layer_side(k);
     LayerWindow window{};
     if (rows.empty()) {
-      std::int32_t wx = 0, wy = 0;
-      m.runner->layer_window_min(k, &wx, &wy);
-      const std::int64_t scale = std::int64_t{1} << (static_cast<int>(m.widths.size()) - 1 - k);
-      window = LayerWindow{wx + m.origin_cells[0] * scale, wy + m.origin_cells[1] * scale, m.runner->layer_side(k),
-                           m.runner->layer_side(k)};
+      window = LayerWindow{m.origin.cells[0] * scale - side / 2, m.origin.cells[1] * scale - side / 2, side, side};
     }
-    if (!write_layer_images(prefix, rows, window, &error)) fail(error);
+    const LayerWindow extent = layer_extent(rows, window);
+    if (extent.nx > kMaxImageCells || extent.ny > kMaxImageCells) {
+      out << "note: layer " << k << " spans " << extent.nx << " x " << extent.ny << " cells, more than the "
+          << kMaxImageCells << " a picture may have: no pictures for it (the CSV holds every cell)\n";
+    } else {
+      if (!write_layer_images(prefix, rows, window, &error)) fail(error);
+      if (o.costmap) {
+        const std::vector<std::uint8_t> cost = layer_costmap(m, k, rows, extent, o.inflate);
+        const std::string cost_prefix = o.out_dir + "/costmap_" + std::to_string(k);
+        write_costmap_images(cost_prefix, cost, static_cast<int>(extent.nx), static_cast<int>(extent.ny));
+        std::size_t counts[4] = {0, 0, 0, 0};  // free/cost, inscribed, lethal, unknown
+        for (const std::uint8_t v : cost) ++counts[v <= kCostMaxTraversable ? 0 : v - kCostMaxTraversable];
+        out << "costmap " << k << " (" << extent.nx << " x " << extent.ny << " at "
+            << fmt("%g", m.widths[static_cast<std::size_t>(k)]) << " m): cost " << counts[0] << ", inscribed "
+            << counts[1] << ", lethal " << counts[2] << ", unknown " << counts[3] << " pixels -> " << cost_prefix
+            << ".{png,pgm}\n";
+      }
+    }
     std::size_t counts[4] = {0, 0, 0, 0};
     for (const LayerCellRow& r : rows) {
       if (r.cell_class == "traversable") ++counts[1];
@@ -370,25 +739,192 @@ int run_map(const Options& o, std::ostream& out) {
       else if (r.cell_class == "steep") ++counts[3];
       else ++counts[0];
     }
-    const int side = m.runner->layer_side(k);
-    out << "layer " << k << " (" << fmt("%g", m.widths[static_cast<std::size_t>(k)]) << " m, " << side << " x "
-        << side << ", " << (m.runner->layer_is_ccm(k) ? "CCM" : (o.preset == "omg" ? "OMG" : "Kalman"))
+    out << "layer " << k << " (" << fmt("%g", m.widths[static_cast<std::size_t>(k)]) << " m, "
+        << (m.tiled ? "tiled" : std::to_string(side) + " x " + std::to_string(side)) << ", "
+        << (m.runner->layer_is_ccm(k) ? "CCM" : (o.preset == "omg" ? "OMG" : "Kalman"))
         << "): " << (rows.size() - counts[0]) << " cells known of " << rows.size() << " observed (traversable "
         << counts[1] << ", obstacle " << counts[2] << ", steep " << counts[3] << ", unknown " << counts[0]
         << ") -> " << prefix << ".csv\n";
   }
   out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
       << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+}
+
+/// Options that belong to one command only.
+void refuse_foreign_options(const Options& o) {
+  if (o.command != "query" && o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  if (o.command != "map" && !o.save.empty()) fail("--save belongs to 'ccmap map'", 2);
+  if (o.command != "merge" && !o.inputs.empty()) fail("--in belongs to 'ccmap merge'", 2);
+  if (o.command != "merge" && o.have_offset) fail("--offset belongs to 'ccmap merge'", 2);
+  if (o.command == "merge" && (!o.clouds.empty() || !o.poses.empty() || o.res > 0.0 || o.wl > 0.0 || o.gate > 0.0 ||
+                                 o.bounds.set)) {
+    fail("ccmap merge takes --preset, --in, --offset and --out (the maps bring their own parameters)", 2);
+  }
+}
+
+/// A tiled map has no single stack: the saved map is that of one stack at the origin, every cloud
+/// one frame (sensor at the origin, as in the tiles), holding the points its windows hold.
+void fold_one_window(const Options& o, MappedClouds& m, std::ostream& out) {
+  std::string error;
+  if (!m.runner->reset(&error) || !m.runner->move_to(0.0F, 0.0F, &error)) fail(error);
+  const float sensor[3] = {0.0F, 0.0F, 0.0F};
+  FrameStats totals;
+  std::vector<float> xyz, weights;
+  for (const std::string& path : o.clouds) {
+    const Cloud cloud = read_nonempty_cloud(path);
+    FrameStats kept_back;
+    local_frame_points(cloud, m.origin, o.bounds, &xyz, &weights, &kept_back);
+    FrameStats stats;
+    if (!m.runner->update_frame(xyz, weights, sensor, &stats, &error)) fail(path + ": " + error);
+    totals.add(stats);
+    totals.add(kept_back);
+  }
+  out << "saved map: one stack at the origin, " << totals.used << " points in its windows, " << totals.outside_map
+      << " outside them\n";
+}
+
+int run_map(const Options& o, std::ostream& out) {
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  if (o.have_footprint || !o.path.empty()) fail("--footprint and --path belong to 'ccmap query'", 2);
+  if (o.step > 0.0 || o.max_unknown_share != 0.1) fail("--step and --max-unknown-share belong to 'ccmap query'", 2);
+  if (o.inflate > 0.0 && !o.costmap) fail("--inflate needs --costmap", 2);
+  MappedClouds m = build_map(o, out, true);
+  write_outputs(m, o, out);
+  if (!o.save.empty()) {
+    if (m.tiled) fold_one_window(o, m, out);
+    std::string error;
+    SavedMap saved;
+    if (!m.runner->save_snapshot(&saved.snapshot, &error)) fail(error);
+    saved.has_origin = true;
+    saved.coarsest_width_m = m.origin.coarsest_width;
+    for (int a = 0; a < 3; ++a) saved.origin_cells[a] = m.origin.cells[a];
+    if (!write_saved_map(o.save, saved, &error)) fail(error);
+    out << "saved: " << o.save << " (" << saved.snapshot.size() + kOriginRecordBytes
+        << " bytes: snapshot and origin)\n";
+  }
+  return 0;
+}
+
+/// metres / width as an exact integer, or fail: the maps do not share the grid.
+std::int64_t whole_cells(double metres, double width, const std::string& what) {
+  const double cells = metres / width;
+  const double rounded = std::round(cells);
+  if (!(std::fabs(cells - rounded) <= 1e-6 * std::max(1.0, std::fabs(rounded))) || std::fabs(rounded) > 1e15) {
+    fail(what + ": " + fmt("%.6f", metres) + " m is not a whole number of " + fmt("%g", width) +
+         " m cells (misaligned)");
+  }
+  return static_cast<std::int64_t>(rounded);
+}
+
+int run_merge(const Options& o, std::ostream& out) {
+  if (o.preset.empty()) fail("--preset is required (cadre, ccm, kf or omg)", 2);
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  if (o.inputs.size() < 2) fail("ccmap merge needs two or more --in FILE", 2);
+  std::string error;
+  MappedClouds m;
+  m.runner = make_map_runner(o.preset, &error);
+  if (!m.runner) fail(error, 2);
+  const int layers = preset_layer_count(o.preset);
+  const std::int64_t coarse_factor = std::int64_t{1} << (layers - 1);  // finest cells per coarsest cell
+  std::vector<SavedMap> maps(o.inputs.size());
+  for (std::size_t i = 0; i < o.inputs.size(); ++i) {
+    if (!read_saved_map(o.inputs[i], m.runner->snapshot_size(), &maps[i], &error)) {
+      fail(error + " (is it a " + o.preset + " map?)");
+    }
+  }
+  if (!m.runner->load_snapshot(maps[0].snapshot, &error)) fail(o.inputs[0] + ": " + error);
+  // Widths: the saved origin's double width (what 'ccmap map' computed with), else the float
+  // width rounded to the decimal a user would type.
+  const SavedMap& first = maps[0];
+  const double coarsest = first.has_origin
+                              ? first.coarsest_width_m
+                              : std::round(static_cast<double>(m.runner->layer_cell_width(layers - 1)) * 1e6) / 1e6;
+  for (int k = 0; k < layers; ++k) m.widths.push_back(coarsest * std::ldexp(1.0, k - (layers - 1)));
+  m.origin.coarsest_width = coarsest;
+  for (int a = 0; a < 3; ++a) {
+    m.origin.cells[a] = first.origin_cells[a];
+    m.origin.xyz[a] = static_cast<double>(first.origin_cells[a]) * coarsest;
+  }
+  out << "ccmap merge: preset " << o.preset << ", " << o.inputs[0] << " (origin " << fmt("%.3f", m.origin.xyz[0])
+      << ' ' << fmt("%.3f", m.origin.xyz[1]) << ' ' << fmt("%.3f", m.origin.xyz[2])
+      << (first.has_origin ? "" : ", none saved") << ") holds the parameters and windows\n";
+  for (std::size_t i = 1; i < maps.size(); ++i) {
+    const SavedMap& other = maps[i];
+    if (other.has_origin && std::fabs(other.coarsest_width_m - coarsest) > 1e-12 * coarsest) {
+      fail(o.inputs[i] + ": made with " + fmt("%g", other.coarsest_width_m) + " m coarsest cells, the first with " +
+           fmt("%g", coarsest) + " m (misaligned)");
+    }
+    // The other map's origin minus the first's: in coarsest cells (x, y), metres (z).
+    std::int64_t dx = other.origin_cells[0] - first.origin_cells[0];
+    std::int64_t dy = other.origin_cells[1] - first.origin_cells[1];
+    if (o.have_offset) {
+      dx = whole_cells(o.offset_x, coarsest, "--offset x");
+      dy = whole_cells(o.offset_y, coarsest, "--offset y");
+    }
+    const double dz = static_cast<double>(other.origin_cells[2] - first.origin_cells[2]) * coarsest;
+    const std::int64_t fx = dx * coarse_factor, fy = dy * coarse_factor;
+    if (std::llabs(fx) > 0x3FFFFFFF || std::llabs(fy) > 0x3FFFFFFF || std::fabs(dz) > 1e5) {
+      fail(o.inputs[i] + ": its origin is too far from the first map's to merge");
+    }
+    std::uint64_t merged = 0, outside = 0;
+    if (!m.runner->merge_snapshot(other.snapshot, static_cast<std::int32_t>(fx), static_cast<std::int32_t>(fy),
+                                  static_cast<float>(dz), &merged, &outside, &error)) {
+      fail(o.inputs[i] + ": " + error);
+    }
+    out << "merged " << o.inputs[i] << ": offset " << fmt("%.3f", static_cast<double>(dx) * coarsest) << ' '
+        << fmt("%.3f", static_cast<double>(dy) * coarsest) << ' ' << fmt("%.3f", dz) << " m, " << merged
+        << " cells merged, " << outside << " outside the first map's windows (dropped)\n";
+  }
+  write_outputs(m, o, out);
+  return 0;
+}
+
+/// The path query: first_hazard_m / first_unknown_m lines.
+int run_path_query(const Options& o, const MappedClouds& m, std::ostream& out) {
+  if (!o.have_footprint) fail("--path needs --footprint LENGTH,WIDTH (the body swept along it)", 2);
+  if (o.footprint_has_yaw) fail("--footprint: YAW_DEG does not apply to --path (the body follows the path)", 2);
+  std::vector<float> xy;
+  for (std::size_t i = 0; i < o.path.size(); i += 2) {
+    xy.push_back(static_cast<float>(o.path[i] - m.origin.xyz[0]));
+    xy.push_back(static_cast<float>(o.path[i + 1] - m.origin.xyz[1]));
+  }
+  const double step = o.step > 0.0 ? o.step : m.widths.front();
+  const LocalPath p = m.runner->path(xy, static_cast<float>(o.footprint_length), static_cast<float>(o.footprint_width),
+                                     static_cast<float>(step), static_cast<float>(o.max_unknown_share));
+  if (p.status != "ok") fail("the map refused the path query (" + p.status + ")", 2);
+  out << "path_length_m: " << fmt("%.6f", p.length_m) << "\n";
+  out << "path_poses: " << p.poses << "\n";
+  out << "first_hazard_m: " << (p.hazard ? fmt("%.6f", p.first_hazard_m) : std::string("none")) << "\n";
+  if (p.hazard) {
+    out << "hazard_class: " << p.hazard_class << "\n";
+    out << "hazard_x: " << fmt("%.6f", static_cast<double>(p.hazard_x) + m.origin.xyz[0]) << "\n";
+    out << "hazard_y: " << fmt("%.6f", static_cast<double>(p.hazard_y) + m.origin.xyz[1]) << "\n";
+  }
+  out << "first_unknown_m: " << (p.unknown ? fmt("%.6f", p.first_unknown_m) : std::string("none")) << "\n";
   return 0;
 }
 
 int run_query(const Options& o, std::ostream& out) {
-  if (!o.have_at) fail("--at X,Y is required", 2);
+  if (!o.have_at && o.path.empty()) fail("--at X,Y or --path X1,Y1:X2,Y2[:...] is required", 2);
+  if (o.have_at && !o.path.empty()) fail("--at and --path are two queries: give one", 2);
   if (!o.out_dir.empty()) fail("--out belongs to 'ccmap map'", 2);
+  if (o.costmap || o.inflate > 0.0) fail("--costmap and --inflate belong to 'ccmap map'", 2);
+  if (o.step > 0.0 && o.path.empty()) fail("--step belongs to --path", 2);
+  if (!o.path.empty() && !o.have_footprint) fail("--path needs --footprint LENGTH,WIDTH (the body swept along it)", 2);
   std::ostringstream log;
   MappedClouds m = build_map(o, log, true);
-  const double lx = o.at_x - m.origin[0], ly = o.at_y - m.origin[1];
-  const LocalQuery q = m.runner->query(static_cast<float>(lx), static_cast<float>(ly));
+  if (!o.path.empty()) return run_path_query(o, m, out);
+  LocalQuery q;
+  q.status = "outside_map";  // a tiled map holds only the tiles that hold points
+  if (!m.tiled) {
+    const double lx = o.at_x - m.origin.xyz[0], ly = o.at_y - m.origin.xyz[1];
+    if (std::fabs(lx) <= static_cast<double>(kMaxAbsCoordinateM) && std::fabs(ly) <= static_cast<double>(kMaxAbsCoordinateM)) {
+      q = m.runner->query(static_cast<float>(lx), static_cast<float>(ly));
+    }
+  } else if (m.query.mapped) {
+    q = m.runner->query(m.query.local_x, m.query.local_y);
+  }
   const double kPi = 3.14159265358979323846;
   out << "x: " << fmt("%.6f", o.at_x) << "\n";
   out << "y: " << fmt("%.6f", o.at_y) << "\n";
@@ -398,7 +934,7 @@ int run_query(const Options& o, std::ostream& out) {
   out << "cell_width_m: " << fmt("%g", layer_ok ? m.widths[static_cast<std::size_t>(q.layer)] : 0.0)
       << "\n";
   const bool ok = q.status == "ok";
-  out << "height_m: " << (ok ? fmt("%.6f", static_cast<double>(q.height) + m.origin[2]) : std::string("nan")) << "\n";
+  out << "height_m: " << (ok ? fmt("%.6f", static_cast<double>(q.height) + m.origin.xyz[2]) : std::string("nan")) << "\n";
   out << "slope_x: " << fmt("%.6g", q.slope_x) << "\n";
   out << "slope_y: " << fmt("%.6g", q.slope_y) << "\n";
   out << "inclination: " << fmt("%.6g", q.inclination) << "\n";
@@ -407,6 +943,20 @@ int run_query(const Options& o, std::ostream& out) {
   out << "elevation_variance_m2: " << fmt("%.6g", q.elevation_variance) << "\n";
   out << "weight: " << fmt("%.6g", q.weight) << "\n";
   out << "class: " << q.cell_class << "\n";
+  if (o.have_footprint) {
+    // The centred map (map_centred) or the map at the last pose: never tiles.
+    const double lx = o.at_x - m.origin.xyz[0], ly = o.at_y - m.origin.xyz[1];
+    const double yaw = o.footprint_yaw_deg * kPi / 180.0;
+    const LocalFootprint f = m.runner->footprint(
+        static_cast<float>(lx), static_cast<float>(ly), static_cast<float>(std::cos(yaw)), static_cast<float>(std::sin(yaw)),
+        static_cast<float>(o.footprint_length), static_cast<float>(o.footprint_width), static_cast<float>(o.max_unknown_share));
+    if (f.status != "ok" && f.status != "outside_map") fail("the map refused the footprint (" + f.status + ")", 2);
+    out << "footprint_class: " << f.verdict << "\n";
+    out << "footprint_unknown_share: " << fmt("%.6f", f.unknown_share) << "\n";
+    out << "footprint_max_step_m: " << fmt("%.6f", f.max_step) << "\n";
+    out << "footprint_max_inclination_deg: "
+        << fmt("%.3f", std::atan(static_cast<double>(f.max_inclination)) * 180.0 / kPi) << "\n";
+  }
   return 0;
 }
 
@@ -423,12 +973,16 @@ int run_cli(int argc, char** argv, std::ostream& out, std::ostream& err) {
       out << kMainHelp;
       return 0;
     }
-    if (command != "map" && command != "query") fail("unknown command '" + command + "' (expected map or query)", 2);
+    if (command != "map" && command != "query" && command != "merge") {
+      fail("unknown command '" + command + "' (expected map, query or merge)", 2);
+    }
     const Options o = parse_options(argc, argv);
     if (o.help) {
-      out << (command == "map" ? kMapHelp : kQueryHelp);
+      out << (command == "map" ? kMapHelp : (command == "query" ? kQueryHelp : kMergeHelp));
       return 0;
     }
+    refuse_foreign_options(o);
+    if (command == "merge") return run_merge(o, out);
     return command == "map" ? run_map(o, out) : run_query(o, out);
   } catch (const CliError& e) {
     err << "ccmap: error: " << e.message << "\n";

@@ -43,7 +43,9 @@ namespace ccmap::detail {
 [[nodiscard]] inline float relative_to_centre(std::int64_t q18, std::int32_t index, std::int64_t width_q40) noexcept {
   constexpr std::int64_t kHalfQ18InQ40 = std::int64_t{1} << 21;
   // |q18| < 2^35 -> |q40| < 2^57; |index * width_q40| <= 1e5 m * 2^40 < 2^57: no overflow.
-  const std::int64_t relative = (q18 << 22) + kHalfQ18InQ40 - (std::int64_t{index} * width_q40 + (width_q40 >> 1));
+  const std::int64_t point_q40 = q18 * (std::int64_t{1} << 22) + kHalfQ18InQ40;
+  const std::int64_t centre_q40 = static_cast<std::int64_t>(index) * width_q40 + width_q40 / 2;
+  const std::int64_t relative = point_q40 - centre_q40;
   return static_cast<float>(relative) * 9.09494702e-13F;  // 2^-40
 }
 
@@ -176,9 +178,11 @@ class UpdatePath {
       if constexpr (kKalman) {
         if (code == 0 && unit_weights) {
           // Unsigned wrap: inside iff 0 <= index - min < side (|index|, |min| <= 2^30 + 2^14).
+          constexpr auto kSide = static_cast<std::uint32_t>(Config::kFineSide);
           const std::uint32_t rx = static_cast<std::uint32_t>(chunk_.ix0[i]) - static_cast<std::uint32_t>(fine_min.x);
           const std::uint32_t ry = static_cast<std::uint32_t>(chunk_.iy0[i]) - static_cast<std::uint32_t>(fine_min.y);
-          if (rx < static_cast<std::uint32_t>(Config::kFineSide) && ry < static_cast<std::uint32_t>(Config::kFineSide)) {
+          // cppcheck-suppress unsignedLessThanZero ; kSide is 0 only where kKalman is false
+          if (rx < kSide && ry < kSide) {
             kalman_point(layers, CellIndex{chunk_.ix0[i], chunk_.iy0[i]}, i, c);
             continue;
           }
@@ -561,7 +565,8 @@ class UpdatePath {
       // The held points as one more batch: their mean, the variance at their mean squared range.
       fuse_batch(cell, params, slot.held.sum_height_q14, slot.held.sum_range_key, slot.count);
     } else {
-      omg_merge_unchecked(cell, slot.held, params.weight_limit);
+      // Cannot fail: the limit was validated at init, the held statistics are finite.
+      (void)omg_merge(cell, slot.held, params.weight_limit);
     }
   }
 
@@ -597,9 +602,10 @@ class UpdatePath {
     const float mean_q14 = static_cast<float>(whole) +
                            (static_cast<float>(rest) + 0.5F * static_cast<float>(n)) / static_cast<float>(n);
     const float mean_z = mean_q14 * 6.10351562e-5F;  // 2^-14
-    const float mean_key = static_cast<float>(sum_range_key / count) +
-                           (static_cast<float>(sum_range_key % count) + 0.5F * static_cast<float>(n)) /
-                               static_cast<float>(n);
+    const std::uint64_t whole_key = sum_range_key / count;  // integer mean, then the rest
+    const std::uint64_t rest_key = sum_range_key % count;
+    const float mean_key =
+        static_cast<float>(whole_key) + (static_cast<float>(rest_key) + 0.5F * static_cast<float>(n)) / static_cast<float>(n);
     const float variance = fine_measurement_variance(params, mean_key * 2.44140625e-4F);  // 2^-12 m^2
     kalman_update_batch_unchecked(cell, mean_z, variance, count, params.kalman_min_variance);
   }
