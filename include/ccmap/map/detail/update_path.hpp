@@ -106,8 +106,12 @@ class UpdatePath {
     for (std::size_t begin = 0; begin < n; begin += kFrontChunkPoints) {
       const std::size_t count = n - begin < kFrontChunkPoints ? n - begin : kFrontChunkPoints;
       front_map_chunk(points + begin, count, pose, front_, chunk_);
-      back_half(layers, params, points + begin, weights != nullptr ? weights + begin : nullptr, count, unit_weights,
-                frame);
+      const float* chunk_weights = weights != nullptr ? weights + begin : nullptr;
+      if (gate_on_) {
+        back_half<true>(layers, params, points + begin, chunk_weights, count, unit_weights, frame);
+      } else {
+        back_half<false>(layers, params, points + begin, chunk_weights, count, unit_weights, frame);
+      }
     }
     finish_frame(layers, params, frame);
   }
@@ -119,7 +123,11 @@ class UpdatePath {
     for (std::size_t begin = 0; begin < n; begin += kFrontChunkPoints) {
       const std::size_t count = n - begin < kFrontChunkPoints ? n - begin : kFrontChunkPoints;
       front_sensor_chunk(points + begin, count, pose, front_, chunk_);
-      back_half(layers, params, nullptr, nullptr, count, constant_weight_, frame);
+      if (gate_on_) {
+        back_half<true>(layers, params, nullptr, nullptr, count, constant_weight_, frame);
+      } else {
+        back_half<false>(layers, params, nullptr, nullptr, count, constant_weight_, frame);
+      }
     }
     finish_frame(layers, params, frame);
   }
@@ -167,6 +175,9 @@ class UpdatePath {
 
   /// Back half of one chunk. `map_points` is the caller's map-frame chunk (the CCM and OMG
   /// updates take the float z from it), or nullptr for sensor-frame input (z from the Q18 position).
+  /// kGate: the outlier gate is on (gate_on_), chosen once per chunk so that the paper's update
+  /// runs the code it ran before the gate.
+  template <bool kGate>
   void back_half(Layers& layers, const StackParams& params, const PointXYZ* map_points, const float* weights,
                  std::size_t count, bool unit_weights, FrameCounters& frame) noexcept {
     ChunkCounts c{};
@@ -183,12 +194,12 @@ class UpdatePath {
           const std::uint32_t ry = static_cast<std::uint32_t>(chunk_.iy0[i]) - static_cast<std::uint32_t>(fine_min.y);
           // cppcheck-suppress unsignedLessThanZero ; kSide is 0 only where kKalman is false
           if (rx < kSide && ry < kSide) {
-            kalman_point(layers, CellIndex{chunk_.ix0[i], chunk_.iy0[i]}, i, c);
+            kalman_point<kGate>(layers, CellIndex{chunk_.ix0[i], chunk_.iy0[i]}, i, c);
             continue;
           }
         }
       }
-      apply(layers, params, i, map_points, weights, unit_weights, c);
+      apply<kGate>(layers, params, i, map_points, weights, unit_weights, c);
     }
     frame.used += c.used;
     frame.rejected_non_finite += c.non_finite;
@@ -207,6 +218,7 @@ class UpdatePath {
   /// float, so floor(q / w_k) = floor(floor(q / w_0) / 2^k), the index locate() computes. (>> of
   /// a negative int32 is an arithmetic shift with gcc and clang, the floor division; C++20 makes
   /// it standard.)
+  template <bool kGate>
   void apply(Layers& layers, const StackParams& params, std::size_t i, const PointXYZ* map_points,
              const float* weights, bool unit_weights, ChunkCounts& c) noexcept {
     const std::int32_t code = chunk_.code[i];
@@ -238,7 +250,7 @@ class UpdatePath {
         const float x = relative_to_centre(chunk_.q18[0][i], index.x, width_q40);
         const float y = relative_to_centre(chunk_.q18[1][i], index.y, width_q40);
         const float z = height(i, map_points);
-        if (gate_on_) {
+        if constexpr (kGate) {
           if (contradicted_by_finer(layers, layer, ix0, iy0, z)) {
             ++c.finer;
             return;
@@ -265,12 +277,12 @@ class UpdatePath {
           continue;
         }
         if constexpr (kKalman) {
-          kalman_point(layers, index, i, c);  // Kalman gains come from the range variance, not from weights
+          kalman_point<kGate>(layers, index, i, c);  // Kalman gains come from the range variance, not from weights
         } else {
           FineCell& cell = layers.fine.cell_unchecked(index);
           const float variance = fine_measurement_variance(params, to_range_sq_m2(chunk_.range_sq[i]));
           const float z = height(i, map_points);
-          if (gate_on_) {
+          if constexpr (kGate) {
             const auto number = static_cast<std::uint32_t>(&cell - layers.fine_storage);
             if (omg_outside_gate(cell, z, gate_[layer])) {
               if (auto* slot = hold(fine_held_, number, index, layer, c)) {
@@ -401,21 +413,24 @@ class UpdatePath {
   /// cell) and half-width (kalman_gate_half_width), both floored to Q14; a point whose
   /// |Q14 height - reference| exceeds the half-width is held in the cell's slot (sums of the
   /// same kind) instead. Precondition: the fine window contains `index`.
+  template <bool kGate>
   void kalman_point(Layers& layers, CellIndex index, std::size_t i, ChunkCounts& c) noexcept {
     if constexpr (kKalman) {
       const std::size_t slot = grid::buffer_offset(index, Config::kFineSide);
       FineFrameSum& sum = fine_sums_[slot];
       const std::int32_t h = chunk_.height_q14[i];
-      if (sum.points == 0U) {
-        fine_touched_[fine_touched_count_++] = static_cast<std::uint32_t>(slot);
-        if (gate_on_) {
+      if constexpr (!kGate) {
+        if (sum.count == 0U) {  // gate off: every point of the frame is inside (points stays 0)
+          fine_touched_[fine_touched_count_++] = static_cast<std::uint32_t>(slot);
+        }
+      } else {
+        if (sum.points == 0U) {
+          fine_touched_[fine_touched_count_++] = static_cast<std::uint32_t>(slot);
           const KalmanCell& cell = layers.fine.storage()[slot];
           sum.reference_q14 = cell.weight > 0.0F ? q14_floor_of(cell.height) : h;
           sum.gate_q14 = q14_half_width(kalman_gate_half_width(cell, gate_[0]));
         }
-      }
-      ++sum.points;
-      if (gate_on_) {
+        ++sum.points;
         const std::int64_t d = std::int64_t{h} - std::int64_t{sum.reference_q14};
         if (static_cast<std::uint64_t>(d < 0 ? -d : d) > std::uint64_t{sum.gate_q14}) {
           if (auto* held = hold(fine_held_, static_cast<std::uint32_t>(slot), index, 0, c)) {
@@ -613,7 +628,7 @@ class UpdatePath {
   /// Per-frame batch of a Kalman cell (all zero between frames).
   struct FineFrameSum {
     std::uint32_t count;          ///< points inside the gate (every point with the gate off)
-    std::uint32_t points;         ///< every point of the frame (held ones included)
+    std::uint32_t points;         ///< with the gate on: every point of the frame (held ones included); else 0
     std::int64_t sum_height_q14;  ///< sum of floor(z * 2^14) of the points inside
     std::uint64_t sum_range_key;  ///< sum of their routing keys (squared ranges, 2^-12 m^2)
     std::int32_t reference_q14;   ///< gate reference, floor(h * 2^14), set by the frame's first point
