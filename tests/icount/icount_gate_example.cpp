@@ -1,4 +1,4 @@
-// Instruction counts of the outlier gate (docs/performance.md, "Outlier gate"): two CADRE stacks
+// Instruction counts of the outlier gate (docs/performance.md, "Outlier gate: what it costs"): two CADRE stacks
 // fed the same frames (tests/support/cadre_frames.hpp, 0.3 m apart), one with the gate at its
 // CADRE default, one with it off (outlier_gate_sigma = 0: the paper's update). Each frame is
 // given once in the sensor frame and once, from the next place, in the map frame. Regions

@@ -1,5 +1,5 @@
 // The points that the outlier gate held back, per cell, until the change rule decides what they
-// were (cell/outlier_gate.hpp, change_decision; docs/design.md, "Outlier gate and change").
+// were (cell/outlier_gate.hpp, change_verdict; docs/design.md, "Outlier gate and change").
 // Evidence of a change may take several frames to gather in a sparsely seen cell (a lidar scan
 // putting one point per frame into it, a frame handed over in chunks), so a cell's held points
 // stay in its slot from frame to frame until the rule decides: at most kMaxHeldFrames frames.
@@ -26,8 +26,8 @@
 
 namespace ccmap::detail {
 
-/// Slots of a pool: cells with held points. docs/performance.md ("Outlier gate") gives the
-/// slots a CADRE traverse with 2 % of its pixels mismatched takes.
+/// Slots of a pool: cells with held points. docs/performance.md ("Outlier gate: what it costs")
+/// gives the slots a CADRE traverse with 1 % of its pixels mismatched takes.
 inline constexpr std::size_t kHeldSlots = 512U;
 /// A slot whose points have not come to a decision after this many frames is dropped.
 inline constexpr std::uint32_t kMaxHeldFrames = 8U;

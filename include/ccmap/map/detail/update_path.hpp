@@ -178,6 +178,7 @@ class UpdatePath {
   /// kGate: the outlier gate is on (gate_on_), chosen once per chunk so that the paper's update
   /// runs the code it ran before the gate.
   template <bool kGate>
+  // cppcheck-suppress unusedPrivateFunction ; called as back_half<true> / back_half<false>
   void back_half(Layers& layers, const StackParams& params, const PointXYZ* map_points, const float* weights,
                  std::size_t count, bool unit_weights, FrameCounters& frame) noexcept {
     ChunkCounts c{};
