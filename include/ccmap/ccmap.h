@@ -3,7 +3,7 @@
  * The map lives in storage the caller owns (static, or a memory pool handed over at set-up):
  * nothing allocates, nothing throws, every call answers with a status. Two-phase life:
  *
- *   static ccmap_cadre_storage storage;                      // ~430 KB, aligned for the map
+ *   static ccmap_cadre_storage storage;                      // 600 KiB, aligned for the map
  *   ccmap_map* map = NULL;
  *   ccmap_params params;
  *   if (ccmap_place(&storage, sizeof storage, CCMAP_PRESET_CADRE, &map) != CCMAP_OK) ...
@@ -69,7 +69,7 @@ typedef enum ccmap_preset {
  * the exact figure. The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
 #define CCMAP_CADRE_STORAGE_SIZE 614400u          /* 600 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2424832u    /* 2368 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2686976u    /* 2624 KiB */
 #define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3211264u /* 3136 KiB */
 #define CCMAP_SINGLE_OMG_STORAGE_SIZE 851968u     /* 832 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
@@ -93,8 +93,8 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 418016u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2359488u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 458976u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621632u
 #define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786624u
 #define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786624u
 

@@ -109,7 +109,9 @@ float layer_threshold(const StackParams& params, int layer, float width) noexcep
   return h * h * 0.0625F;
 }
 
-CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& params, float threshold) noexcept {
+namespace {
+template <typename Cell>
+CellClass classify(const Cell& cell, float width, const StackParams& params, float threshold) noexcept {
   if (!(cell.weight >= params.min_weight) || !(cell.weight > 0.0F)) {
     return CellClass::kUnknown;
   }
@@ -127,6 +129,14 @@ CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& para
     return CellClass::kSteep;
   }
   return CellClass::kTraversable;
+}
+}  // namespace
+
+CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& params, float threshold) noexcept {
+  return classify(cell, width, params, threshold);
+}
+CellClass classify_ccm(const CcmPaperCell& cell, float width, const StackParams& params, float threshold) noexcept {
+  return classify(cell, width, params, threshold);
 }
 
 }  // namespace ccmap

@@ -6,13 +6,15 @@
 // float instructions per point; on other targets the markers are empty and this program just
 // checks that the updates succeed.
 //
-//   icount_stack_example [frames width_px height_px]     default: 3 frames of 80 x 50 points
-//   (10 850 650: the timing test's ten full frames, docs/performance.md section 1.1)
+//   icount_stack_example [frames width_px height_px [sensor]]   default: 3 frames of 80 x 50 points
+//   (10 850 650: the timing test's ten full frames, docs/performance.md section 1.1; `sensor`
+//   folds the same frames in the sensor frame with update_frame_sensor and their pose)
 //
 // The markers bracket the call, so the call's argument set-up (a handful of instructions) may
 // be counted too; against thousands of points per frame that is noise.
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
@@ -35,9 +37,10 @@ int main(int argc, char** argv) {
   int frames = 3;
   int width_px = 80;
   int height_px = 50;
-  if (argc != 1 && (argc != 4 || !parse(argv[1], 1000, &frames) || !parse(argv[2], 4000, &width_px) ||
-                    !parse(argv[3], 4000, &height_px))) {
-    std::fprintf(stderr, "usage: icount_stack_example [frames (1..1000) width_px height_px (1..4000)]\n");
+  const bool sensor_frame = argc == 5 && std::strcmp(argv[4], "sensor") == 0;
+  if (argc != 1 && ((argc != 4 && !sensor_frame) || !parse(argv[1], 1000, &frames) ||
+                    !parse(argv[2], 4000, &width_px) || !parse(argv[3], 4000, &height_px))) {
+    std::fprintf(stderr, "usage: icount_stack_example [frames (1..1000) width_px height_px (1..4000) [sensor]]\n");
     return 2;
   }
   const std::size_t points = static_cast<std::size_t>(width_px) * static_cast<std::size_t>(height_px);
@@ -54,7 +57,9 @@ int main(int argc, char** argv) {
     ccmap::FrameCounters counters{};
     ccmap::test::icount_begin<1>();
     const ccmap::Status status =
-        stack->update_frame(frame.map_points.data(), frame.map_points.size(), frame.sensor_origin, &counters);
+        sensor_frame
+            ? stack->update_frame_sensor(frame.sensor_points.data(), frame.sensor_points.size(), frame.pose, &counters)
+            : stack->update_frame(frame.map_points.data(), frame.map_points.size(), frame.sensor_origin, &counters);
     ccmap::test::icount_end<1>();
     if (status != ccmap::Status::kOk || counters.used != points) {
       std::fprintf(stderr, "icount_stack_example: frame %d: status %d, %u of %zu points used\n", k,
@@ -62,6 +67,7 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  std::printf("icount_stack_example: %d frames of %zu points updated (region 1)\n", frames, points);
+  std::printf("icount_stack_example: %d %s-frame frames of %zu points updated (region 1)\n", frames,
+              sensor_frame ? "sensor" : "map", points);
   return 0;
 }

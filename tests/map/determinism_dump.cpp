@@ -12,8 +12,11 @@
 //   ccmap_determinism_dump                 prints the hash
 //   ccmap_determinism_dump --check FILE    exit 0 iff the hash equals the first token of FILE
 //   ccmap_determinism_dump --raw FILE      also writes the raw storage bytes to FILE
+//   ccmap_determinism_dump --paper-cell    (first) the same with Stack<PaperCell<CadreConfig>>,
+//                                          golden tests/golden/determinism_paper_cell.txt
 //
-// Regenerating the golden hash (tests/golden/determinism.txt, first token) after an intended
+// Regenerating the golden hash (tests/golden/determinism.txt and determinism_paper_cell.txt,
+// first token, the latter with --paper-cell) after an intended
 // change of the map's arithmetic: replace the file's first line with the output of the host
 // build's build/host-release/tests/map/ccmap_determinism_dump, then run the aarch64 test
 // (ctest --preset aarch64 -R determinism) before committing: the golden file is what proves
@@ -32,8 +35,6 @@
 #include "support/map_state.hpp"
 
 namespace {
-
-using S = ccmap::Stack<ccmap::CadreConfig>;
 
 using ccmap::test::hash_unit;
 
@@ -58,7 +59,9 @@ struct Result {
   std::vector<unsigned char> raw;
 };
 
+template <typename Config>
 Result run() {
+  using S = ccmap::Stack<Config>;
   auto stack = std::make_unique<S>();
   ccmap::StackParams params = ccmap::default_stack_params(0.04F);
   if (stack->init(params) != ccmap::Status::kOk) {
@@ -134,11 +137,12 @@ Result run() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Result r = run();
+  const bool paper_cell = argc > 1 && std::strcmp(argv[1], "--paper-cell") == 0;
+  const Result r = paper_cell ? run<ccmap::PaperCell<ccmap::CadreConfig>>() : run<ccmap::CadreConfig>();
   char text[32];
   std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(r.hash));
   std::printf("%s\n", text);
-  for (int i = 1; i + 1 < argc; i += 2) {
+  for (int i = paper_cell ? 2 : 1; i + 1 < argc; i += 2) {
     if (std::strcmp(argv[i], "--raw") == 0) {
       std::FILE* f = std::fopen(argv[i + 1], "wb");
       if (f == nullptr || std::fwrite(r.raw.data(), 1, r.raw.size(), f) != r.raw.size()) return 2;
@@ -160,7 +164,7 @@ int main(int argc, char** argv) {
       }
       std::fprintf(stderr, "map hash matches the golden %s\n", argv[i + 1]);
     } else {
-      std::fprintf(stderr, "usage: %s [--check FILE] [--raw FILE]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--paper-cell] [--check FILE] [--raw FILE]\n", argv[0]);
       return 2;
     }
   }

@@ -1,6 +1,7 @@
 // Double-precision twin of the CCM cell's incremental update (ccm_cell.hpp, eqs. 1-7): the same
-// Welford form and the same weight limiter, in double. Fed the same float inputs in lockstep
-// with a float cell, it separates the float rounding of the library from the statistics.
+// Welford form and the same weight limiter, in double, with the lateral co-moment s_xy of the
+// full cell (a paper-cell comparison ignores it). Fed the same float inputs in lockstep with a
+// float cell, it separates the float rounding of the library from the statistics.
 #pragma once
 
 namespace ccmap::test {
@@ -8,7 +9,7 @@ namespace ccmap::test {
 struct CcmCellDouble {
   double weight = 0.0;
   double mean_x = 0.0, mean_y = 0.0, mean_z = 0.0;
-  double s_xx = 0.0, s_yy = 0.0, s_zz = 0.0, s_xz = 0.0, s_yz = 0.0;
+  double s_xx = 0.0, s_yy = 0.0, s_zz = 0.0, s_xz = 0.0, s_yz = 0.0, s_xy = 0.0;
 
   void update(double x, double y, double z, double w, double weight_limit) {
     const double previous = weight;
@@ -24,6 +25,7 @@ struct CcmCellDouble {
     s_zz += k * dz * dz;
     s_xz += k * dx * dz;
     s_yz += k * dy * dz;
+    s_xy += k * dx * dy;
     weight = total;
     if (weight > weight_limit) {
       const double scale = weight_limit / weight;
@@ -32,6 +34,7 @@ struct CcmCellDouble {
       s_zz *= scale;
       s_xz *= scale;
       s_yz *= scale;
+      s_xy *= scale;
       weight = weight_limit;
     }
   }
@@ -40,6 +43,7 @@ struct CcmCellDouble {
   double var_zz() const { return weight > 0.0 ? s_zz / weight : 0.0; }
   double cov_xz() const { return weight > 0.0 ? s_xz / weight : 0.0; }
   double cov_yz() const { return weight > 0.0 ? s_yz / weight : 0.0; }
+  double cov_xy() const { return weight > 0.0 ? s_xy / weight : 0.0; }
 };
 
 }  // namespace ccmap::test

@@ -7,7 +7,8 @@
 //    in double, routing by the stack's IV-G table (first layer whose squared bound holds the
 //    range; the sensor itself is too noisy), the cell floor(x / w) in double, the walk to the
 //    first coarser layer whose window holds the point;
-//  - cells in double: CCM by the Welford update with the limiter (support/ccm_double.hpp);
+//  - cells in double: CCM by the Welford update with the limiter (support/ccm_double.hpp), the
+//    lateral covariance s_xy compared for full cells (CcmCell), not kept by paper cells;
 //    Kalman by the documented frame batch (n points of a cell fused once per frame with their
 //    mean height and the variance at their mean squared range over n); OMG per point.
 // Generators must keep points away from cell edges and routing bounds (safe_point below), where
@@ -185,7 +186,7 @@ class ModelStack {
       };
       if (S::layer_is_ccm(k)) {
         const auto& grid = stack_.ccm_layer(k - S::kFineLayerCount);
-        grid.for_each([&](CellIndex i, const CcmCell& a) {
+        grid.for_each([&](CellIndex i, const typename S::CcmCellType& a) {
           const auto it = l.cells.find(cell_key(i));
           if (it == l.cells.end()) {
             check(a.weight == 0.0F, i, "presence");
@@ -204,6 +205,10 @@ class ModelStack {
                     near_value(a.s_zz / w, e.var_zz(), var_tol, 1e-3) &&
                     near_value(a.s_xz / w, e.cov_xz(), var_tol, 1e-3) && near_value(a.s_yz / w, e.cov_yz(), var_tol, 1e-3),
                 i, "co-moments");
+          if constexpr (kHasLateralCovariance<typename S::CcmCellType>) {
+            // The lateral covariance of the full cell (issue 11): the same Welford rule, in double.
+            check(near_value(a.s_xy / w, e.cov_xy(), var_tol, 1e-3), i, "lateral covariance s_xy");
+          }
         });
       } else {
         stack_.fine_layer().for_each([&](CellIndex i, const typename S::FineCell& a) {

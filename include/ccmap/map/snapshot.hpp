@@ -12,7 +12,7 @@
 // the saved one (routing table and thresholds are recomputed by init(), deterministically).
 // Not stored: RingGrid::cells_cleared_by_moves() (restarts at 0 on load).
 //
-// Format (version 1). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 2). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -21,7 +21,8 @@
 //                4  total size of the snapshot, trailer included
 //   fingerprint  1  fine kind (FineKind), 1 layer count, 2 reserved 0,
 //               32  side of each layer, finest first (uint32 x kMaxLayers, 0 past the last layer)
-//                2  bytes per fine cell on the wire (12), 2 bytes per CCM cell (36)
+//                2  bytes per fine cell on the wire (12), 2 bytes per CCM cell (40 for CcmCell,
+//                   36 for CcmPaperCell: the cell kind is part of the shape)
 //   params      60  StackParams floats: finest_cell_width_m, weight_limit, coverage_tau,
 //                   min_weight, obstacle_fraction, max_inclination, kalman_min_variance,
 //                   normal_variance_threshold[0..7]
@@ -32,7 +33,12 @@
 //                   side*side cells in window order: rows of increasing global y from the
 //                   window's lowest y, x increasing inside a row (RingGrid::for_each order).
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
-//                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz.
+//                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
+//                   s_xy for CcmCell (CcmPaperCell has none).
+//
+// Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
+// (CcmCell with s_xy). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
+// hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
 //   counters    28  total FrameCounters (7 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
@@ -41,10 +47,10 @@
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
 //   kInvalidArgument  data == nullptr
 //   kCorrupt          shorter than the header, wrong magic, a non-zero reserved header field
-//   kVersionMismatch  another format version
+//   kVersionMismatch  another format version (also version 1, before the cell kinds)
 //   kCorrupt          size field != size (truncated or trailing bytes), CRC mismatch
-//   kVersionMismatch  fingerprint of another stack configuration (another preset): the data is
-//                     intact but describes another map shape
+//   kVersionMismatch  fingerprint of another stack configuration (another preset or another CCM
+//                     cell kind): the data is intact but describes another map shape
 //   kCorrupt          anything inside that a save could not have written: parameters that
 //                     init() would refuse, a non-finite float (weight_limit may be +inf, the
 //                     "no limit" value), a negative cell weight, an odd or out-of-range window
@@ -64,7 +70,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 1U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 2U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -74,7 +80,7 @@ inline constexpr std::uint16_t kSnapshotFormatVersion = 1U;
 
 namespace detail {
 
-static_assert(kMaxLayers == 8, "snapshot format version 1 stores 8 sides and 8 thresholds");
+static_assert(kMaxLayers == 8, "snapshot format version 2 stores 8 sides and 8 thresholds");
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
@@ -83,7 +89,11 @@ inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
 inline constexpr std::size_t kSnapshotCountersBytes = 7U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
-inline constexpr std::size_t kSnapshotCcmCellBytes = std::size_t{9} * 4U;
+/// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
+template <typename Cell>
+inline constexpr std::size_t kSnapshotCcmCellBytes = sizeof(Cell) / sizeof(float) * 4U;
+static_assert(kSnapshotCcmCellBytes<CcmCell> == 40U && kSnapshotCcmCellBytes<CcmPaperCell> == 36U,
+              "CCM cells on the wire: 10 and 9 floats");
 
 /// What a snapshot says about the shape of the stack it came from.
 struct SnapshotFingerprint {
@@ -158,10 +168,12 @@ void snapshot_write_centre(SnapshotWriter& w, CellIndex centre) noexcept;
 /// False for an odd or out-of-range centre (windows always start on even indices).
 [[nodiscard]] bool snapshot_read_centre(SnapshotReader& r, CellIndex* out) noexcept;
 void snapshot_write_cell(SnapshotWriter& w, const CcmCell& c) noexcept;
+void snapshot_write_cell(SnapshotWriter& w, const CcmPaperCell& c) noexcept;
 void snapshot_write_cell(SnapshotWriter& w, const KalmanCell& c) noexcept;
 void snapshot_write_cell(SnapshotWriter& w, const OmgCell& c) noexcept;
 /// False for a non-finite field or a negative weight (*out is written either way).
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, CcmCell* out) noexcept;
+[[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, CcmPaperCell* out) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, KalmanCell* out) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, OmgCell* out) noexcept;
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& totals, std::uint32_t rejected_moves,
@@ -175,13 +187,15 @@ void snapshot_write_trailer(SnapshotWriter& w) noexcept;
 template <typename Config>
 struct SnapshotAccess {
   using StackType = Stack<Config>;
+  using CcmCellType = typename StackType::CcmCellType;
   static constexpr int kLayers = StackType::kLayerCount;
+  static constexpr std::size_t kCcmCellBytes = kSnapshotCcmCellBytes<CcmCellType>;
 
   [[nodiscard]] static constexpr std::size_t size() noexcept {
     std::size_t total = kSnapshotHeaderBytes + kSnapshotFingerprintBytes + kSnapshotParamsBytes +
                         kSnapshotCountersBytes + kSnapshotTrailerBytes;
     for (int layer = 0; layer < kLayers; ++layer) {
-      const std::size_t cell_bytes = StackType::layer_is_ccm(layer) ? kSnapshotCcmCellBytes : kSnapshotFineCellBytes;
+      const std::size_t cell_bytes = StackType::layer_is_ccm(layer) ? kCcmCellBytes : kSnapshotFineCellBytes;
       total += kSnapshotLayerHeaderBytes + StackType::layer_capacity(layer) * cell_bytes;
     }
     return total;
@@ -195,7 +209,7 @@ struct SnapshotAccess {
       f.sides[layer] = static_cast<std::uint32_t>(StackType::layer_side(layer));
     }
     f.fine_cell_bytes = static_cast<std::uint16_t>(kSnapshotFineCellBytes);
-    f.ccm_cell_bytes = static_cast<std::uint16_t>(kSnapshotCcmCellBytes);
+    f.ccm_cell_bytes = static_cast<std::uint16_t>(kCcmCellBytes);
     return f;
   }
 
@@ -218,9 +232,9 @@ struct SnapshotAccess {
     snapshot_write_params(w, stack.params_);
     for (int layer = 0; layer < kLayers; ++layer) {
       if (StackType::layer_is_ccm(layer)) {
-        const RingGrid<CcmCell>& grid = stack.layers_.ccm_grid(layer);
+        const RingGrid<CcmCellType>& grid = stack.layers_.ccm_grid(layer);
         snapshot_write_centre(w, grid.centre());
-        grid.for_each([&w](CellIndex, const CcmCell& cell) { snapshot_write_cell(w, cell); });
+        grid.for_each([&w](CellIndex, const CcmCellType& cell) { snapshot_write_cell(w, cell); });
       } else {
         snapshot_write_centre(w, stack.layers_.fine.centre());
         stack.layers_.fine.for_each([&w](CellIndex, const typename StackType::FineCell& cell) { snapshot_write_cell(w, cell); });
@@ -269,7 +283,7 @@ struct SnapshotAccess {
       const std::size_t cells = StackType::layer_capacity(layer);
       for (std::size_t i = 0; i < cells && valid; ++i) {
         if (StackType::layer_is_ccm(layer)) {
-          CcmCell cell{};
+          CcmCellType cell{};
           valid = snapshot_read_cell(r, &cell);
         } else {
           typename StackType::FineCell cell{};
@@ -295,9 +309,9 @@ struct SnapshotAccess {
       CellIndex centre{};
       (void)snapshot_read_centre(r, &centre);
       if (StackType::layer_is_ccm(layer)) {
-        RingGrid<CcmCell>& grid = stack.layers_.ccm_grid(layer);
+        RingGrid<CcmCellType>& grid = stack.layers_.ccm_grid(layer);
         (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);
-        grid.for_each([&r](CellIndex, CcmCell& cell) { (void)snapshot_read_cell(r, &cell); });
+        grid.for_each([&r](CellIndex, CcmCellType& cell) { (void)snapshot_read_cell(r, &cell); });
       } else {
         auto& grid = stack.layers_.fine;
         (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);

@@ -60,7 +60,7 @@ class QueryView {
     QueryResult out = empty_result(Status::kOk, layer);
     out.cell_width_m = width;
     if (Layers::is_ccm(layer)) {
-      const CcmCell cell = pooled(layers_, params_.weight_limit, layer, index);
+      const typename Layers::CcmCellType cell = pooled(layers_, params_.weight_limit, layer, index);
       // Known: covered (eq. 12), or an obstacle already (classify_ccm: obstacle evidence wins).
       const CellClass cell_class = classify_ccm(cell, width, params_, thresholds_[layer]);
       if (require_known && cell_class == CellClass::kUnknown) {

@@ -25,10 +25,12 @@ template <typename FineCell>
 /// Preconditions: LayerSet<Config>::is_ccm(layer) and the layer's window contains `index`
 /// (so 2 * index fits int32: windows stay within +-2^30).
 template <typename Config>
-[[nodiscard]] CcmCell pooled(const LayerSet<Config>& layers, float weight_limit, int layer, CellIndex index) noexcept {
+[[nodiscard]] typename LayerSet<Config>::CcmCellType pooled(const LayerSet<Config>& layers, float weight_limit, int layer,
+                                                            CellIndex index) noexcept {
   using Layers = LayerSet<Config>;
-  const CcmCell* own = layers.ccm_grid(layer).cell(index);
-  CcmCell result = own != nullptr ? *own : CcmCell{};
+  using Cell = typename Layers::CcmCellType;
+  const Cell* own = layers.ccm_grid(layer).cell(index);
+  Cell result = own != nullptr ? *own : Cell{};
   if (layer == 0) {
     return result;
   }
@@ -39,7 +41,7 @@ template <typename Config>
   if (!layers.contains(child_layer, first)) {
     return result;
   }
-  CcmCell children[4] = {};
+  Cell children[4] = {};
   bool any = false;
   for (int i = 0; i < 4; ++i) {
     const CellIndex child{first.x + (i & 1), first.y + (i >> 1)};
@@ -48,7 +50,7 @@ template <typename Config>
     } else {
       if constexpr (Layers::kHasFine) {
         const typename Layers::FineCell& c = layers.fine.cell_unchecked(child);
-        children[i] = ccm_from_constant(fine_height(c), fine_variance(c), c.weight, layers.widths[child_layer]);
+        children[i] = ccm_from_constant<Cell>(fine_height(c), fine_variance(c), c.weight, layers.widths[child_layer]);
       }
     }
     any = any || children[i].weight > 0.0F;
@@ -56,7 +58,7 @@ template <typename Config>
   if (!any) {
     return result;
   }
-  CcmCell merged = ccm_pool4(children, layers.widths[child_layer], weight_limit);
+  Cell merged = ccm_pool4(children, layers.widths[child_layer], weight_limit);
   if (result.weight > 0.0F) {
     (void)ccm_merge(merged, result, weight_limit);
   }

@@ -154,7 +154,7 @@ class UpdatePath {
     for (int layer = code; layer < Layers::kLayerCount; ++layer) {
       const CellIndex index{ix0 >> layer, iy0 >> layer};
       if (Layers::is_ccm(layer)) {
-        RingGrid<CcmCell>& grid = layers.ccm_grid(layer);
+        RingGrid<typename Layers::CcmCellType>& grid = layers.ccm_grid(layer);
         if (!grid.contains(index)) {
           continue;
         }
