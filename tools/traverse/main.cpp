@@ -2,7 +2,7 @@
 // with a 90 deg turn over a generated lunar terrain, maps with Stack<CadreConfig> from a CADRE
 // stereo frame every 0.3 m, and reports hazard detection against ground truth, update times
 // and pictures. See traverse.hpp for the definitions.
-//   ccmap_traverse [--seed N] [--out DIR] [--stride K] [--frames N] [--quick]
+//   ccmap_traverse [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--paper-cell]
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -13,12 +13,13 @@ namespace {
 
 int usage(const char* argv0, std::FILE* f) {
   std::fprintf(f,
-               "usage: %s [--seed N] [--out DIR] [--stride K] [--frames N] [--quick]\n"
+               "usage: %s [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--paper-cell]\n"
                "  --seed N    terrain and noise seed (default 1); results are deterministic by seed\n"
                "  --out DIR   pictures (default out/traverse)\n"
                "  --stride K  cast every K-th pixel of the 850 x 650 frame (default 1: full frame)\n"
                "  --frames N  stop after N frames (default: the whole 13.5 m path, 46 frames)\n"
-               "  --quick     8 frames at stride 4 (what the CI test runs)\n",
+               "  --quick     8 frames at stride 4 (what the CI test runs)\n"
+               "  --paper-cell  the paper's 9-float CCM cell instead of the full cell (lateral covariance)\n",
                argv0);
   return f == stdout ? 0 : 2;
 }
@@ -30,13 +31,15 @@ int main(int argc, char** argv) {
   cfg.out_dir = "out/traverse";
   std::uint64_t seed = 1;
   int stride = 0, frames = -1;
-  bool quick = false;
+  bool quick = false, paper_cell = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
     if (a == "--help" || a == "-h") return usage(argv[0], stdout);
     if (a == "--quick") {
       quick = true;
+    } else if (a == "--paper-cell") {
+      paper_cell = true;
     } else if (a == "--seed" && v != nullptr) {
       seed = std::strtoull(v, nullptr, 10);
       ++i;
@@ -60,6 +63,7 @@ int main(int argc, char** argv) {
     cfg.out_dir = out;
   }
   cfg.seed = seed;
+  cfg.paper_cell = paper_cell;
   if (stride > 0) cfg.pixel_stride = stride;
   if (frames > 0) cfg.max_frames = frames;
   cfg.log = stdout;

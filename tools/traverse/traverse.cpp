@@ -21,7 +21,7 @@ namespace {
 
 using experiments::format;
 using experiments::Rgb;
-using Map = Stack<CadreConfig>;
+// Map: Stack<CadreConfig> (full CCM cells) or Stack<PaperCell<CadreConfig>> (TraverseConfig::paper_cell).
 
 constexpr double kMaxSlopeDeg = 20.0;
 constexpr double kObstacleFraction = 0.75;
@@ -105,6 +105,7 @@ struct LayerTruth {
 
 /// The layer whose cell gave the class of a stack answer (query() takes the class of a
 /// constant-layer answer from the first CCM layer when that one knows the point).
+template <typename Map>
 int classifying_layer(const Map& map, const QueryResult& q, float x, float y) {
   if (q.status == Status::kOk && !Map::layer_is_ccm(q.layer) && Map::kCcmLayerCount > 0 &&
       map.query_layer(Map::kFineLayerCount, x, y).status == Status::kOk) {
@@ -191,6 +192,7 @@ void panel_decorations(tools::RgbImage& img, const PanelFrame& f, const std::str
 }
 
 /// Height, normal variance and class of one layer, side by side, with the path and legends.
+template <typename Map>
 bool write_layer_picture(const std::string& path, const Map& map, int layer, const std::vector<sim::PathPose>& route,
                          std::size_t driven, std::string* error) {
   std::vector<CellRecord> records(Map::layer_capacity(layer));
@@ -282,6 +284,7 @@ Rgb truth_rgb(signed char t) {
   return experiments::kBlack;
 }
 
+template <typename Map>
 bool write_hazard_picture(const std::string& path, const QueryRaster& q, const Map& map,
                           const std::vector<sim::PathPose>& route, std::size_t driven,
                           const std::vector<std::pair<sim::Rock, bool>>& large, std::string* error) {
@@ -360,9 +363,8 @@ bool write_hazard_picture(const std::string& path, const QueryRaster& q, const M
   return tools::write_png(path, img, error);
 }
 
-}  // namespace
-
-TraverseResult run_traverse(const TraverseConfig& cfg) {
+template <typename Map>
+TraverseResult traverse_with(const TraverseConfig& cfg) {
   TraverseResult result;
   std::FILE* log = cfg.log;
   // Path: 6 m east, a 90 deg left turn over 3.5 m, 4 m north (13.5 m).
@@ -391,9 +393,10 @@ TraverseResult run_traverse(const TraverseConfig& cfg) {
   if (log != nullptr) {
     std::fprintf(log,
                  "ccmap traverse: seed %llu, terrain 30 x 30 m (%zu rocks, %zu box, raster %.0f cm in %.0f ms CPU), "
-                 "path %.1f m, %zu frames every %.2f m, camera %d x %d px stride %d\n",
+                 "path %.1f m, %zu frames every %.2f m, camera %d x %d px stride %d, %s CCM cell\n",
                  static_cast<unsigned long long>(cfg.seed), result.rocks, result.boxes, 100.0 * cfg.raster_resolution_m,
-                 raster_ms, result.path_length_m, frames, cfg.frame_spacing_m, sp.width_px, sp.height_px, sp.pixel_stride);
+                 raster_ms, result.path_length_m, frames, cfg.frame_spacing_m, sp.width_px, sp.height_px, sp.pixel_stride,
+                 cfg.paper_cell ? "paper (9-float)" : "full (10-float)");
   }
   std::vector<PointXYZ> points;
   for (std::size_t i = 0; i < frames; ++i) {
@@ -570,6 +573,12 @@ TraverseResult run_traverse(const TraverseConfig& cfg) {
     result.pictures.push_back(file);
   }
   return result;
+}
+
+}  // namespace
+
+TraverseResult run_traverse(const TraverseConfig& cfg) {
+  return cfg.paper_cell ? traverse_with<Stack<PaperCell<CadreConfig>>>(cfg) : traverse_with<Stack<CadreConfig>>(cfg);
 }
 
 std::string traverse_report(const TraverseResult& r) {

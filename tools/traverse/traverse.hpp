@@ -43,6 +43,7 @@ struct TraverseConfig {
   double raster_resolution_m = 0.01;///< terrain raster the camera ray-casts against
   double query_step_m = 0.04;       ///< raster of the stack query evaluation and picture
   std::string out_dir;              ///< pictures go here; empty = no pictures
+  bool paper_cell = false;          ///< map with the paper's 9-float CCM cell (PaperCell<CadreConfig>)
   std::FILE* log = nullptr;         ///< progress lines (one per frame) and the report; nullptr = quiet
   /// A short run: 8 frames at pixel stride 4.
   static TraverseConfig quick() {
