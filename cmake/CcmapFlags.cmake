@@ -2,6 +2,12 @@
 
 # Same rounding on host and aarch64: no FMA contraction, no fast-math.
 add_compile_options(-ffp-contract=off -fno-fast-math)
+# Bare metal: math functions set no errno, so sqrtf is the one VSQRT.F32 instruction (the same
+# correctly rounded result) without a NaN test and a libm call. It must follow -fno-fast-math,
+# which turns -fmath-errno back on.
+if(CCMAP_BAREMETAL)
+  add_compile_options(-fno-math-errno)
+endif()
 
 if(CCMAP_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)

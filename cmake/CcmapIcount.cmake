@@ -10,6 +10,7 @@
 #                       [ARGS <program arguments>...]
 #                       [CHECKS <region>:<field>:<op>:<integer>...]
 #                       [PER <region>:<units per interval>:<unit name>...]
+#                       [RATIOS <region>:<field>:LE:<percent>:<region>...]
 #                       [RUNS <n>] [EXPECT_MARKER_ERRORS <n>] [LABELS <labels>...])
 # In the aarch64 build only: a ctest that runs TARGET under
 #   <CMAKE_CROSSCOMPILING_EMULATOR> -plugin libccmap_icount.so,out=<file> TARGET ARGS
@@ -22,7 +23,8 @@
 # e.g. 1:max_interval_insns:LE:86000000 (every interval of region 1 within 86 M instructions).
 # It also requires total marker_errors = EXPECT_MARKER_ERRORS (default 0) and vcpus = 1, and
 # each CHECKS region to be present. PER prints instructions, float instructions (fp +
-# simd_fp) and loads/stores per unit, e.g. 1:4000:point. Label `icount` unless LABELS is given.
+# simd_fp) and loads/stores per unit, e.g. 1:4000:point. RATIOS compare two regions' fields:
+# 2:insns:LE:125:3 requires 100 * insns(2) <= 125 * insns(3). Label `icount` unless LABELS is given.
 include_guard(GLOBAL)
 include(ExternalProject)
 
@@ -58,7 +60,7 @@ if(_ccmap_icount_cross)
 endif()
 
 function(ccmap_add_icount_test)
-  cmake_parse_arguments(ARG "" "NAME;TARGET;RUNS;EXPECT_MARKER_ERRORS" "ARGS;CHECKS;PER;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "NAME;TARGET;RUNS;EXPECT_MARKER_ERRORS" "ARGS;CHECKS;PER;RATIOS;LABELS" ${ARGN})
   if(NOT ARG_NAME OR NOT ARG_TARGET)
     message(FATAL_ERROR "ccmap_add_icount_test: NAME and TARGET are required")
   endif()
@@ -79,12 +81,13 @@ function(ccmap_add_icount_test)
   string(REPLACE ";" "|" _args "${ARG_ARGS}")
   string(REPLACE ";" "|" _checks "${ARG_CHECKS}")
   string(REPLACE ";" "|" _per "${ARG_PER}")
+  string(REPLACE ";" "|" _ratios "${ARG_RATIOS}")
   add_test(NAME ${ARG_NAME}
            COMMAND ${CMAKE_COMMAND}
                    "-DEMULATOR=${_emulator}" "-DPLUGIN=${CCMAP_ICOUNT_PLUGIN}"
                    "-DEXE=$<TARGET_FILE:${ARG_TARGET}>" "-DARGS=${_args}"
                    "-DOUT=${CMAKE_CURRENT_BINARY_DIR}/${ARG_NAME}.icount" "-DRUNS=${ARG_RUNS}"
-                   "-DCHECKS=${_checks}" "-DPER=${_per}" "-DEXPECT_MARKER_ERRORS=${ARG_EXPECT_MARKER_ERRORS}"
+                   "-DCHECKS=${_checks}" "-DPER=${_per}" "-DRATIOS=${_ratios}" "-DEXPECT_MARKER_ERRORS=${ARG_EXPECT_MARKER_ERRORS}"
                    -P ${PROJECT_SOURCE_DIR}/cmake/ccmap_icount_run.cmake)
   set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT 900)
   add_dependencies(${ARG_TARGET} ccmap_icount_plugin)

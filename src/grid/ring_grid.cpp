@@ -3,7 +3,7 @@
 // -Wdouble-promotion, -Wold-style-cast, ... -Werror, no exceptions, no RTTI) and instantiates
 // every non-template member for representative cell types, so a warning in any of them fails
 // the library build, not only a user's build. (The member templates for_each are checked the
-// same way by tests/grid/ring_grid_wall_check.cpp.)
+// same way by tests/grid/ring_grid_core_wall_test.cpp.)
 #include "ccmap/grid/ring_grid.hpp"
 
 #include <cstdint>

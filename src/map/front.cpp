@@ -48,7 +48,7 @@ Status make_front_config(float finest_width_m, const float* max_range_sq_m2, int
   for (int k = 0; k < layers; ++k) {
     const float units = max_range_sq_m2[k] * 4294967296.0F;  // m^2 -> 2^-32 m^2 (exact scale)
     // A bound beyond int64 (including the +inf of an unbounded model) never refuses.
-    f.max_range_sq[k] = !(units < 9.0e18F) ? INT64_MAX : static_cast<std::int64_t>(units);
+    f.max_range_sq[k] = !(units < 9.0e18F) ? INT64_MAX : (units < 1.0F ? 0 : floor_to_int64(units));
   }
   for (int k = 0; k < kFrontMaxLayers; ++k) {
     f.max_range_key[k] = route_key_of(f.max_range_sq[k]);
@@ -99,8 +99,9 @@ Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, 
     for (int row = 0; row < 3; ++row) {
       // Rounding to Q18 (+ half a Q48 -> Q18 step) and the mean of the floor in the Q18
       // conversion of each coordinate (+ half a unit, rotated): unbiased results.
-      const std::int64_t row_sum = std::int64_t{pose.rotation_q30[3 * row]} + pose.rotation_q30[3 * row + 1] +
-                                   pose.rotation_q30[3 * row + 2];
+      const std::size_t first = 3U * static_cast<std::size_t>(row);
+      const std::int64_t row_sum = std::int64_t{pose.rotation_q30[first]} + pose.rotation_q30[first + 1U] +
+                                   pose.rotation_q30[first + 2U];
       pose.rotation_bias_q48[row] = (std::int64_t{1} << (kRotationFracBits - 1)) + (row_sum >> 1);
     }
   }
@@ -160,7 +161,7 @@ inline std::int32_t route(std::uint32_t key, const std::uint32_t (&bound)[kFront
 /// The code of a point whose refusal code so far is `code`: too noisy if it is the sensor itself
 /// (range 0: no direction, no noise model), else unchanged.
 inline std::int32_t at_sensor_code(std::int32_t code, std::int64_t range_sq) noexcept {
-  return (range_sq == 0) & (code == 0) ? std::int32_t{kFrontTooNoisy} : code;
+  return ((range_sq == 0) && (code == 0)) ? std::int32_t{kFrontTooNoisy} : code;
 }
 
 inline std::int64_t square_sum_q16(std::int32_t dx, std::int32_t dy, std::int32_t dz) noexcept {
@@ -168,16 +169,14 @@ inline std::int64_t square_sum_q16(std::int32_t dx, std::int32_t dy, std::int32_
   const std::int32_t rx = dx >> 2;
   const std::int32_t ry = dy >> 2;
   const std::int32_t rz = dz >> 2;
-  return std::int64_t{rx} * rx + std::int64_t{ry} * ry + std::int64_t{rz} * rz;
+  return static_cast<std::int64_t>(rx) * rx + static_cast<std::int64_t>(ry) * ry + static_cast<std::int64_t>(rz) * rz;
 }
 
 }  // namespace
 
 CCMAP_FRONT_CLONES
 void front_map_chunk(const PointXYZ* points, std::size_t n, const FramePose& pose, const FrontConfig& config,
-                     FrontChunk& chunk) noexcept {
-  // Locals and a restrict-qualified view: the vectoriser then knows that nothing aliases.
-  FrontChunk& __restrict out = chunk;
+                     FrontChunk& out) noexcept {
   const std::uint32_t limit_bits = bits_of(kMaxAbsCoordinateM);
   std::int64_t* const qx = out.q18[0];
   std::int64_t* const qy = out.q18[1];
@@ -230,8 +229,8 @@ void front_map_chunk(const PointXYZ* points, std::size_t n, const FramePose& pos
     const std::int32_t routed = route(out.range_key[i], bounds, layers);
     const std::int32_t valid = out.code[i];
     out.code[i] = valid != 0 ? valid : routed;
-    out.ix0[i] = static_cast<std::int32_t>((std::int64_t{dx32[i]} * mult + ox_mult) >> shift);
-    out.iy0[i] = static_cast<std::int32_t>((std::int64_t{dy32[i]} * mult + oy_mult) >> shift);
+    out.ix0[i] = static_cast<std::int32_t>((static_cast<std::int64_t>(dx32[i]) * mult + ox_mult) >> shift);
+    out.iy0[i] = static_cast<std::int32_t>((static_cast<std::int64_t>(dy32[i]) * mult + oy_mult) >> shift);
     out.height_q14[i] = static_cast<std::int32_t>(qz[i] >> (kPositionFracBits - kHeightFracBits));
   }
   if (far_points > 0) {
@@ -248,8 +247,7 @@ void front_map_chunk(const PointXYZ* points, std::size_t n, const FramePose& pos
 
 CCMAP_FRONT_CLONES
 void front_sensor_chunk(const PointXYZ* points, std::size_t n, const FramePose& pose, const FrontConfig& config,
-                        FrontChunk& chunk) noexcept {
-  FrontChunk& __restrict out = chunk;
+                        FrontChunk& out) noexcept {
   constexpr std::uint32_t kLimitBits = 0x45000000U;  // bits_of(2048.0F), exclusive
   std::int32_t* const sx = out.scratch_i32[0];
   std::int32_t* const sy = out.scratch_i32[1];
@@ -304,8 +302,8 @@ void front_sensor_chunk(const PointXYZ* points, std::size_t n, const FramePose& 
     const std::int32_t routed = route(out.range_key[i], bounds, layers);
     const std::int32_t valid = out.code[i];
     out.code[i] = valid != 0 ? valid : routed;
-    out.ix0[i] = static_cast<std::int32_t>((std::int64_t{dx} * mult + tx_mult) >> shift);
-    out.iy0[i] = static_cast<std::int32_t>((std::int64_t{dy} * mult + ty_mult) >> shift);
+    out.ix0[i] = static_cast<std::int32_t>((static_cast<std::int64_t>(dx) * mult + tx_mult) >> shift);
+    out.iy0[i] = static_cast<std::int32_t>((static_cast<std::int64_t>(dy) * mult + ty_mult) >> shift);
     out.height_q14[i] = static_cast<std::int32_t>(mz >> (kPositionFracBits - kHeightFracBits));
   }
   // The map-frame range check (|m| <= 1e5 m on every axis) can only refuse a point when the

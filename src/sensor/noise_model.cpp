@@ -18,19 +18,19 @@ NoiseModel NoiseModel::stereo(const StereoParams& params) noexcept {
   model.kind_ = SensorKind::kStereo;
   if (!std::isfinite(params.focal_px) || !std::isfinite(params.baseline_m) ||
       !std::isfinite(params.disparity_sigma_px)) {
-    model.param_status_ = Status::kNonFiniteInput;
+    model.param_state_ = ParamState::kNonFinite;
   } else if (!(params.focal_px > 0.0F) || !(params.baseline_m > 0.0F) ||
              !(params.disparity_sigma_px >= 0.0F)) {
-    model.param_status_ = Status::kInvalidArgument;
+    model.param_state_ = ParamState::kInvalid;
   } else {
     // k = sigma_d / (f * b) (1/m). f * b can underflow to 0 for absurd inputs: k is then
     // not finite and the model is refused. An overflow of f * b gives k = 0 (noise-free).
     const float k = params.disparity_sigma_px / (params.focal_px * params.baseline_m);
     if (std::isfinite(k)) {
       model.stereo_k_ = k;
-      model.param_status_ = Status::kOk;
+      model.param_state_ = ParamState::kOk;
     } else {
-      model.param_status_ = Status::kInvalidArgument;
+      model.param_state_ = ParamState::kInvalid;
     }
   }
   model.set_weight_mode(WeightMode::kConstant);
@@ -41,20 +41,31 @@ NoiseModel NoiseModel::lidar(const LidarParams& params) noexcept {
   NoiseModel model;
   model.kind_ = SensorKind::kLidar;
   if (!std::isfinite(params.sigma0_m) || !std::isfinite(params.sigma_per_m)) {
-    model.param_status_ = Status::kNonFiniteInput;
+    model.param_state_ = ParamState::kNonFinite;
   } else if (!(params.sigma0_m >= 0.0F) || !(params.sigma_per_m >= 0.0F)) {
-    model.param_status_ = Status::kInvalidArgument;
+    model.param_state_ = ParamState::kInvalid;
   } else {
     model.lidar_sigma0_m_ = params.sigma0_m;
     model.lidar_sigma_per_m_ = params.sigma_per_m;
-    model.param_status_ = Status::kOk;
+    model.param_state_ = ParamState::kOk;
   }
   model.set_weight_mode(WeightMode::kConstant);
   return model;
 }
 
+Status NoiseModel::param_status() const noexcept {
+  switch (param_state_) {
+    case ParamState::kOk: return Status::kOk;
+    case ParamState::kNonFinite: return Status::kNonFiniteInput;
+    case ParamState::kInvalid: return Status::kInvalidArgument;
+    case ParamState::kUnset: break;
+  }
+  return Status::kNotInitialised;
+}
+
 Status NoiseModel::validate() const noexcept {
-  return param_status_ != Status::kOk ? param_status_ : weight_status_;
+  const Status params = param_status();
+  return params != Status::kOk ? params : weight_status_;
 }
 
 void NoiseModel::set_weight_mode(WeightMode mode, float reference_range_m) noexcept {
@@ -82,7 +93,7 @@ void NoiseModel::set_weight_mode(WeightMode mode, float reference_range_m) noexc
   const float sigma_ref = sigma_at_range_sq(reference_range_m * reference_range_m);
   if (!(sigma_ref > 0.0F) || !(sigma_ref <= kMaxFinite)) {
     // A noise-free model (or r_ref^2 overflowing) has nothing to normalise by.
-    weight_status_ = param_status_ == Status::kOk ? Status::kInvalidArgument : Status::kOk;
+    weight_status_ = param_state_ == ParamState::kOk ? Status::kInvalidArgument : Status::kOk;
     return;
   }
   reference_sigma_m_ = sigma_ref;
@@ -90,7 +101,7 @@ void NoiseModel::set_weight_mode(WeightMode mode, float reference_range_m) noexc
 }
 
 float NoiseModel::sigma_at_range_sq(float range_sq_m2) const noexcept {
-  if (param_status_ != Status::kOk || !finite_non_negative(range_sq_m2)) {
+  if (param_state_ != ParamState::kOk || !finite_non_negative(range_sq_m2)) {
     return kInf;
   }
   if (kind_ == SensorKind::kStereo) {
@@ -100,7 +111,7 @@ float NoiseModel::sigma_at_range_sq(float range_sq_m2) const noexcept {
 }
 
 float NoiseModel::sigma_at_range(float range_m) const noexcept {
-  if (param_status_ != Status::kOk || !finite_non_negative(range_m)) {
+  if (param_state_ != ParamState::kOk || !finite_non_negative(range_m)) {
     return kInf;
   }
   if (kind_ == SensorKind::kStereo) {
@@ -110,7 +121,7 @@ float NoiseModel::sigma_at_range(float range_m) const noexcept {
 }
 
 float NoiseModel::max_range_sq_for_sigma(float sigma_m) const noexcept {
-  if (param_status_ != Status::kOk || !(sigma_m >= 0.0F)) {
+  if (param_state_ != ParamState::kOk || !(sigma_m >= 0.0F)) {
     return 0.0F;
   }
   if (kind_ == SensorKind::kStereo) {
@@ -130,7 +141,7 @@ float NoiseModel::max_range_sq_for_sigma(float sigma_m) const noexcept {
 }
 
 float NoiseModel::max_range_for_sigma(float sigma_m) const noexcept {
-  if (param_status_ != Status::kOk || !(sigma_m >= 0.0F)) {
+  if (param_state_ != ParamState::kOk || !(sigma_m >= 0.0F)) {
     return 0.0F;
   }
   if (kind_ == SensorKind::kLidar && sigma_m >= lidar_sigma0_m_ && lidar_sigma_per_m_ > 0.0F) {
@@ -140,7 +151,7 @@ float NoiseModel::max_range_for_sigma(float sigma_m) const noexcept {
 }
 
 float NoiseModel::weight_at_range_sq(float range_sq_m2) const noexcept {
-  if (weight_mode_ != WeightMode::kInverseVariance || param_status_ != Status::kOk ||
+  if (weight_mode_ != WeightMode::kInverseVariance || param_state_ != ParamState::kOk ||
       weight_status_ != Status::kOk) {
     return 1.0F;
   }

@@ -1,52 +1,43 @@
 /* The C API from plain C99: placement in static storage, init, frames (with and without
  * weights, map and sensor frame), queries, export, counters, snapshots, every preset and the
- * refusal of NULL pointers, foreign handles and bad enum values. Exits non-zero on failure. */
+ * refusal of NULL pointers, foreign handles and bad enum values.
+ *
+ * One case of the portable harness (tests/baremetal/harness.h; capi_case.cpp registers it), so
+ * the same file runs on the host, on aarch64 Linux and on the bare-metal board. No stdio and no
+ * double (the board's FPU is single precision). RAM: the host runs every preset; a build that
+ * defines CCMAP_TEST_RAM_BYTES (the board: 4 MiB) runs the single-layer presets whose storage
+ * fits in what the CADRE maps leave, and says which it skipped. */
 #include <math.h>
 #include <stdint.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "ccmap/ccmap.h"
+#include "harness.h"
 
-static int g_failures = 0;
-static int g_checks = 0;
-
-#define CHECK(cond)                                                   \
-  do {                                                                \
-    ++g_checks;                                                       \
-    if (!(cond)) {                                                    \
-      ++g_failures;                                                   \
-      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-    }                                                                 \
-  } while (0)
+#define CHECK(cond) ccmap_test_check((cond) ? 1 : 0, __FILE__, __LINE__, #cond)
 
 #define CHECK_STATUS(expr, expected)                                                          \
   do {                                                                                        \
     const ccmap_status got_ = (expr);                                                         \
-    ++g_checks;                                                                               \
-    if (got_ != (expected)) {                                                                 \
-      ++g_failures;                                                                           \
-      fprintf(stderr, "%s:%d: %s gave %s, expected %s\n", __FILE__, __LINE__, #expr,          \
-              ccmap_status_string(got_), ccmap_status_string(expected));                     \
-    }                                                                                         \
+    ccmap_test_check_texts(got_ == (expected), __FILE__, __LINE__, #expr,                     \
+                           ccmap_status_string(got_), ccmap_status_string(expected));         \
   } while (0)
 
-#define CHECK_NEAR(a, b, tol)                                                                 \
-  do {                                                                                        \
-    const double a_ = (a), b_ = (b);                                                          \
-    ++g_checks;                                                                               \
-    if (!(fabs(a_ - b_) <= (tol))) {                                                          \
-      ++g_failures;                                                                           \
-      fprintf(stderr, "%s:%d: %s = %g, expected %g +- %g\n", __FILE__, __LINE__, #a, a_, b_,  \
-              (double)(tol));                                                                 \
-    }                                                                                         \
-  } while (0)
+#define CHECK_NEAR(a, b, tol) ccmap_test_check_near((float)(a), (float)(b), (float)(tol), __FILE__, __LINE__, #a)
 
 static ccmap_cadre_storage g_storage;
 static ccmap_cadre_storage g_storage_copy;
-static ccmap_single_ccm_storage g_ccm_storage;
-static ccmap_single_kalman_storage g_kalman_storage;
-static ccmap_single_omg_storage g_omg_storage;
+/* One storage for the single-layer maps, placed one after another. */
+#ifdef CCMAP_TEST_RAM_BYTES
+#define SINGLE_STORAGE_SIZE (CCMAP_TEST_RAM_BYTES - 2u * CCMAP_CADRE_STORAGE_SIZE - 1048576u)
+#else
+#define SINGLE_STORAGE_SIZE CCMAP_SINGLE_KALMAN_STORAGE_SIZE
+#endif
+static union {
+  unsigned char bytes[SINGLE_STORAGE_SIZE];
+  long double align_long_double;
+  void* align_pointer;
+} g_single;
 static uint8_t g_snapshot[CCMAP_CADRE_SNAPSHOT_SIZE];
 static ccmap_cell_record g_records[64 * 64];
 
@@ -93,6 +84,7 @@ static void test_storage_and_placement(void) {
   CHECK(ccmap_storage_size(CCMAP_PRESET_SINGLE_OMG) <= CCMAP_SINGLE_OMG_STORAGE_SIZE);
   CHECK(ccmap_storage_size((ccmap_preset)99) == 0u);
   CHECK(sizeof g_storage >= CCMAP_CADRE_STORAGE_SIZE);
+  CHECK(ccmap_storage_size(CCMAP_PRESET_SINGLE_OMG) <= sizeof g_single);
 
   CHECK_STATUS(ccmap_place(NULL, sizeof g_storage, CCMAP_PRESET_CADRE, &map), CCMAP_INVALID_ARGUMENT);
   CHECK_STATUS(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, NULL), CCMAP_INVALID_ARGUMENT);
@@ -222,8 +214,8 @@ static void test_frames_queries_export(ccmap_map* map) {
       CHECK(q.height_m == rec->height_m && q.cell_class == rec->cell_class);
       break;
     }
-    if (fabs(rec->centre_x - 0.08 * (rec->index_x + 0.5)) > 1e-5) {
-      CHECK(fabs(rec->centre_x - 0.08 * (rec->index_x + 0.5)) <= 1e-5);
+    if (fabsf(rec->centre_x - 0.08f * ((float)rec->index_x + 0.5f)) > 1e-5f) {
+      CHECK(fabsf(rec->centre_x - 0.08f * ((float)rec->index_x + 0.5f)) <= 1e-5f);
       break;
     }
   }
@@ -256,7 +248,7 @@ static void test_frames_queries_export(ccmap_map* map) {
 
 static void test_snapshots(ccmap_map* map) {
   ccmap_map* copy = NULL;
-  ccmap_map* ccm = NULL;
+  ccmap_map* other = NULL;
   size_t written = 0;
   ccmap_query_result a;
   ccmap_query_result b;
@@ -287,29 +279,27 @@ static void test_snapshots(ccmap_map* map) {
   CHECK(same); /* bitwise identical answers */
 
   /* A CADRE snapshot does not load into a single-layer map. */
-  CHECK_STATUS(ccmap_place(&g_ccm_storage, sizeof g_ccm_storage, CCMAP_PRESET_SINGLE_CCM, &ccm), CCMAP_OK);
-  CHECK_STATUS(ccmap_load_snapshot(ccm, g_snapshot, written), CCMAP_VERSION_MISMATCH);
+  CHECK_STATUS(ccmap_place(&g_single, sizeof g_single, CCMAP_PRESET_SINGLE_OMG, &other), CCMAP_OK);
+  CHECK_STATUS(ccmap_load_snapshot(other, g_snapshot, written), CCMAP_VERSION_MISMATCH);
 }
 
 static void test_single_layer_presets(void) {
-  void* storages[3];
-  size_t sizes[3];
   const ccmap_preset presets[3] = {CCMAP_PRESET_SINGLE_CCM, CCMAP_PRESET_SINGLE_KALMAN, CCMAP_PRESET_SINGLE_OMG};
+  const char* const names[3] = {"single CCM", "single Kalman", "single OMG"};
   const float sensor[3] = {0.0f, 0.0f, 0.5f};
   size_t n = make_plane();
   int k;
-  storages[0] = &g_ccm_storage;
-  storages[1] = &g_kalman_storage;
-  storages[2] = &g_omg_storage;
-  sizes[0] = sizeof g_ccm_storage;
-  sizes[1] = sizeof g_kalman_storage;
-  sizes[2] = sizeof g_omg_storage;
   for (k = 0; k < 3; ++k) {
     ccmap_map* map = NULL;
     ccmap_query_result r;
     ccmap_frame_counters c;
     ccmap_params p = precise_lidar_params(presets[k]);
-    CHECK_STATUS(ccmap_place(storages[k], sizes[k], presets[k], &map), CCMAP_OK);
+    if (ccmap_storage_size(presets[k]) > sizeof g_single) {
+      ccmap_test_note("  skipped (its storage does not fit this target's RAM beside the CADRE maps):");
+      ccmap_test_note(names[k]);
+      continue;
+    }
+    CHECK_STATUS(ccmap_place(&g_single, sizeof g_single, presets[k], &map), CCMAP_OK);
     CHECK(ccmap_layer_count(map) == 1);
     CHECK(ccmap_layer_capacity(map, 0) == 256u * 256u);
     CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
@@ -322,13 +312,15 @@ static void test_single_layer_presets(void) {
   }
 }
 
-int main(void) {
+/* The whole C API test: one case (capi_case.cpp). CCMAP_TEST_PLATFORM_NAME: the platform
+ * library the build links ("posix" or "baremetal"). */
+void ccmap_capi_test(void) {
   ccmap_map* map = NULL;
   CHECK(strcmp(ccmap_status_string(CCMAP_OK), "ok") == 0);
   CHECK(strcmp(ccmap_status_string(CCMAP_CORRUPT), "corrupt") == 0);
   CHECK(strcmp(ccmap_status_string(CCMAP_VERSION_MISMATCH), "version_mismatch") == 0);
   CHECK(strcmp(ccmap_status_string((ccmap_status)99), "invalid_status") == 0);
-  CHECK(strcmp(ccmap_platform_name(), "posix") == 0);
+  CHECK(strcmp(ccmap_platform_name(), CCMAP_TEST_PLATFORM_NAME) == 0);
 
   test_storage_and_placement();
   CHECK_STATUS(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, &map), CCMAP_OK);
@@ -336,7 +328,4 @@ int main(void) {
   test_frames_queries_export(map);
   test_snapshots(map);
   test_single_layer_presets();
-
-  printf("ccmap C API: %d checks, %d failed\n", g_checks, g_failures);
-  return g_failures == 0 ? 0 : 1;
 }

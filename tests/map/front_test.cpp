@@ -50,6 +50,24 @@ float from_bits(std::uint32_t u) {
 /// floor(v * 2^18) in double (exact: a float times a power of two fits a double).
 std::int64_t reference_q18(float v) { return static_cast<std::int64_t>(std::floor(std::ldexp(double{v}, 18))); }
 
+TEST(Front, FloorToInt64EqualsTheCompilersConversion) {
+  // 1 <= v < 2^63: biased exponents 127 .. 189, with mantissas from the edges and between.
+  const std::uint32_t mantissas[] = {0x000000U, 0x000001U, 0x2AAAAAU, 0x400000U, 0x555555U, 0x7FFFFEU, 0x7FFFFFU};
+  int checked = 0;
+  for (std::uint32_t exponent = 127U; exponent <= 189U; ++exponent) {
+    for (const std::uint32_t mantissa : mantissas) {
+      const float v = from_bits((exponent << 23) | mantissa);
+      ASSERT_EQ(floor_to_int64(v), static_cast<std::int64_t>(v)) << "v = " << v;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 63 * 7);
+  EXPECT_EQ(floor_to_int64(1.0F), 1);
+  EXPECT_EQ(floor_to_int64(2.75F), 2);
+  EXPECT_EQ(floor_to_int64(8388607.5F), 8388607);  // 2^23 - 0.5: exact in float
+  EXPECT_EQ(floor_to_int64(9.0e18F), static_cast<std::int64_t>(9.0e18F));
+}
+
 TEST(Front, Q18ConversionIsTheExactFloor) {
   test::Rng rng(1);
   std::vector<float> values = {0.0F, -0.0F, 1e-45F, -1e-45F, 1.17549435e-38F, -3.0e-6F, 3.8146973e-6F,

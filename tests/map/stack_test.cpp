@@ -486,5 +486,22 @@ TEST(StackInit, BadParametersAreRefusedAndTheStackStaysUnusable) {
   EXPECT_EQ(stack->init(default_stack_params(0.04F)), Status::kOk);
 }
 
+TEST(StackContract, BadLayerIndexFiresTheAssertHookAndReturnsAnEmptyGrid) {
+  static int fired = 0;
+  fired = 0;
+  const AssertHook previous = set_assert_hook([](const char*, int, const char*) { ++fired; });
+  auto stack = make_stack<CadreConfig>(default_stack_params(0.04F));
+  EXPECT_EQ(stack->ccm_layer(3).side(), 32) << "a valid index answers its grid";
+  EXPECT_EQ(fired, 0);
+  for (const int bad : {-1, 4, 1000}) {
+    const RingGrid<CcmCell>& grid = stack->ccm_layer(bad);
+    EXPECT_FALSE(grid.initialised()) << "index " << bad << " must answer the empty grid";
+    EXPECT_EQ(grid.cell_count(), 0U);
+    EXPECT_EQ(grid.cell(CellIndex{0, 0}), nullptr);
+  }
+  EXPECT_EQ(fired, 3) << "each contract violation must reach the assert hook";
+  (void)set_assert_hook(previous);
+}
+
 }  // namespace
 }  // namespace ccmap

@@ -1,11 +1,15 @@
-// The 80 ms frame budget (paper: 850 x 650 px stereo at 80 ms on a Snapdragon 820), asserted on
-// the CADRE preset: Stack<CadreConfig> with default_stack_params(0.04F), fed 10 synthetic CADRE
-// frames of 552,500 points each (tests/support/cadre_frames.hpp), every point inside the stack.
-// The median frame update must stay under 80 ms; median and maximum are printed.
+// The 80 ms budget of the flight cycle (paper: 850 x 650 px stereo at 80 ms on a Snapdragon 820),
+// measured as a rover runs it: per frame move_to the new pose, update_frame_sensor with a CADRE
+// frame in the sensor frame (2 % NaN, 6 % beyond every IV-G range), and the planner's corridor
+// queries (tests/support/flight_cycle.hpp). Ten cycles, one attempt.
 //
-// Label `timing`: tools/test runs it alone after every other test, so nothing competes for the
-// cores. Under QEMU user mode the time is that of the emulator on this host, not of the target
-// (docs/performance.md argues what it does and does not say about the Snapdragon 820).
+// What is asserted: the median thread CPU time of the ten cycles (platform::thread_cpu_ns: time
+// the other core's load and preemption do not inflate) is below 80 ms; wall time is printed
+// beside it. Under QEMU user mode the time is the emulator's on this host, not the target's
+// (docs/performance.md); the deterministic budget is the instruction count of the same cycle
+// (tests/map/cycle_icount.cpp, label timing too).
+//
+// Label `timing`: tools/test runs it alone after every other test (RUN_SERIAL), once.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,38 +20,47 @@
 
 #include "ccmap/map/stack.hpp"
 #include "ccmap/platform/platform.hpp"
-#include "support/cadre_frames.hpp"
+#include "support/flight_cycle.hpp"
 
 namespace ccmap {
 namespace {
 
-constexpr int kFrames = 10;
+constexpr int kCycles = 10;
 constexpr double kBudgetMs = 80.0;
 
-TEST(Timing, CadreFrameMedianUnderTheEightyMillisecondBudget) {
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+TEST(Timing, FlightCycleMedianUnderTheEightyMillisecondBudget) {
   auto stack = std::make_unique<Stack<CadreConfig>>();
   ASSERT_EQ(stack->init(default_stack_params(0.04F)), Status::kOk);
-  std::vector<double> ms;
-  for (int k = 0; k < kFrames; ++k) {
+  std::vector<double> cpu_ms;
+  std::vector<double> wall_ms;
+  for (int k = 0; k < kCycles; ++k) {
     // Frames are generated outside the timed region (one at a time: 13 MB each).
-    const test::CadreFrame frame = test::make_cadre_frame(test::cadre_sequence_spec(k));
-    ASSERT_EQ(frame.map_points.size(), 552500U);
-    FrameCounters counters{};
-    const std::uint64_t start = platform::monotonic_ns();
-    ASSERT_EQ(stack->update_frame(frame.map_points.data(), frame.map_points.size(), frame.sensor_origin, &counters),
-              Status::kOk);
-    const std::uint64_t end = platform::monotonic_ns();
-    ASSERT_EQ(counters.used, 552500U) << "every synthetic CADRE point must land in the stack";
-    ms.push_back(static_cast<double>(end - start) * 1e-6);
+    const test::CadreFrame frame = test::cycle_frame(k);
+    const test::CyclePose pose = test::cycle_pose(k);
+    const std::uint64_t cpu0 = platform::thread_cpu_ns();
+    const std::uint64_t wall0 = platform::monotonic_ns();
+    const test::CycleOutcome outcome = test::run_cycle(*stack, pose, frame);
+    const std::uint64_t wall1 = platform::monotonic_ns();
+    const std::uint64_t cpu1 = platform::thread_cpu_ns();
+    ASSERT_TRUE(test::cycle_ok(outcome, frame.sensor_points.size()))
+        << "cycle " << k << ": used " << outcome.counters.used << ", non-finite " << outcome.counters.rejected_non_finite
+        << ", too noisy " << outcome.counters.too_noisy << ", corridor unknown " << outcome.corridor_unknown << " of "
+        << outcome.corridor_cells;
+    cpu_ms.push_back(static_cast<double>(cpu1 - cpu0) * 1e-6);
+    wall_ms.push_back(static_cast<double>(wall1 - wall0) * 1e-6);
   }
-  std::vector<double> sorted = ms;
-  std::sort(sorted.begin(), sorted.end());
-  const double median = 0.5 * (sorted[kFrames / 2 - 1] + sorted[kFrames / 2]);
-  const double maximum = sorted.back();
-  std::printf("[ timing ] CADRE frame update (552,500 points, %s): median %.2f ms, max %.2f ms, min %.2f ms "
-              "over %d frames (budget %.0f ms)\n",
-              platform::name(), median, maximum, sorted.front(), kFrames, kBudgetMs);
-  EXPECT_LT(median, kBudgetMs) << "median CADRE frame update " << median << " ms exceeds the 80 ms budget";
+  const double cpu = median(cpu_ms);
+  const double wall = median(wall_ms);
+  std::printf("[ timing ] flight cycle (move, sensor-frame update of 552,500 points, 1250 corridor queries), %s: "
+              "median CPU %.2f ms (max %.2f), median wall %.2f ms (max %.2f) over %d cycles (budget %.0f ms)\n",
+              platform::name(), cpu, *std::max_element(cpu_ms.begin(), cpu_ms.end()), wall,
+              *std::max_element(wall_ms.begin(), wall_ms.end()), kCycles, kBudgetMs);
+  EXPECT_LT(cpu, kBudgetMs) << "median flight cycle " << cpu << " ms of CPU exceeds the 80 ms budget";
 }
 
 }  // namespace

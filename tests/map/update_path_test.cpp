@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <memory>
 #include <string>
@@ -50,6 +51,14 @@ std::vector<test::CadreFrame> drive_frames() {
   return frames;
 }
 
+/// Inserts hostile points at spread positions of a frame.
+void mix_in(std::vector<PointXYZ>& pts, std::initializer_list<PointXYZ> hostile) {
+  std::size_t i = 0;
+  for (const PointXYZ& p : hostile) {
+    pts.insert(pts.begin() + static_cast<std::ptrdiff_t>((i++ * 7919U) % pts.size()), p);
+  }
+}
+
 template <typename Config>
 void map_frame_matches_the_model(const StackParams& params, bool with_weights) {
   auto stack = make_stack<Config>(params);
@@ -65,12 +74,9 @@ void map_frame_matches_the_model(const StackParams& params, bool with_weights) {
       const double dx = double{p.x} - o.x, dy = double{p.y} - o.y, dz = double{p.z} - o.z;
       if (model.safe_point(p.x, p.y, dx * dx + dy * dy + dz * dz, 1e-5)) pts.push_back(p);
     }
-    const PointXYZ hostile[] = {{kNan, 0.5F, 0.0F}, {0.5F, kInf, 0.0F}, {0.5F, 0.5F, -kInf}, {2.0e5F, 0.0F, 0.0F},
-                                {0.5F, -1.5e5F, 0.0F}, o, {o.x + 7.05F, o.y + 0.01F, 0.0F},
-                                {o.x + 1.0e4F, o.y + 0.01F, 0.0F}};
-    for (std::size_t i = 0; i < sizeof hostile / sizeof hostile[0]; ++i) {
-      pts.insert(pts.begin() + static_cast<std::ptrdiff_t>((i * 7919U) % pts.size()), hostile[i]);
-    }
+    // Every refusal reason, and the sensor origin itself (range 0).
+    mix_in(pts, {{kNan, 0.5F, 0.0F}, {0.5F, kInf, 0.0F}, {0.5F, 0.5F, -kInf}, {2.0e5F, 0.0F, 0.0F},
+                 {0.5F, -1.5e5F, 0.0F}, o, {o.x + 7.05F, o.y + 0.01F, 0.0F}, {o.x + 1.0e4F, o.y + 0.01F, 0.0F}});
     std::vector<float> weights;
     if (with_weights) {
       for (std::size_t i = 0; i < pts.size(); ++i) {
@@ -126,11 +132,8 @@ void sensor_frame_matches_the_model(const StackParams& params) {
         pts.push_back(s);
       }
     }
-    const PointXYZ hostile[] = {{kNan, 0.5F, 0.0F}, {0.5F, -kInf, 0.0F}, {2048.0F, 0.0F, 0.0F}, {0.0F, 0.0F, -3.0e4F},
-                                {0.0F, 0.0F, 0.0F}, {7.05F, 0.01F, 0.0F}};
-    for (std::size_t i = 0; i < sizeof hostile / sizeof hostile[0]; ++i) {
-      pts.insert(pts.begin() + static_cast<std::ptrdiff_t>((i * 7919U) % pts.size()), hostile[i]);
-    }
+    mix_in(pts, {{kNan, 0.5F, 0.0F}, {0.5F, -kInf, 0.0F}, {2048.0F, 0.0F, 0.0F}, {0.0F, 0.0F, -3.0e4F},
+                 {0.0F, 0.0F, 0.0F}, {7.05F, 0.01F, 0.0F}});
     FrameCounters c{};
     ASSERT_EQ(stack->update_frame_sensor(pts.data(), pts.size(), pose, &c), Status::kOk);
     const auto m = model.frame_sensor(pts, pose);

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "ccmap/map/types.hpp"
@@ -41,6 +42,11 @@ struct CadreFrameSpec {
   float heading_cos = 1.0F;
   float heading_sin = 0.0F;
   std::uint32_t seed = 1U;  ///< noise seed; 0 -> no range noise
+  /// Shares of pixels a stereo matcher does not deliver as usable ground points, chosen by an
+  /// integer hash of the pixel (deterministic): `invalid_share` NaN (no disparity), `far_share`
+  /// pushed along their ray to 6..15 m (sky, far hills, mismatches: beyond every IV-G range).
+  float invalid_share = 0.0F;
+  float far_share = 0.0F;
 };
 
 struct CadreFrame {
@@ -99,18 +105,17 @@ struct XorShift {
 };
 }  // namespace detail_frames
 
-/// Builds one frame (image order: top row first, left to right). Allocates (test support).
-inline CadreFrame make_cadre_frame(const CadreFrameSpec& spec) {
+/// Writes one frame (image order: top row first, left to right) into the caller's buffers of
+/// width_px * height_px points each, and its sensor origin and pose. No heap (the bare-metal
+/// tests call it with static buffers).
+inline void fill_cadre_frame(const CadreFrameSpec& spec, PointXYZ* map_points, PointXYZ* sensor_points,
+                             PointXYZ* sensor_origin, Pose* pose) {
   using detail_frames::XorShift;
-  CadreFrame frame;
-  const std::size_t n = static_cast<std::size_t>(spec.width_px) * static_cast<std::size_t>(spec.height_px);
-  frame.map_points.resize(n);
-  frame.sensor_points.resize(n);
   const float h = spec.camera_height_m;
   const float c = spec.heading_cos;
   const float s = spec.heading_sin;
-  frame.sensor_origin = PointXYZ{spec.sensor_x, spec.sensor_y, h};
-  frame.pose = yaw_pose(c, s, PointXYZ{spec.sensor_x, spec.sensor_y, h});
+  *sensor_origin = PointXYZ{spec.sensor_x, spec.sensor_y, h};
+  *pose = yaw_pose(c, s, PointXYZ{spec.sensor_x, spec.sensor_y, h});
   XorShift rng{0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(spec.seed) * 0x2545F4914F6CDD1DULL)};
   // Rows linear in t = h / d, the tangent of the depression angle (a pinhole's row spacing).
   const float t_far = h / spec.far_m;
@@ -141,10 +146,35 @@ inline CadreFrame make_cadre_frame(const CadreFrameSpec& spec) {
         py *= scale;
         pz *= scale;
       }
-      frame.sensor_points[i] = PointXYZ{px, py, pz};
-      frame.map_points[i] = PointXYZ{spec.sensor_x + c * px - s * py, spec.sensor_y + s * px + c * py, h + pz};
+      // Unusable pixels (integer hash in [0, 1): portable).
+      const std::uint32_t hashed = static_cast<std::uint32_t>(
+          (static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(spec.seed) << 32)) >> 40);
+      const float u01 = static_cast<float>(hashed & 0xFFFFFFU) * (1.0F / 16777216.0F);
+      if (u01 < spec.invalid_share) {
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        px = nan;
+        py = nan;
+        pz = nan;
+      } else if (u01 < spec.invalid_share + spec.far_share) {
+        const float r = std::sqrt(px * px + py * py + pz * pz);
+        const float far = 6.0F + 9.0F * (u01 - spec.invalid_share) / spec.far_share;
+        px *= far / r;
+        py *= far / r;
+        pz *= far / r;
+      }
+      sensor_points[i] = PointXYZ{px, py, pz};
+      map_points[i] = PointXYZ{spec.sensor_x + c * px - s * py, spec.sensor_y + s * px + c * py, h + pz};
     }
   }
+}
+
+/// Builds one frame (fill_cadre_frame into vectors). Allocates (test support).
+inline CadreFrame make_cadre_frame(const CadreFrameSpec& spec) {
+  CadreFrame frame;
+  const std::size_t n = static_cast<std::size_t>(spec.width_px) * static_cast<std::size_t>(spec.height_px);
+  frame.map_points.resize(n);
+  frame.sensor_points.resize(n);
+  fill_cadre_frame(spec, frame.map_points.data(), frame.sensor_points.data(), &frame.sensor_origin, &frame.pose);
   return frame;
 }
 

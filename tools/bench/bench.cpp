@@ -8,6 +8,7 @@
 
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/flight_cycle.hpp"
 
 namespace {
 
@@ -67,6 +68,23 @@ void BM_CadreFrame100k(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s
 void BM_CellCcm(benchmark::State& s) { frame_update<ccmap::SingleCcmConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
 void BM_CellKalman(benchmark::State& s) { frame_update<ccmap::SingleKalmanConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
 void BM_CellOmg(benchmark::State& s) { frame_update<ccmap::SingleOmgConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
+// The flight cycle of the timing test (tests/support/flight_cycle.hpp): move_to, a sensor-frame
+// frame with 8 % unusable pixels, the 1250 corridor queries; ten frames of the drive, cycled.
+void BM_FlightCycle(benchmark::State& state) {
+  static const std::vector<CadreFrame> drive = [] {
+    std::vector<CadreFrame> f;
+    for (int k = 0; k < 10; ++k) f.push_back(ccmap::test::cycle_frame(k));
+    return f;
+  }();
+  auto stack = make_stack<ccmap::CadreConfig>(0.04F);
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const int cycle = static_cast<int>(k++ % drive.size());
+    benchmark::DoNotOptimize(ccmap::test::run_cycle(*stack, ccmap::test::cycle_pose(cycle), drive[static_cast<std::size_t>(cycle)]));
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * 850 * 650);
+}
+BENCHMARK(BM_FlightCycle)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CadreFrame)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CadreFrameSensor)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CadreFrame10k)->Unit(benchmark::kMicrosecond);

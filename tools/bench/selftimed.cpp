@@ -15,6 +15,7 @@
 #include "ccmap/map/stack.hpp"
 #include "ccmap/platform/platform.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/flight_cycle.hpp"
 
 namespace {
 
@@ -104,6 +105,27 @@ int main(int argc, char** argv) {
   std::printf("%-44s %12zu bytes\n", "sizeof Stack<SingleKalmanConfig>", sizeof(Stack<SingleKalmanConfig>));
   std::printf("%-44s %12zu bytes\n", "sizeof Stack<SingleOmgConfig>", sizeof(Stack<SingleOmgConfig>));
 
+  // The flight cycle of the timing test (move, sensor-frame update, corridor queries).
+  {
+    auto stack = make_stack<CadreConfig>(0.04F);
+    std::vector<double> wall;
+    std::vector<double> cpu;
+    for (int r = 0; r < reps; ++r) {
+      const int k = r % 10;
+      const test::CadreFrame frame = test::cycle_frame(k);
+      const std::uint64_t c0 = platform::thread_cpu_ns();
+      const std::uint64_t t0 = monotonic_ns();
+      const test::CycleOutcome o = test::run_cycle(*stack, test::cycle_pose(k), frame);
+      wall.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-6);
+      cpu.push_back(static_cast<double>(platform::thread_cpu_ns() - c0) * 1e-6);
+      if (!test::cycle_ok(o, frame.sensor_points.size())) {
+        std::fprintf(stderr, "flight cycle %d failed\n", r);
+        std::exit(1);
+      }
+    }
+    report("flight cycle (wall)", wall, "ms");
+    report("flight cycle (thread CPU)", cpu, "ms");
+  }
   // Full frame updates on the CADRE preset.
   {
     const auto cadre = frames_of(3, 850, 650);

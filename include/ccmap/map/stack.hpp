@@ -328,16 +328,18 @@ class Stack {
   [[nodiscard]] Status begin_frame(const PointXYZ* points, std::size_t n, const PointXYZ& origin, const float* rotation,
                                    detail::FramePose* pose, FrameCounters& frame, FrameCounters* counters,
                                    std::uint64_t* start) noexcept {
-    Status status = Status::kOk;
     if (!initialised_) {
       write_counters(frame, counters);
       return Status::kNotInitialised;
     }
-    if ((points == nullptr && n > 0U) || n > 0xFFFFFFFFULL) {
-      status = Status::kInvalidArgument;
-    } else {
-      status = detail::make_frame_pose(origin, rotation, pose);
+    bool too_many = false;
+    // Frame counters are 32-bit. A 32-bit size_t (Cortex-M) cannot exceed them, and there the
+    // comparison would be always false (-Wtype-limits under the warning wall).
+    if constexpr (sizeof(std::size_t) > sizeof(std::uint32_t)) {
+      too_many = n > 0xFFFFFFFFULL;
     }
+    const Status status = ((points == nullptr && n > 0U) || too_many) ? Status::kInvalidArgument
+                                                                      : detail::make_frame_pose(origin, rotation, pose);
     if (status != Status::kOk) {
       ++rejected_frames_;
       write_counters(frame, counters);

@@ -123,14 +123,21 @@ class NoiseModel {
   [[nodiscard]] float lidar_sigma_per_m() const noexcept { return lidar_sigma_per_m_; }
 
  private:
+  // Every member starts at zero: a default model is all zero bytes, so a static map holding one
+  // is zero-initialised (.bss) instead of being an image of initial values (.data, in flash).
+  /// What the factory found in the parameters; kUnset: no factory made this model.
+  enum class ParamState : std::uint8_t { kUnset = 0, kOk, kNonFinite, kInvalid };
+  /// param_state_ as a Status (kUnset: kNotInitialised).
+  [[nodiscard]] Status param_status() const noexcept;
+
   SensorKind kind_ = SensorKind::kStereo;
   WeightMode weight_mode_ = WeightMode::kConstant;
-  Status param_status_ = Status::kNotInitialised;
+  ParamState param_state_ = ParamState::kUnset;
   Status weight_status_ = Status::kOk;
   float stereo_k_ = 0.0F;           ///< sigma_d / (f * b), 1/m (stereo)
   float lidar_sigma0_m_ = 0.0F;     ///< m (lidar)
   float lidar_sigma_per_m_ = 0.0F;  ///< m/m (lidar)
-  float reference_range_m_ = 1.0F;  ///< m
+  float reference_range_m_ = 0.0F;  ///< m (set_weight_mode, which both factories call)
   float reference_sigma_m_ = 0.0F;  ///< sigma at the reference range (m)
 };
 
@@ -189,7 +196,9 @@ struct RoutingTable {
 
   /// First layer k with range_sq <= max_range_sq[k]; -1 if the point is too noisy for every
   /// layer, or if range_sq is not > 0 (NaN, negative, or the sensor origin itself) or +inf.
-  /// No sqrt, no division: at most kLayers + 1 compares.
+  /// No sqrt, no division: at most kLayers + 1 compares. This is the routing rule in float; the
+  /// stack routes in fixed point (map/detail/front.hpp, the bounds of this table as keys), and
+  /// tests/map/front_test.cpp holds that against this function on double-precision ranges.
   [[nodiscard]] int select(float range_sq) const noexcept {
     if (!(range_sq > 0.0F)) {
       return -1;

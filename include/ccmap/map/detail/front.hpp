@@ -64,36 +64,49 @@ enum : std::uint32_t {
   return u;
 }
 
-/// floor(v * 2^18) for the float with bit pattern `bits`, exact, in integer operations.
-/// Meaningful for finite |v| < 2^17 m (callers compare |bits| with kMaxAbsCoordinateM = 1e5 m);
-/// for other bit patterns the result is some value (the shift is clamped: no undefined
-/// behaviour, so vectorised lanes of refused points are harmless).
-/// v = s * 2^(e - 150) with s the 24-bit significand and e the biased exponent, so
-/// v * 2^18 = (s * 2^11) * 2^(e - 143): a left shift by 11 (at most 2^35), then an arithmetic
-/// right shift by 143 - e >= 0 of the signed value, which floors negative values.
-[[nodiscard]] inline std::int64_t q18_floor(std::uint32_t bits) noexcept {
-  const auto biased = static_cast<std::int32_t>((bits >> 23) & 0xFFU);
-  const std::int64_t significand = static_cast<std::int64_t>(bits & 0x7FFFFFU) | (biased != 0 ? 0x800000 : 0);
-  const std::int32_t exponent = biased + (biased == 0 ? 1 : 0);
-  std::int64_t shift = 143 - exponent;
-  shift = shift < 0 ? 0 : (shift > 63 ? 63 : shift);
-  const std::int64_t sign = -static_cast<std::int64_t>(bits >> 31);  // 0 or -1
-  const std::int64_t value = ((significand << 11) ^ sign) - sign;
+/// floor(v) as int64 for 1 <= v < 2^63, from the bit pattern in integer operations only. A
+/// static_cast calls libgcc's __aeabi_f2lz on 32-bit Arm, which converts through double
+/// (__aeabi_f2d, __aeabi_dmul) when the FPU is single precision (Cortex-M7 FPv5-SP): no double
+/// may enter the core's image (tests/baremetal, link.no_soft_double). Per-frame and init-time
+/// constants only.
+[[nodiscard]] inline std::int64_t floor_to_int64(float v) noexcept {
+  const std::uint32_t bits = bits_of(v);
+  const std::int32_t exponent = static_cast<std::int32_t>((bits >> 23) & 0xFFU) - 150;  // v = significand * 2^exponent
+  const std::uint64_t significand = (bits & 0x7FFFFFU) | 0x800000U;  // v >= 1: normal
+  return static_cast<std::int64_t>(exponent >= 0 ? significand << exponent : significand >> -exponent);
+}
+
+/// floor(v * 2^18) for the float with bit pattern `bits`, exact, in integer operations of type
+/// Int, for |v| < 2^kMagnitudeBits m: v = s * 2^(e - 150) with s the 24-bit significand and e the
+/// biased exponent, so v * 2^18 = (s * 2^L) * 2^(e - 150 + 18 - L) with L = kMagnitudeBits - 6:
+/// a left shift by L (the largest |v| fills the type), then an arithmetic right shift by
+/// 126 + kMagnitudeBits - e >= 0 of the signed value, which floors negative values. For other bit
+/// patterns the result is some value (the shift is clamped: no undefined behaviour, so vectorised
+/// lanes of refused points are harmless).
+template <typename Int, int kMagnitudeBits>
+[[nodiscard]] inline Int q18_floor_bits(std::uint32_t bits) noexcept {
+  static_assert(kMagnitudeBits - 6 + 24 < static_cast<int>(sizeof(Int) * 8), "the shifted significand must fit");
+  constexpr int kLeft = kMagnitudeBits - 6;
+  constexpr Int kMaxShift = static_cast<Int>(sizeof(Int) * 8 - 1);
+  const auto biased = static_cast<Int>((bits >> 23) & 0xFFU);
+  const Int significand = static_cast<Int>(bits & 0x7FFFFFU) | (biased != 0 ? Int{0x800000} : Int{0});
+  const Int exponent = biased + (biased == 0 ? Int{1} : Int{0});
+  Int shift = static_cast<Int>(126 + kMagnitudeBits) - exponent;
+  shift = shift < 0 ? Int{0} : (shift > kMaxShift ? kMaxShift : shift);
+  const Int sign = -static_cast<Int>(bits >> 31);  // 0 or -1
+  const Int value = ((significand << kLeft) ^ sign) - sign;
   return value >> shift;  // arithmetic shift: gcc/clang, standard in C++20
 }
 
-/// floor(v * 2^18) for |v| < 2^11 m as int32 (the sensor-frame conversion): the same value as
-/// q18_floor, in 32-bit operations (v * 2^18 = (s * 2^5) * 2^(e - 137)). Meaningful for
-/// |bits| < bits_of(2048.0F); the shift is clamped for other bit patterns.
+/// floor(v * 2^18) of a map-frame coordinate (|v| <= kMaxAbsCoordinateM = 1e5 m < 2^17), int64.
+[[nodiscard]] inline std::int64_t q18_floor(std::uint32_t bits) noexcept {
+  return q18_floor_bits<std::int64_t, 17>(bits);
+}
+
+/// floor(v * 2^18) of a sensor-frame coordinate (|v| < 2^11 m), int32: the same value as
+/// q18_floor, in 32-bit operations (4 lanes per NEON vector).
 [[nodiscard]] inline std::int32_t q18_floor_small(std::uint32_t bits) noexcept {
-  const auto biased = static_cast<std::int32_t>((bits >> 23) & 0xFFU);
-  const std::int32_t significand = static_cast<std::int32_t>(bits & 0x7FFFFFU) | (biased != 0 ? 0x800000 : 0);
-  const std::int32_t exponent = biased + (biased == 0 ? 1 : 0);
-  std::int32_t shift = 137 - exponent;
-  shift = shift < 0 ? 0 : (shift > 31 ? 31 : shift);
-  const std::int32_t sign = -static_cast<std::int32_t>(bits >> 31);
-  const std::int32_t value = ((significand << 5) ^ sign) - sign;
-  return value >> shift;
+  return q18_floor_bits<std::int32_t, 11>(bits);
 }
 
 /// Constants of the front, derived at init from the finest cell width and the routing table.

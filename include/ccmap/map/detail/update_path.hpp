@@ -32,7 +32,9 @@ namespace ccmap::detail {
 [[nodiscard]] inline float relative_to_centre(std::int64_t q18, std::int32_t index, std::int64_t width_q40) noexcept {
   constexpr std::int64_t kHalfQ18InQ40 = std::int64_t{1} << 21;
   // |q18| < 2^35 -> |q40| < 2^57; |index * width_q40| <= 1e5 m * 2^40 < 2^57: no overflow.
-  const std::int64_t relative = (q18 << 22) + kHalfQ18InQ40 - (std::int64_t{index} * width_q40 + (width_q40 >> 1));
+  const std::int64_t point_q40 = q18 * (std::int64_t{1} << 22) + kHalfQ18InQ40;
+  const std::int64_t centre_q40 = static_cast<std::int64_t>(index) * width_q40 + width_q40 / 2;
+  const std::int64_t relative = point_q40 - centre_q40;
   return static_cast<float>(relative) * 9.09494702e-13F;  // 2^-40
 }
 
@@ -47,7 +49,7 @@ class UpdatePath {
     const Status status = make_front_config(layers.widths[0], max_range_sq_m2, Layers::kLayerCount, &front_);
     for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
       // Exact: a float width >= 2^-17 m times 2^40 is an integer below 2^47 (validated widths).
-      width_q40_[layer] = static_cast<std::int64_t>(layers.widths[layer] * 1099511627776.0F);
+      width_q40_[layer] = floor_to_int64(layers.widths[layer] * 1099511627776.0F);
     }
     constant_weight_ = params.noise.weight_mode() == sensor::WeightMode::kConstant;
     stereo_ = params.noise.kind() == sensor::SensorKind::kStereo && params.noise.validate() == Status::kOk;
@@ -108,9 +110,11 @@ class UpdatePath {
       if constexpr (kKalman) {
         if (code == 0 && unit_weights) {
           // Unsigned wrap: inside iff 0 <= index - min < side (|index|, |min| <= 2^30 + 2^14).
+          constexpr auto kSide = static_cast<std::uint32_t>(Config::kFineSide);
           const std::uint32_t rx = static_cast<std::uint32_t>(chunk_.ix0[i]) - static_cast<std::uint32_t>(fine_min.x);
           const std::uint32_t ry = static_cast<std::uint32_t>(chunk_.iy0[i]) - static_cast<std::uint32_t>(fine_min.y);
-          if (rx < static_cast<std::uint32_t>(Config::kFineSide) && ry < static_cast<std::uint32_t>(Config::kFineSide)) {
+          // cppcheck-suppress unsignedLessThanZero ; kSide is 0 only where kKalman is false
+          if (rx < kSide && ry < kSide) {
             kalman_point(CellIndex{chunk_.ix0[i], chunk_.iy0[i]}, i);
             ++c.used;
             continue;
@@ -245,9 +249,10 @@ class UpdatePath {
                                (static_cast<float>(rest) + 0.5F * static_cast<float>(count)) / static_cast<float>(count);
         const float mean_z = mean_q14 * 6.10351562e-5F;  // 2^-14
         // Mean squared range from the keys (floored to 2^-12 m^2: + half a key removes the bias).
-        const float mean_key = static_cast<float>(sum.sum_range_key / sum.count) +
-                               (static_cast<float>(sum.sum_range_key % sum.count) + 0.5F * static_cast<float>(count)) /
-                                   static_cast<float>(count);
+        const std::uint64_t whole_key = sum.sum_range_key / sum.count;  // integer mean, then the rest
+        const std::uint64_t rest_key = sum.sum_range_key % sum.count;
+        const float mean_key = static_cast<float>(whole_key) +
+                               (static_cast<float>(rest_key) + 0.5F * static_cast<float>(count)) / static_cast<float>(count);
         const float variance = fine_measurement_variance(params, mean_key * 2.44140625e-4F);  // 2^-12 m^2
         kalman_update_batch_unchecked(cells[slot], mean_z, variance, sum.count, params.kalman_min_variance);
         sum = FineFrameSum{};

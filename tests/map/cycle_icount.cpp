@@ -1,0 +1,74 @@
+// The deterministic budget of the flight cycle: the aarch64 instructions one cycle executes,
+// counted under QEMU by the project's plugin (tools/qemu-icount) between markers around the cycle
+// alone (frame generation is outside them). The same binary counts the same instructions: the
+// ctest cannot flake. Registered in tests/map/CMakeLists.txt with the limits (label timing):
+//   region 1: every cycle (move_to + update_frame_sensor + corridor queries)
+//   region 2: the update_frame_sensor calls alone (for the per-point figures)
+//   region 3: the update_frame calls of the same points in the map frame (the 1.25x ratio)
+// On other targets the markers are empty and the program only checks the cycles.
+//
+//   ccmap_cycle_icount [cycles]     default 3 (full 850 x 650 frames)
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "ccmap/map/stack.hpp"
+#include "support/flight_cycle.hpp"
+#include "support/icount_marker.hpp"
+
+namespace {
+
+template <std::uint32_t kRegion, typename Fn>
+auto counted(Fn&& fn) {
+  ccmap::test::icount_begin<kRegion>();
+  auto result = fn();
+  ccmap::test::icount_end<kRegion>();
+  return result;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int cycles = argc > 1 ? std::atoi(argv[1]) : 3;
+  if (cycles < 1 || cycles > 100) {
+    std::fprintf(stderr, "usage: ccmap_cycle_icount [cycles 1..100]\n");
+    return 2;
+  }
+  // Heap, as the timing test: a count is of a binary, and the stack's placement changes code.
+  const auto stack = std::make_unique<ccmap::Stack<ccmap::CadreConfig>>();
+  const auto sensor_only = std::make_unique<ccmap::Stack<ccmap::CadreConfig>>();
+  const auto map_only = std::make_unique<ccmap::Stack<ccmap::CadreConfig>>();
+  for (auto* s : {stack.get(), sensor_only.get(), map_only.get()}) {
+    if (s->init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) {
+      std::fprintf(stderr, "ccmap_cycle_icount: init failed\n");
+      return 1;
+    }
+  }
+  for (int k = 0; k < cycles; ++k) {
+    const ccmap::test::CadreFrame frame = ccmap::test::cycle_frame(k);
+    const ccmap::test::CyclePose pose = ccmap::test::cycle_pose(k);
+    const ccmap::test::CycleOutcome outcome =
+        counted<1>([&] { return ccmap::test::run_cycle(*stack, pose, frame); });
+    if (!ccmap::test::cycle_ok(outcome, frame.sensor_points.size())) {
+      std::fprintf(stderr, "ccmap_cycle_icount: cycle %d did not do its work\n", k);
+      return 1;
+    }
+    // The update alone, sensor frame and map frame, on stacks that follow the same drive.
+    (void)sensor_only->move_to(pose.x, pose.y);
+    (void)map_only->move_to(pose.x, pose.y);
+    const ccmap::Status sensor_status = counted<2>([&] {
+      return sensor_only->update_frame_sensor(frame.sensor_points.data(), frame.sensor_points.size(), frame.pose,
+                                              nullptr);
+    });
+    const ccmap::Status map_status = counted<3>([&] {
+      return map_only->update_frame(frame.map_points.data(), frame.map_points.size(), frame.sensor_origin, nullptr);
+    });
+    if (sensor_status != ccmap::Status::kOk || map_status != ccmap::Status::kOk) {
+      std::fprintf(stderr, "ccmap_cycle_icount: update refused in cycle %d\n", k);
+      return 1;
+    }
+  }
+  std::printf("ccmap_cycle_icount: %d cycles of %d x %d points\n", cycles, ccmap::test::kCycleWidthPx,
+              ccmap::test::kCycleHeightPx);
+  return 0;
+}
