@@ -368,6 +368,58 @@ TEST(CliQuery, AnswersAtAMapFramePoint) {
 }
 
 // =============================================================================================
+// The CCM cell: full (lateral covariance) by default, the paper's 9 floats with --paper-cell
+// =============================================================================================
+
+TEST(CliMap, DiagonalHalfCellsOnATwelveDegreePlaneWithBothCells) {
+  // Issue 11's measurement: every 16 cm cell of a 12 deg plane along y seen on one diagonal half
+  // (x + y < 0 relative to the cell centre), points on a 5 mm grid. The paper's cell reports
+  // slope_x = -b/2 (sigma_xy = -sigma_xx / 2 on that triangle) and calls the cell covered; the
+  // full cell gives slope_x = 0 and calls it unknown (its smaller lateral eigenvalue is w^2/36).
+  const fs::path dir = temp_dir();
+  const double b = std::tan(12.0 * M_PI / 180.0), w = 0.16, x0 = 0.16 * 4000.0, y0 = 0.16 * 9000.0;
+  {
+    std::ofstream out(dir / "diagonal.xyz");
+    out.precision(12);
+    for (int j = 0; j < 320; ++j) {
+      for (int i = 0; i < 320; ++i) {
+        const double lx = 0.0025 + 0.005 * i, ly = 0.0025 + 0.005 * j;  // local, from the square's corner
+        const double fx = std::fmod(lx, w), fy = std::fmod(ly, w);     // from the cell's corner
+        if (fx + fy >= w - 1e-9) continue;                              // the seen half: x + y < 0
+        out << x0 + lx << ' ' << y0 + ly << ' ' << 10.0 + b * ly << '\n';
+      }
+    }
+  }
+  for (const bool paper : {false, true}) {
+    std::vector<std::string> args = {"map", "--preset", "ccm", "--res", "0.16", "--cloud", (dir / "diagonal.xyz").string(),
+                                     "--out", (dir / (paper ? "paper" : "full")).string()};
+    if (paper) args.push_back("--paper-cell");
+    const CliRun r = run(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find(paper ? "CCM cell paper (9 floats)" : "CCM cell full (10 floats)"), std::string::npos) << r.out;
+    const std::vector<LayerCellRow> rows = read_rows(dir / (paper ? "paper" : "full") / "layer_0.csv");
+    int inner = 0;
+    for (const LayerCellRow& c : rows) {
+      const double lx = c.cx - x0, ly = c.cy - y0;
+      if (lx < w || ly < w || lx > 1.6 - w || ly > 1.6 - w) continue;  // inner cells of the 1.6 m square
+      ++inner;
+      if (paper) {
+        EXPECT_NEAR(c.slope_x, -0.5 * b, 0.01) << "paper cell: slope_x on a diagonal half";
+        EXPECT_EQ(c.cell_class, "traversable") << "paper cell: covered per axis";
+      } else {
+        EXPECT_NEAR(c.slope_x, 0.0, 2e-3) << "full cell: slope_x off 0 on a 12 deg plane along y";
+        EXPECT_NEAR(c.slope_y, b, 2e-3) << "full cell: slope_y off tan 12 deg";
+        EXPECT_EQ(c.cell_class, "unknown") << "full cell: a diagonal half cell is not covered";
+      }
+    }
+    EXPECT_EQ(inner, 64) << "test premise: the inner 8 x 8 cells of the 10 x 10 square";
+  }
+  const CliRun kf = run({"map", "--preset", "kf", "--paper-cell", "--cloud", (dir / "diagonal.xyz").string(), "--out",
+                         (dir / "kf").string()});
+  expect_one_line_error(kf, "--paper-cell", "--paper-cell with a preset without CCM layers");
+}
+
+// =============================================================================================
 // Errors: one line, non-zero exit, no output files
 // =============================================================================================
 

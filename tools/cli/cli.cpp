@@ -36,9 +36,13 @@ constexpr const char* kMainHelp =
 constexpr const char* kMapHelp =
     "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR\n"
     "                 [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
+    "                 [--paper-cell]\n"
     "\n"
     "  --preset NAME   cadre: 4 cm piece-wise constant Kalman layer, then 8/16/32/64 cm CCM layers\n"
     "                  ccm, kf, omg: one 256 x 256 layer of CCM, Kalman or OMG cells\n"
+    "  --paper-cell    CCM cells of the paper's 9 floats (slopes per axis, eq. 9; coverage per\n"
+    "                  axis, eq. 12) instead of the full cell with the lateral covariance (the\n"
+    "                  least-squares plane; coverage by the smaller eigenvalue); cadre and ccm only\n"
     "  --res METRES    finest cell width (default 0.04 for cadre, 0.08 otherwise); the layers of\n"
     "                  cadre keep their 1:2:4:8:16 ratios\n"
     "  --wl W_L        weight limit W_l of CCM and OMG cells (default 1000)\n"
@@ -63,6 +67,7 @@ constexpr const char* kMapHelp =
 constexpr const char* kQueryHelp =
     "usage: ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --at X,Y\n"
     "                   [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
+    "                   [--paper-cell]\n"
     "\n"
     "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
     "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
@@ -112,6 +117,7 @@ struct Options {
   double at_x = 0.0, at_y = 0.0;
   SensorChoice sensor = SensorChoice::kLidar;
   double sigma = 0.005;
+  bool paper_cell = false;
   bool help = false;
 };
 
@@ -124,6 +130,10 @@ Options parse_options(int argc, char** argv) {
     bool have_value = false;
     if (arg == "--help" || arg == "-h") {
       o.help = true;
+      continue;
+    }
+    if (arg == "--paper-cell") {
+      o.paper_cell = true;
       continue;
     }
     if (arg.rfind("--", 0) != 0) fail("unexpected argument '" + arg + "' (options start with --)", 2);
@@ -197,7 +207,7 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
   if (o.preset.empty()) fail("--preset is required (cadre, ccm, kf or omg)", 2);
   std::string error;
   MappedClouds m;
-  m.runner = make_map_runner(o.preset, &error);
+  m.runner = make_map_runner(o.preset, o.paper_cell, &error);
   if (!m.runner) fail(error, 2);
   if (o.clouds.empty()) fail("at least one --cloud FILE is required", 2);
 
@@ -251,6 +261,7 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
         for (double w : m.widths) out << ' ' << fmt("%g", w);
         out << " m, W_l " << fmt("%g", m.runner->weight_limit()) << ", min weight "
             << fmt("%g", m.runner->min_weight()) << ", sensor " << sensor_name(o);
+        if (preset_has_ccm(o.preset)) out << ", CCM cell " << (o.paper_cell ? "paper (9 floats)" : "full (10 floats)");
         if (o.sensor == SensorChoice::kLidar) out << " (sigma " << fmt("%g", o.sigma) << " m)";
         out << "\n";
         out << "origin (map frame): " << fmt("%.3f", m.origin[0]) << ' ' << fmt("%.3f", m.origin[1]) << ' '
