@@ -204,10 +204,10 @@ typedef struct ccmap_query_result {
   int32_t layer;              /* layer that answered (0 = finest), -1 if none holds the point */
   float cell_width_m;
   float height_m;             /* sub-cell height at the point (eq. 10) */
-  float slope_x;              /* dz/dx (eq. 9) */
+  float slope_x;              /* dz/dx of the cell's least-squares plane (ccm_surface) */
   float slope_y;
   float inclination;          /* sqrt(slope_x^2 + slope_y^2) */
-  float normal_variance;      /* sigma_s^2 (eq. 11), m^2 */
+  float normal_variance;      /* sigma_s^2 (eq. 11; the plane's residual), m^2 */
   float elevation_variance;   /* m^2 */
   float weight;
   int32_t cell_class;         /* ccmap_cell_class */

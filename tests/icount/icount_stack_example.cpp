@@ -6,9 +6,11 @@
 // float instructions per point; on other targets the markers are empty and this program just
 // checks that the updates succeed.
 //
-//   icount_stack_example [frames width_px height_px [sensor]]   default: 3 frames of 80 x 50 points
-//   (10 850 650: the timing test's ten full frames, docs/performance.md section 1.1; `sensor`
-//   folds the same frames in the sensor frame with update_frame_sensor and their pose)
+//   icount_stack_example [frames width_px height_px [map|sensor [full|paper]]]
+//   default: 3 frames of 80 x 50 points (10 850 650: the timing test's ten full frames,
+//   docs/performance.md section 1.1); `sensor` folds the same frames in the sensor frame with
+//   update_frame_sensor and their pose; `paper` maps into Stack<PaperCell<CadreConfig>> (the
+//   paper's 9-float CCM cell) instead of Stack<CadreConfig>
 //
 // The markers bracket the call, so the call's argument set-up (a handful of instructions) may
 // be counted too; against thousands of points per frame that is noise.
@@ -31,22 +33,13 @@ bool parse(const char* text, int max, int* value) {
   *value = static_cast<int>(v);
   return true;
 }
-}  // namespace
 
-int main(int argc, char** argv) {
-  int frames = 3;
-  int width_px = 80;
-  int height_px = 50;
-  const bool sensor_frame = argc == 5 && std::strcmp(argv[4], "sensor") == 0;
-  if (argc != 1 && ((argc != 4 && !sensor_frame) || !parse(argv[1], 1000, &frames) ||
-                    !parse(argv[2], 4000, &width_px) || !parse(argv[3], 4000, &height_px))) {
-    std::fprintf(stderr, "usage: icount_stack_example [frames (1..1000) width_px height_px (1..4000) [sensor]]\n");
-    return 2;
-  }
+template <typename Config>
+int run(int frames, int width_px, int height_px, bool sensor_frame) {
   const std::size_t points = static_cast<std::size_t>(width_px) * static_cast<std::size_t>(height_px);
   // On the heap (585 KB), as in tests/map/timing_test.cpp, so that both count the same code: a
   // count is of a binary, and where the stack lives can change the code emitted for it.
-  const auto stack = std::make_unique<ccmap::Stack<ccmap::CadreConfig>>();
+  const auto stack = std::make_unique<ccmap::Stack<Config>>();
   if (stack->init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) {
     std::fprintf(stderr, "icount_stack_example: Stack<CadreConfig> init failed\n");
     return 1;
@@ -67,7 +60,27 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  std::printf("icount_stack_example: %d %s-frame frames of %zu points updated (region 1)\n", frames,
-              sensor_frame ? "sensor" : "map", points);
+  std::printf("icount_stack_example: %d %s-frame frames of %zu points updated (region 1), %s CCM cells\n", frames,
+              sensor_frame ? "sensor" : "map", points,
+              ccmap::Stack<Config>::kCcmCellKind == ccmap::CcmCellKind::kFull ? "full" : "paper");
   return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  int frames = 3;
+  int width_px = 80;
+  int height_px = 50;
+  const bool sensor_frame = argc >= 5 && std::strcmp(argv[4], "sensor") == 0;
+  const bool paper_cell = argc >= 6 && std::strcmp(argv[5], "paper") == 0;
+  const bool good_path = argc < 5 || sensor_frame || std::strcmp(argv[4], "map") == 0;
+  const bool good_cell = argc < 6 || paper_cell || std::strcmp(argv[5], "full") == 0;
+  if (argc != 1 && (argc < 4 || argc > 6 || !good_path || !good_cell || !parse(argv[1], 1000, &frames) ||
+                    !parse(argv[2], 4000, &width_px) || !parse(argv[3], 4000, &height_px))) {
+    std::fprintf(stderr,
+                 "usage: icount_stack_example [frames (1..1000) width_px height_px (1..4000) [map|sensor [full|paper]]]\n");
+    return 2;
+  }
+  return paper_cell ? run<ccmap::PaperCell<ccmap::CadreConfig>>(frames, width_px, height_px, sensor_frame)
+                    : run<ccmap::CadreConfig>(frames, width_px, height_px, sensor_frame);
 }

@@ -88,7 +88,7 @@ inline bool hash_stack(const StackT& stack, CellRecord* records, std::size_t cap
 }
 
 // ---- the board-sized scenario ----------------------------------------------------------------
-// Sized for a controller with 1 MiB of SRAM: the CADRE map (585 KB) + one frame of 10,000
+// Sized for a controller with 1 MiB of SRAM: the CADRE map (582 KB) + one frame of 10,000
 // points (120 KB) + their weights (40 KB) + an export buffer for the largest layer (180 KB).
 // 24 frames along a curved path, cycling through the three update calls (map frame, sensor
 // frame, map frame with per-point weights), with hostile points, then queries on a grid.

@@ -88,6 +88,32 @@ void per_point_cost(const char* name, float width, const std::vector<ccmap::test
   report(name, ns, "ns/point");
 }
 
+/// The flight cycle of the timing test, `reps` cycles of the ten-frame drive: wall and thread CPU.
+template <typename Config>
+void flight_cycle(const char* name, int reps) {
+  auto stack = make_stack<Config>(0.04F);
+  std::vector<double> wall;
+  std::vector<double> cpu;
+  for (int r = 0; r < reps; ++r) {
+    const int k = r % 10;
+    const ccmap::test::CadreFrame frame = ccmap::test::cycle_frame(k);
+    const std::uint64_t c0 = ccmap::platform::thread_cpu_ns();
+    const std::uint64_t t0 = monotonic_ns();
+    const ccmap::test::CycleOutcome o = ccmap::test::run_cycle(*stack, ccmap::test::cycle_pose(k), frame);
+    wall.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-6);
+    cpu.push_back(static_cast<double>(ccmap::platform::thread_cpu_ns() - c0) * 1e-6);
+    if (!ccmap::test::cycle_ok(o, frame.sensor_points.size())) {
+      std::fprintf(stderr, "%s %d failed\n", name, r);
+      std::exit(1);
+    }
+  }
+  char label[64];
+  std::snprintf(label, sizeof label, "%s (wall)", name);
+  report(label, wall, "ms");
+  std::snprintf(label, sizeof label, "%s (thread CPU)", name);
+  report(label, cpu, "ms");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -104,34 +130,21 @@ int main(int argc, char** argv) {
   std::printf("%-44s %12zu bytes\n", "sizeof Stack<SingleCcmConfig>", sizeof(Stack<SingleCcmConfig>));
   std::printf("%-44s %12zu bytes\n", "sizeof Stack<SingleKalmanConfig>", sizeof(Stack<SingleKalmanConfig>));
   std::printf("%-44s %12zu bytes\n", "sizeof Stack<SingleOmgConfig>", sizeof(Stack<SingleOmgConfig>));
+  std::printf("%-44s %12zu bytes\n", "sizeof Stack<PaperCell<CadreConfig>>", sizeof(Stack<PaperCell<CadreConfig>>));
 
-  // The flight cycle of the timing test (move, sensor-frame update, corridor queries).
-  {
-    auto stack = make_stack<CadreConfig>(0.04F);
-    std::vector<double> wall;
-    std::vector<double> cpu;
-    for (int r = 0; r < reps; ++r) {
-      const int k = r % 10;
-      const test::CadreFrame frame = test::cycle_frame(k);
-      const std::uint64_t c0 = platform::thread_cpu_ns();
-      const std::uint64_t t0 = monotonic_ns();
-      const test::CycleOutcome o = test::run_cycle(*stack, test::cycle_pose(k), frame);
-      wall.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-6);
-      cpu.push_back(static_cast<double>(platform::thread_cpu_ns() - c0) * 1e-6);
-      if (!test::cycle_ok(o, frame.sensor_points.size())) {
-        std::fprintf(stderr, "flight cycle %d failed\n", r);
-        std::exit(1);
-      }
-    }
-    report("flight cycle (wall)", wall, "ms");
-    report("flight cycle (thread CPU)", cpu, "ms");
-  }
+  // The flight cycle of the timing test (move, sensor-frame update, corridor queries), with the
+  // full and with the paper's CCM cell (the difference is the lateral covariance's cost).
+  flight_cycle<CadreConfig>("flight cycle", reps);
+  flight_cycle<PaperCell<CadreConfig>>("flight cycle, paper cell", reps);
   // Full frame updates on the CADRE preset.
   {
     const auto cadre = frames_of(3, 850, 650);
     auto stack = make_stack<CadreConfig>(0.04F);
     report("cadre frame 552500 pts, map frame", time_frames(*stack, cadre, reps, false), "ms");
     report("cadre frame 552500 pts, sensor frame", time_frames(*stack, cadre, reps, true), "ms");
+    auto paper = make_stack<PaperCell<CadreConfig>>(0.04F);
+    report("cadre frame, map frame, paper cell", time_frames(*paper, cadre, reps, false), "ms");
+    report("cadre frame, sensor frame, paper cell", time_frames(*paper, cadre, reps, true), "ms");
   }
   {
     const auto small = frames_of(3, 125, 80);
@@ -145,6 +158,7 @@ int main(int argc, char** argv) {
   }
   // Per-point cost of each cell kind in the same run: one-layer stacks, 8 cm cells.
   per_point_cost<SingleCcmConfig>("per point, CCM cell (SingleCcm)", 0.08F, medium, reps);
+  per_point_cost<PaperCell<SingleCcmConfig>>("per point, CCM paper cell", 0.08F, medium, reps);
   per_point_cost<SingleKalmanConfig>("per point, Kalman cell (SingleKalman)", 0.08F, medium, reps);
   per_point_cost<SingleOmgConfig>("per point, OMG cell (SingleOmg)", 0.08F, medium, reps);
 

@@ -28,5 +28,11 @@ namespace ccmap {
                                      float threshold) noexcept;
 [[nodiscard]] CellClass classify_ccm(const CcmPaperCell& cell, float width, const StackParams& params,
                                      float threshold) noexcept;
+/// The same with the cell's surface already computed (`surface` must be ccm_surface(cell)): a
+/// query needs the surface for its answer anyway, and computes it once.
+[[nodiscard]] CellClass classify_ccm(const CcmCell& cell, const CcmSurface& surface, float width,
+                                     const StackParams& params, float threshold) noexcept;
+[[nodiscard]] CellClass classify_ccm(const CcmPaperCell& cell, const CcmSurface& surface, float width,
+                                     const StackParams& params, float threshold) noexcept;
 
 }  // namespace ccmap

@@ -327,7 +327,7 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 418,016 bytes (docs/integration.md lists every preset).
+/// CadreConfig: 458,976 bytes (PaperCell<CadreConfig>: 418,016; docs/integration.md lists every preset).
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();

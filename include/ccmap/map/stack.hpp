@@ -197,7 +197,7 @@ class Stack {
   // -------------------------------------------------------------------------------------------
 
   /// Answer from the finest layer that knows the cell at (x, y): a piece-wise constant cell
-  /// with at least min_weight, or a (pooled) CCM cell that passes the coverage test (eq. 12)
+  /// with at least min_weight, or a (pooled) CCM cell that passes the coverage test (ccm_is_covered)
   /// or is an obstacle (see classify_ccm).
   /// For an answer from the piece-wise constant layer, height and elevation variance come from
   /// it and slope, normal variance and class from the first CCM layer's pooled cell there when

@@ -61,14 +61,14 @@ class QueryView {
     out.cell_width_m = width;
     if (Layers::is_ccm(layer)) {
       const typename Layers::CcmCellType cell = pooled(layers_, params_.weight_limit, layer, index);
-      // Known: covered (eq. 12), or an obstacle already (classify_ccm: obstacle evidence wins).
-      const CellClass cell_class = classify_ccm(cell, width, params_, thresholds_[layer]);
+      const CcmSurface surface = ccm_surface(cell);
+      // Known: covered (ccm_is_covered), or an obstacle already (classify_ccm: obstacle evidence wins).
+      const CellClass cell_class = classify_ccm(cell, surface, width, params_, thresholds_[layer]);
       if (require_known && cell_class == CellClass::kUnknown) {
         return empty_result(Status::kUnknown, layer);
       }
       const float qx = x - grid::cell_centre(index.x, width);
       const float qy = y - grid::cell_centre(index.y, width);
-      const CcmSurface surface = ccm_surface(cell);
       out.weight = cell.weight;
       out.height_m = ccm_height_at(cell, surface, qx, qy);
       out.slope_x = surface.slope_x;

@@ -25,8 +25,8 @@ template <typename FineCell>
 /// Preconditions: LayerSet<Config>::is_ccm(layer) and the layer's window contains `index`
 /// (so 2 * index fits int32: windows stay within +-2^30).
 template <typename Config>
-[[nodiscard]] typename LayerSet<Config>::CcmCellType pooled(const LayerSet<Config>& layers, float weight_limit, int layer,
-                                                            CellIndex index) noexcept {
+[[nodiscard]] typename LayerSet<Config>::CcmCellType pooled(const LayerSet<Config>& layers, float weight_limit,
+                                                            int layer, CellIndex index) noexcept {
   using Layers = LayerSet<Config>;
   using Cell = typename Layers::CcmCellType;
   const Cell* own = layers.ccm_grid(layer).cell(index);
