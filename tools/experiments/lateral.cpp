@@ -184,7 +184,8 @@ LateralResult run_lateral(const LateralConfig& cfg) {
   r.slopes.push_back(pooled_case("pooled, 2 adjacent children, 20 deg along y", 0b0011, child, 0.0, b20));
   r.slopes.push_back(pooled_case("pooled, all 4 children, 20 deg along y", 0b1111, child, 0.0, b20));
   for (const double deg : {0.0, 15.0, 30.0, 45.0}) {
-    r.coverage.push_back(LateralCoverageRow{deg, needed_share<CcmPaperCell>(w, deg), needed_share<CcmCell>(w, deg)});
+    r.coverage.push_back(
+        LateralCoverageRow{deg, needed_share<CcmPaperCell>(w, deg), needed_share<CcmCell>(w, deg)});
   }
   return r;
 }

@@ -1,5 +1,8 @@
 // Converging Covariance Map (CCM) cell: state, incremental update, batch merge, weight
-// limiter, queries and pooling (paper Section IV, eqs. (1)-(15)).
+// limiter, queries and pooling (paper Section IV, eqs. (1)-(15)), for two cell types: CcmCell,
+// with the lateral covariance s_xy (the least-squares plane, rotation-invariant coverage; the
+// library default), and CcmPaperCell, the paper's 9 floats. Every function takes both; one
+// implementation each, the cross term compiled in or out (docs/design.md, "The CCM cell").
 //
 // Frames and units
 //  - x, y are metres relative to the geometric centre of the cell (paper eq. (2):
