@@ -12,42 +12,30 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include "cli.hpp"
+#include "cli_run.hpp"
 #include "csv_writer.hpp"
+#include "temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using ccmap::tools::LayerCellRow;
 
 namespace {
 
-struct CliRun {
-  int code;
-  std::string out;
-  std::string err;
-};
+using ccmap::test::CliRun;
+using ccmap::test::read_rows;
+using ccmap::test::summary_counts;
+using ccmap::test::XyzPoint;
 
-CliRun run(std::vector<std::string> args) {
-  args.insert(args.begin(), "ccmap");
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  std::ostringstream out, err;
-  const int code = ccmap::tools::run_cli(static_cast<int>(args.size()), argv.data(), out, err);
-  return CliRun{code, out.str(), err.str()};
-}
+CliRun run(std::vector<std::string> args) { return ccmap::test::run_ccmap(std::move(args)); }
 
-fs::path temp_dir() {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("ccmap_cli_test_" + std::to_string(::getpid()) + "_" +
-                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+/// The test's own temporary directory, removed at its end, also when it fails.
+using TempDir = ccmap::test::TempDir;
+const char* const kTempPrefix = "ccmap_cli_test_";
 
 /// Checks that a failed run printed exactly one line "ccmap: error: ..." containing `needle`.
 void expect_one_line_error(const CliRun& r, const std::string& needle, const std::string& what) {
@@ -72,34 +60,20 @@ struct Scene {
   }
 };
 
-/// Writes the scene as a binary little-endian PLY with double coordinates.
+/// Writes the scene (local x in [x_min_local, x_max_local)) as a binary PLY with double coordinates.
 void write_scene_ply(const fs::path& path, const Scene& s, double x_min_local = -kHalfSide,
                      double x_max_local = kHalfSide) {
-  std::vector<double> xyz;
+  std::vector<XyzPoint> points;
   const int n = static_cast<int>(std::lround(2 * kHalfSide / 0.01));
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       const double lx = -kHalfSide + 0.005 + 0.01 * i, ly = -kHalfSide + 0.005 + 0.01 * j;
       if (lx < x_min_local || lx >= x_max_local) continue;
       const double x = s.x0 + lx, y = s.y0 + ly;
-      xyz.insert(xyz.end(), {x, y, s.height(x, y)});
+      points.push_back(XyzPoint{x, y, s.height(x, y)});
     }
   }
-  std::ofstream out(path, std::ios::binary);
-  out << "ply\nformat binary_little_endian 1.0\nelement vertex " << xyz.size() / 3
-      << "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
-  out.write(reinterpret_cast<const char*>(xyz.data()), static_cast<std::streamsize>(xyz.size() * sizeof(double)));
-}
-
-std::vector<LayerCellRow> read_rows(const fs::path& path) {
-  std::ifstream in(path);
-  std::string header;
-  std::getline(in, header);
-  EXPECT_EQ(header, "layer,ix,iy,cx,cy,res,weight,height,slope_x,slope_y,normal_var,elev_var,class") << path;
-  std::vector<LayerCellRow> rows;
-  std::string error;
-  EXPECT_TRUE(ccmap::tools::read_layer_csv(path.string(), &rows, &error)) << error;
-  return rows;
+  ccmap::test::write_ply(path, points);
 }
 
 /// Checks an 8 cm CCM layer of the scene: every cell of the square observed, exact geometry
@@ -137,12 +111,6 @@ std::string data_dir() {
   return env != nullptr ? env : CCMAP_DEFAULT_DATA_DIR;
 }
 
-/// "points: read N, used M, ..." from the summary.
-bool summary_counts(const std::string& out, long long* read, long long* used) {
-  const std::size_t at = out.find("points: read ");
-  return at != std::string::npos && std::sscanf(out.c_str() + at, "points: read %lld, used %lld", read, used) == 2;
-}
-
 }  // namespace
 
 // =============================================================================================
@@ -150,7 +118,7 @@ bool summary_counts(const std::string& out, long long* read, long long* used) {
 // =============================================================================================
 
 TEST(CliMap, CcmPresetInclinedPlaneWithStepLocalCoordinates) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.0, 0.0, 0.0};
   write_scene_ply(dir / "scene.ply", s);
   const CliRun r = run({"map", "--preset", "ccm", "--cloud", (dir / "scene.ply").string(), "--out", (dir / "out").string()});
@@ -169,7 +137,7 @@ TEST(CliMap, CcmPresetInclinedPlaneWithStepLocalCoordinates) {
 
 TEST(CliMap, UtmSizedCoordinatesKeepMillimetres) {
   // x ~ 5.2e5, y ~ 4.9e6, z ~ 2235: float alone would have 3 cm / 50 cm steps here.
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
   write_scene_ply(dir / "utm.ply", s);
   const CliRun r = run({"map", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--out", (dir / "out").string()});
@@ -184,14 +152,14 @@ TEST(CliMap, UtmSizedCoordinatesKeepMillimetres) {
 }
 
 TEST(CliMap, CadrePresetWritesFiveLayersFinestFirst) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
   write_scene_ply(dir / "utm.ply", s);
   const CliRun r = run({"map", "--preset", "cadre", "--cloud", (dir / "utm.ply").string(), "--out", (dir / "out").string()});
   ASSERT_EQ(r.code, 0) << r.err;
   long long read = 0, used = 0;
   ASSERT_TRUE(summary_counts(r.out, &read, &used)) << r.out;
-  EXPECT_EQ(used, read) << "the 3.2 m square lies inside the 8 cm layer's +-2.56 m window";
+  EXPECT_EQ(used, read) << "without poses the stack is swept over the whole cloud";
   const double widths[5] = {0.04, 0.08, 0.16, 0.32, 0.64};
   for (int k = 0; k < 5; ++k) {
     const fs::path csv = dir / "out" / ("layer_" + std::to_string(k) + ".csv");
@@ -203,10 +171,13 @@ TEST(CliMap, CadrePresetWritesFiveLayersFinestFirst) {
       ASSERT_DOUBLE_EQ(row.res, widths[k]);
       EXPECT_NEAR(row.cx, (static_cast<double>(row.ix) + 0.5) * widths[k], 1e-6);
     }
+    // Every layer covers the whole 3.2 m square (tiled), not only its window around the origin.
+    const std::size_t cells_per_side = static_cast<std::size_t>(std::lround(3.2 / widths[k]));
+    const std::size_t coarse_side = k == 4 ? 6U : cells_per_side;  // 64 cm cells overlap the square's edges
+    EXPECT_EQ(rows.size(), coarse_side * coarse_side) << "layer " << k;
     if (k == 0) {
       // Piece-wise constant Kalman cells: height = mean of a symmetric 4 x 4 sample = the plane
-      // at the centre; slopes 0. The 4 cm layer spans +-1.28 m.
-      EXPECT_EQ(rows.size(), 64U * 64U);
+      // at the centre; slopes 0.
       for (const LayerCellRow& row : rows) {
         EXPECT_EQ(row.slope_x, 0.0);
         EXPECT_EQ(row.slope_y, 0.0);
@@ -217,10 +188,11 @@ TEST(CliMap, CadrePresetWritesFiveLayersFinestFirst) {
       }
     }
     if (k == 1) {
-      // 8 cm CCM cells outside the 4 cm window get the points directly: exact plane fits.
+      // Every point went to the 4 cm layer; 8 cm CCM cells pool their four Kalman children,
+      // which sample the plane at their centres: exact plane fits (docs/design.md 2.6).
       for (const LayerCellRow& row : rows) {
-        const double lx = row.cx - s.x0, ly = row.cy - s.y0;
-        if (std::max(std::fabs(lx), std::fabs(ly)) > 1.28 && std::fabs(lx - kStepX) > 0.05) {
+        const double lx = row.cx - s.x0;
+        if (std::fabs(lx - kStepX) > 0.05) {
           EXPECT_NEAR(row.height, s.height(row.cx, row.cy), 1e-3);
           EXPECT_NEAR(row.slope_x, kSlopeX, 2e-3);
           EXPECT_EQ(row.cell_class, "traversable");
@@ -232,7 +204,7 @@ TEST(CliMap, CadrePresetWritesFiveLayersFinestFirst) {
 }
 
 TEST(CliMap, ResAndWeightLimitFlags) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.0, 0.0, 0.0};
   write_scene_ply(dir / "scene.ply", s);
   const CliRun r = run({"map", "--preset=ccm", "--res", "0.16", "--wl", "50", "--cloud", (dir / "scene.ply").string(),
@@ -249,7 +221,7 @@ TEST(CliMap, ResAndWeightLimitFlags) {
 }
 
 TEST(CliMap, KalmanAndOmgPresets) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.0, 0.0, 0.0};
   write_scene_ply(dir / "scene.ply", s);
   for (const char* preset : {"kf", "omg"}) {
@@ -268,7 +240,7 @@ TEST(CliMap, KalmanAndOmgPresets) {
 }
 
 TEST(CliMap, TwoFramesWithPosesGiveTheSameMapAsOne) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
   write_scene_ply(dir / "west.ply", s, -kHalfSide, 0.0);
   write_scene_ply(dir / "east.ply", s, 0.0, kHalfSide);
@@ -288,7 +260,7 @@ TEST(CliMap, TwoFramesWithPosesGiveTheSameMapAsOne) {
 }
 
 TEST(CliMap, NonFinitePointsAreSkippedAndCounted) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   {
     std::ofstream out(dir / "pts.xyz");
     for (int j = 0; j < 40; ++j) {
@@ -305,10 +277,142 @@ TEST(CliMap, NonFinitePointsAreSkippedAndCounted) {
   EXPECT_EQ(used, 1600);
 }
 
+namespace {
+
+/// nx x ny points `spacing` apart at the centres of a grid from (x0, y0), on z = 5 + 0.1 (x - x0).
+std::vector<XyzPoint> good_patch(int nx, int ny, double x0, double y0, double spacing) {
+  std::vector<XyzPoint> points;
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const double x = x0 + spacing * (i + 0.5), y = y0 + spacing * (j + 0.5);
+      points.push_back(XyzPoint{x, y, 5.0 + 0.1 * (x - x0)});
+    }
+  }
+  return points;
+}
+
+/// The set of (ix, iy) cells of width w holding the points.
+std::set<std::pair<long long, long long>> cells_of(const std::vector<XyzPoint>& points, double w) {
+  std::set<std::pair<long long, long long>> cells;
+  for (const XyzPoint& p : points) cells.insert({std::llround(std::floor(p.x / w)), std::llround(std::floor(p.y / w))});
+  return cells;
+}
+
+std::set<std::pair<long long, long long>> cells_of(const std::vector<LayerCellRow>& rows) {
+  std::set<std::pair<long long, long long>> cells;
+  for (const LayerCellRow& r : rows) cells.insert({r.ix, r.iy});
+  return cells;
+}
+
+}  // namespace
+
+TEST(CliMap, HostileValuesBesideGoodPointsAreCountedAndTheGoodOnesMapped) {
+  // 300 good points and four bad lines: before, the origin was the centroid of every parsed
+  // value (-5.9e18), every point fell out of range, and the CADRE picture window overflowed int64.
+  const TempDir dir(kTempPrefix);
+  const std::vector<XyzPoint> good = good_patch(20, 15, 12.3, 45.6, 0.01);
+  {
+    std::ofstream out(dir / "hostile.xyz");
+    out.precision(17);
+    for (const XyzPoint& p : good) out << p.x << ' ' << p.y << ' ' << p.z << "\n";
+    out << "nan 0 0\n0 inf 0\n1e30 1e30 1e30\n-1e38 0 0\n";
+  }
+  for (const char* preset : {"ccm", "cadre", "kf"}) {
+    const CliRun r = run({"map", "--preset", preset, "--cloud", (dir / "hostile.xyz").string(), "--out",
+                          (dir / preset).string()});
+    ASSERT_EQ(r.code, 0) << preset << ": " << r.err;
+    long long read = 0, used = 0;
+    ASSERT_TRUE(summary_counts(r.out, &read, &used)) << r.out;
+    EXPECT_EQ(read, 304) << preset;
+    EXPECT_EQ(used, 300) << preset << ": every good point is mapped\n" << r.out;
+    EXPECT_EQ(ccmap::test::summary_count(r.out, "non-finite "), 2) << r.out;
+    EXPECT_EQ(ccmap::test::summary_count(r.out, "out of range "), 2) << "1e30 and -1e38 are out of range\n" << r.out;
+    // The origin is the good points' median, rounded to the coarsest cell width.
+    double ox = 0, oy = 0, oz = 0;
+    const std::size_t at = r.out.find("origin (map frame): ");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    ASSERT_EQ(std::sscanf(r.out.c_str() + at, "origin (map frame): %lf %lf %lf", &ox, &oy, &oz), 3) << r.out;
+    EXPECT_LT(std::fabs(ox - 12.4), 0.33) << r.out;
+    EXPECT_LT(std::fabs(oy - 45.675), 0.33) << r.out;
+    EXPECT_LT(std::fabs(oz - 5.01), 0.33) << r.out;
+    const std::vector<LayerCellRow> rows = read_rows(dir / preset / "layer_0.csv");
+    const double w = std::string(preset) == "cadre" ? 0.04 : 0.08;
+    EXPECT_EQ(cells_of(rows), cells_of(good, w)) << preset << ": the layer holds exactly the good points' cells";
+  }
+}
+
+TEST(CliMap, OneFarReturnNeitherMovesTheOriginNorDropsGoodPoints) {
+  // 900 good points within a 0.6 m patch and one return 12.7 km away: before, the centroid
+  // moved the window and 3 % of the good points fell outside the map.
+  const TempDir dir(kTempPrefix);
+  const std::vector<XyzPoint> good = good_patch(30, 30, 3.0, 4.0, 0.02);
+  std::vector<XyzPoint> with_far = good;
+  with_far.push_back(XyzPoint{9000.0, -9000.0, 40.0});
+  ccmap::test::write_ply(dir / "good.ply", good);
+  ccmap::test::write_ply(dir / "far.ply", with_far);
+  for (const char* preset : {"ccm", "cadre"}) {
+    const CliRun a = run({"map", "--preset", preset, "--cloud", (dir / "good.ply").string(), "--out",
+                          (dir / (std::string(preset) + "_good")).string()});
+    const CliRun b = run({"map", "--preset", preset, "--cloud", (dir / "far.ply").string(), "--out",
+                          (dir / (std::string(preset) + "_far")).string()});
+    ASSERT_EQ(a.code, 0) << a.err;
+    ASSERT_EQ(b.code, 0) << b.err;
+    long long read = 0, used = 0;
+    ASSERT_TRUE(summary_counts(b.out, &read, &used)) << b.out;
+    EXPECT_EQ(used, 901) << preset << ": the far return is mapped too, in its own tile\n" << b.out;
+    EXPECT_EQ(ccmap::test::summary_count(b.out, "outside map "), 0) << b.out;
+    const std::size_t at_a = a.out.find("origin (map frame): "), at_b = b.out.find("origin (map frame): ");
+    ASSERT_NE(at_b, std::string::npos);
+    EXPECT_EQ(a.out.substr(at_a, a.out.find('\n', at_a) - at_a), b.out.substr(at_b, b.out.find('\n', at_b) - at_b))
+        << "one far return must not move the origin";
+    const int layers = std::string(preset) == "cadre" ? 5 : 1;
+    for (int k = 0; k < layers; ++k) {
+      const std::string name = "layer_" + std::to_string(k) + ".csv";
+      const std::vector<LayerCellRow> ra = read_rows(dir / (std::string(preset) + "_good") / name);
+      std::vector<LayerCellRow> rb = read_rows(dir / (std::string(preset) + "_far") / name);
+      // The far return's own cell is the only extra row; every other row is unchanged.
+      ASSERT_EQ(rb.size(), ra.size() + 1) << preset << " layer " << k;
+      rb.erase(std::remove_if(rb.begin(), rb.end(), [](const LayerCellRow& r) { return r.cx > 8000.0; }), rb.end());
+      ASSERT_EQ(rb.size(), ra.size());
+      for (std::size_t i = 0; i < ra.size(); ++i) {
+        EXPECT_EQ(ra[i].ix, rb[i].ix);
+        EXPECT_EQ(ra[i].iy, rb[i].iy);
+        EXPECT_EQ(ra[i].weight, rb[i].weight);
+        EXPECT_EQ(ra[i].height, rb[i].height) << preset << " layer " << k << " cell " << ra[i].ix << "," << ra[i].iy;
+        EXPECT_EQ(ra[i].cell_class, rb[i].cell_class);
+      }
+    }
+  }
+}
+
+TEST(CliMap, BoundsLimitTheMappedArea) {
+  const TempDir dir(kTempPrefix);
+  const std::vector<XyzPoint> good = good_patch(100, 50, 100.0, 200.0, 0.02);  // 2 x 1 m
+  ccmap::test::write_ply(dir / "patch.ply", good);
+  // x in [100.5, 101.3], y in [200.1, 200.9], absolute coordinates.
+  const CliRun r = run({"map", "--preset", "ccm", "--cloud", (dir / "patch.ply").string(), "--bounds",
+                        "100.5,200.1,101.3,200.9", "--out", (dir / "out").string()});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::vector<XyzPoint> inside;
+  for (const XyzPoint& p : good) {
+    if (p.x >= 100.5 && p.x <= 101.3 && p.y >= 200.1 && p.y <= 200.9) inside.push_back(p);
+  }
+  long long read = 0, used = 0;
+  ASSERT_TRUE(summary_counts(r.out, &read, &used)) << r.out;
+  EXPECT_EQ(used, static_cast<long long>(inside.size())) << r.out;
+  EXPECT_EQ(ccmap::test::summary_count(r.out, "outside map "), static_cast<long long>(good.size() - inside.size()))
+      << "points outside --bounds are counted as outside map\n" << r.out;
+  EXPECT_EQ(cells_of(read_rows(dir / "out" / "layer_0.csv")), cells_of(inside, 0.08));
+  // Bounds that hold no point: a one-line error, no output.
+  const CliRun none = run({"map", "--preset", "ccm", "--cloud", (dir / "patch.ply").string(), "--bounds",
+                           "0,0,1,1", "--out", (dir / "none").string()});
+  expect_one_line_error(none, "no point inside --bounds", "bounds without points");
+}
+
 TEST(CliMap, PerPointWeightsFromTheFileReplaceTheSensorModel) {
   // One 32 cm cell, a checkerboard of heights 1 (weight 9) and 0 (weight 1): the weighted mean
-  // is 0.9 (unweighted it would be 0.5); one point with weight -1 is refused as a bad weight.
-  const fs::path dir = temp_dir();
+  // is 0.9 (unweighted it would be 0.5); points with weight -1 and 1e300 are refused as bad weights.
+  const TempDir dir(kTempPrefix);
   {
     std::ofstream out(dir / "weighted.xyz");
     for (int j = 0; j < 32; ++j) {
@@ -317,12 +421,12 @@ TEST(CliMap, PerPointWeightsFromTheFileReplaceTheSensorModel) {
         out << 0.005 + 0.01 * i << ' ' << 0.005 + 0.01 * j << ' ' << (high ? 1.0 : 0.0) << ' ' << (high ? 9 : 1) << "\n";
       }
     }
-    out << "0.1 0.1 5.0 -1\n";
+    out << "0.1 0.1 5.0 -1\n0.1 0.1 5.0 1e300\n";  // 1e300 exceeds float: a bad weight, not a conversion
   }
   const CliRun r = run({"map", "--preset", "ccm", "--res", "0.32", "--wl", "1e6", "--cloud",
                         (dir / "weighted.xyz").string(), "--out", (dir / "out").string()});
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.out.find("bad weight 1"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("bad weight 2"), std::string::npos) << r.out;
   const auto rows = read_rows(dir / "out" / "layer_0.csv");
   ASSERT_EQ(rows.size(), 1U);
   EXPECT_NEAR(rows[0].weight, 512.0 * 9.0 + 512.0, 1e-3) << "the file's weights must be summed";
@@ -334,7 +438,7 @@ TEST(CliMap, PerPointWeightsFromTheFileReplaceTheSensorModel) {
 // =============================================================================================
 
 TEST(CliQuery, AnswersAtAMapFramePoint) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
   write_scene_ply(dir / "utm.ply", s);
   const double qx = s.x0 - 0.51, qy = s.y0 + 0.33;  // sub-cell position, away from the step
@@ -365,6 +469,10 @@ TEST(CliQuery, AnswersAtAMapFramePoint) {
   const CliRun far = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at});
   ASSERT_EQ(far.code, 0) << far.err;
   EXPECT_NE(far.out.find("status: outside_map"), std::string::npos) << far.out;
+  // Far beyond the library's range (and int64 cell indices): outside the map, no overflow.
+  const CliRun huge = run({"query", "--preset", "cadre", "--cloud", (dir / "utm.ply").string(), "--at", "1e300,-1e300"});
+  ASSERT_EQ(huge.code, 0) << huge.err;
+  EXPECT_NE(huge.out.find("status: outside_map"), std::string::npos) << huge.out;
 }
 
 // =============================================================================================
@@ -376,7 +484,7 @@ TEST(CliMap, DiagonalHalfCellsOnATwelveDegreePlaneWithBothCells) {
   // (x + y < 0 relative to the cell centre), points on a 5 mm grid. The paper's cell reports
   // slope_x = -b/2 (sigma_xy = -sigma_xx / 2 on that triangle) and calls the cell covered; the
   // full cell gives slope_x = 0 and calls it unknown (its smaller lateral eigenvalue is w^2/36).
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const double b = std::tan(12.0 * M_PI / 180.0), w = 0.16, x0 = 0.16 * 4000.0, y0 = 0.16 * 9000.0;
   {
     std::ofstream out(dir / "diagonal.xyz");
@@ -424,7 +532,7 @@ TEST(CliMap, DiagonalHalfCellsOnATwelveDegreePlaneWithBothCells) {
 // =============================================================================================
 
 TEST(CliErrors, BadInputGivesOneLineAndNonZeroExit) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const Scene s{0.0, 0.0, 0.0};
   write_scene_ply(dir / "scene.ply", s);
   const std::string good = (dir / "scene.ply").string();
@@ -471,6 +579,11 @@ TEST(CliErrors, BadInputGivesOneLineAndNonZeroExit) {
       {{"query", "--preset", "ccm", "--cloud", good, "--at", "1"}, "--at"},
       {{"query", "--preset", "ccm", "--cloud", good, "--at", "1,x"}, "not a number"},
       {{"query", "--preset", "ccm", "--cloud", good}, "--at"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--bounds", "1,2,3", "--out", out}, "XMIN,YMIN,XMAX,YMAX"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--bounds", "1,2,3,4,5", "--out", out}, "XMIN,YMIN,XMAX,YMAX"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--bounds", "3,0,1,4", "--out", out}, "XMIN < XMAX"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--bounds", "0,0,inf,4", "--out", out}, "finite"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--bounds", "0,a,1,4", "--out", out}, "not a number"},
       {{"frobnicate"}, "unknown command"},
   };
   for (const Case& c : cases) {
@@ -496,7 +609,7 @@ TEST(CliErrors, HelpTexts) {
 }
 
 TEST(CliErrors, TheBuiltBinaryExitsNonZeroWithOneLine) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   const std::string err_file = (dir / "err.txt").string();
   const std::string help = std::string("'") + CCMAP_CLI_BINARY + "' map --help > /dev/null 2>&1";
   const int help_status = std::system(help.c_str());
@@ -525,7 +638,7 @@ TEST(CliRealData, LoneStarCropAndScan) {
   if (!fs::exists(crop) || !fs::exists(las)) {
     GTEST_SKIP() << "real data not found under " << data << " (set CCMAP_DATA_DIR to the folder holding lone_star_tls/)";
   }
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   // The 10 x 10 m crop fits the 8 cm CCM layer (+-10.24 m): every finite point is used.
   const CliRun r = run({"map", "--preset", "ccm", "--res", "0.16", "--cloud", crop.string(), "--out", (dir / "crop").string()});
   ASSERT_EQ(r.code, 0) << r.err;
@@ -550,13 +663,29 @@ TEST(CliRealData, LoneStarCropAndScan) {
   }
   EXPECT_GT(traversable, rows.size() / 2) << "geothermal ground with ~4.6 deg median slope is mostly traversable";
 
-  // The whole scan through the CADRE stack (+-10.24 m of its 32 x 41 m lie inside the map).
-  const CliRun s = run({"map", "--preset", "cadre", "--cloud", las.string(), "--out", (dir / "las").string()});
-  ASSERT_EQ(s.code, 0) << s.err;
-  ASSERT_TRUE(summary_counts(s.out, &read, &used)) << s.out;
-  EXPECT_EQ(read, 518862);
-  EXPECT_GT(used, 100000) << s.out;
-  for (int k = 0; k < 5; ++k) {
-    EXPECT_FALSE(read_rows(dir / "las" / ("layer_" + std::to_string(k) + ".csv")).empty()) << "layer " << k;
+  // The whole 32 x 41 m scan: wider than every window (ccm: +-10.24 m), mapped whole by tiling.
+  for (const char* preset : {"ccm", "cadre"}) {
+    const fs::path out = dir / (std::string("las_") + preset);
+    const CliRun s = run({"map", "--preset", preset, "--cloud", las.string(), "--out", out.string()});
+    ASSERT_EQ(s.code, 0) << s.err;
+    ASSERT_TRUE(summary_counts(s.out, &read, &used)) << s.out;
+    EXPECT_EQ(read, 518862);
+    EXPECT_EQ(used, read) << preset << ": every point of the file is mapped\n" << s.out;
+    EXPECT_EQ(ccmap::test::summary_count(s.out, "outside map "), 0) << preset << ": " << s.out;
+    EXPECT_NE(s.out.find("progress: "), std::string::npos) << "a long run prints progress lines";
+    const int layers = std::string(preset) == "cadre" ? 5 : 1;
+    for (int k = 0; k < layers; ++k) {
+      const std::vector<LayerCellRow> layer = read_rows(out / ("layer_" + std::to_string(k) + ".csv"));
+      ASSERT_FALSE(layer.empty()) << preset << " layer " << k;
+      double x_min = layer[0].cx, x_max = layer[0].cx, y_min = layer[0].cy, y_max = layer[0].cy;
+      for (const LayerCellRow& row : layer) {
+        x_min = std::min(x_min, row.cx);
+        x_max = std::max(x_max, row.cx);
+        y_min = std::min(y_min, row.cy);
+        y_max = std::max(y_max, row.cy);
+      }
+      EXPECT_GT(x_max - x_min, 30.0) << preset << " layer " << k << ": the scan is 32.4 m wide";
+      EXPECT_GT(y_max - y_min, 38.0) << preset << " layer " << k << ": the scan is 40.8 m long";
+    }
   }
 }

@@ -3,8 +3,7 @@
 # tools/, so the tool targets are referenced by name (resolved at generation time).
 add_executable(ccmap_test_tools_io ${CMAKE_CURRENT_LIST_DIR}/io_test.cpp)
 target_link_libraries(ccmap_test_tools_io PRIVATE GTest::gtest_main ccmap_tools_io ccmap_host_flags)
-gtest_discover_tests(ccmap_test_tools_io DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                     PROPERTIES LABELS "tools" TIMEOUT 300)
+ccmap_tools_gtest(ccmap_test_tools_io 300)
 
 add_executable(ccmap_test_tools_cli ${CMAKE_CURRENT_LIST_DIR}/cli_test.cpp)
 target_link_libraries(ccmap_test_tools_cli PRIVATE GTest::gtest_main ccmap_cli_lib ccmap_tools_io ccmap_host_flags)
@@ -13,5 +12,10 @@ target_compile_definitions(ccmap_test_tools_cli PRIVATE
   CCMAP_DEFAULT_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data"
   CCMAP_CLI_BINARY="$<TARGET_FILE:ccmap>")
 add_dependencies(ccmap_test_tools_cli ccmap)
-gtest_discover_tests(ccmap_test_tools_cli DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                     PROPERTIES LABELS "tools" TIMEOUT 600)
+ccmap_tools_gtest(ccmap_test_tools_cli 600)
+
+# Whole clouds mapped in tiles (tools/cli/tiling.hpp) against brute-force and one-window references.
+add_executable(ccmap_test_tools_tiling ${CMAKE_CURRENT_LIST_DIR}/tiling_test.cpp)
+target_link_libraries(ccmap_test_tools_tiling PRIVATE GTest::gtest_main ccmap_cli_lib ccmap_tools_io ccmap_host_flags)
+target_include_directories(ccmap_test_tools_tiling PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+ccmap_tools_gtest(ccmap_test_tools_tiling 600)

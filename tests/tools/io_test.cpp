@@ -1,5 +1,6 @@
 // Host I/O of the tools: point-cloud readers (PLY, LAS, text), poses, layer CSV, pictures.
 #include <gtest/gtest.h>
+#include <gtest/gtest-spi.h>
 
 #include <cmath>
 #include <cstdint>
@@ -14,19 +15,15 @@
 #include "cloud_reader.hpp"
 #include "csv_writer.hpp"
 #include "layer_images.hpp"
+#include "temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using ccmap::tools::Cloud;
 
 namespace {
 
-fs::path temp_dir() {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("ccmap_io_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  fs::create_directories(dir);
-  return dir;
-}
+using TempDir = ccmap::test::TempDir;
+const char* const kTempPrefix = "ccmap_io_test_";
 
 void write_bytes(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary);
@@ -192,7 +189,8 @@ void expect_las_points(const Cloud& c, const LasSpec& s) {
 // =============================================================================================
 
 TEST(IoReaderPly, AsciiWithExtraPropertiesListsAndFaces) {
-  const fs::path path = temp_dir() / "cloud.ply";
+  const TempDir dir(kTempPrefix);
+  const fs::path path = dir / "cloud.ply";
   write_text(path, ply_ascii());
   const Cloud c = ccmap::tools::read_cloud(path.string());
   expect_points(c, true);
@@ -212,7 +210,8 @@ TEST(IoReaderPly, AsciiWithCrLfLineEnds) {
 }
 
 TEST(IoReaderPly, BinaryLittleEndianDoubleCoordinatesSkipsOtherProperties) {
-  const fs::path path = temp_dir() / "cloud.ply";
+  const TempDir dir(kTempPrefix);
+  const fs::path path = dir / "cloud.ply";
   write_bytes(path, ply_binary(false));
   const Cloud c = ccmap::tools::read_cloud(path.string());
   expect_points(c, true, /*float_weights=*/true);
@@ -346,7 +345,8 @@ TEST(IoReaderPly, ZeroVerticesIsAnEmptyCloudNotAnError) {
 TEST(IoReaderLas, Las12Format1WithVlrAndPaddedRecords) {
   LasSpec s;
   s.record_length = 32;  // 28 + 4 extra bytes per record
-  const fs::path path = temp_dir() / "scan.las";
+  const TempDir dir(kTempPrefix);
+  const fs::path path = dir / "scan.las";
   write_bytes(path, make_las(s));
   const Cloud c = ccmap::tools::read_cloud(path.string());
   expect_las_points(c, s);
@@ -437,7 +437,8 @@ TEST(IoReaderLas, ExtremeScaleGivesNonFinitePointsThatAreCounted) {
 // =============================================================================================
 
 TEST(IoReaderText, CommentsBlankLinesSeparatorsAndWeights) {
-  const fs::path path = temp_dir() / "cloud.xyz";
+  const TempDir dir(kTempPrefix);
+  const fs::path path = dir / "cloud.xyz";
   write_text(path,
              "# x y z w\n\n1.5 -2.25 0.125 1\r\n515386.625,4918368.375,2235.0625,2.5  # trailing comment\n"
              "\t-0.1  0.2\t-0.3 0.75\n0 0 0 1");
@@ -478,7 +479,7 @@ TEST(IoReaderText, EmptyFileIsAnEmptyCloud) {
 // =============================================================================================
 
 TEST(IoReaderFiles, FormatDetectionAndFileErrors) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   // PLY content behind a .txt name is read as PLY (magic wins).
   write_text(dir / "really_ply.txt", ply_ascii());
   expect_points(ccmap::tools::read_cloud((dir / "really_ply.txt").string()), true);
@@ -491,13 +492,13 @@ TEST(IoReaderFiles, FormatDetectionAndFileErrors) {
     EXPECT_FALSE(c.ok()) << name;
     EXPECT_NE(c.error.find(name), std::string::npos) << "error names the file: " << c.error;
   }
-  EXPECT_FALSE(ccmap::tools::read_cloud(dir.string()).ok()) << "a directory is not a cloud";
+  EXPECT_FALSE(ccmap::tools::read_cloud(dir.path().string()).ok()) << "a directory is not a cloud";
   write_text(dir / "empty.las", "");
   EXPECT_FALSE(ccmap::tools::read_cloud((dir / "empty.las").string()).ok());
 }
 
 TEST(IoReaderFiles, Poses) {
-  const fs::path dir = temp_dir();
+  const TempDir dir(kTempPrefix);
   write_text(dir / "poses.txt", "# x y z yaw\n515386.5 4918368.25 2236 0.5\n\n1 2 3 -1.5\n");
   std::vector<ccmap::tools::Pose> poses;
   std::string error;
@@ -518,7 +519,8 @@ TEST(IoReaderFiles, Poses) {
 // =============================================================================================
 
 TEST(IoLayerCsv, HeaderAndRoundTripKeepUtmDigits) {
-  const fs::path path = temp_dir() / "layer_0.csv";
+  const TempDir dir(kTempPrefix);
+  const fs::path path = dir / "layer_0.csv";
   ccmap::tools::LayerCellRow r;
   r.layer = 2;
   r.ix = 3221166;
@@ -578,9 +580,44 @@ TEST(IoLayerImages, ClassColoursNorthUpUnobservedBlackAndScaledUp) {
   ccmap::tools::class_colour("steep", c);
   EXPECT_EQ(c[0], 255);
   EXPECT_EQ(c[1], 150);
-  const fs::path prefix = temp_dir() / "layer_0";
+  const TempDir dir(kTempPrefix);
+  const fs::path prefix = dir / "layer_0";
   ASSERT_TRUE(ccmap::tools::write_layer_images(prefix.string(), rows, ccmap::tools::LayerWindow{}, &error)) << error;
   for (const char* suffix : {"_height.png", "_slope.png", "_normal_var.png", "_class.png"}) {
     EXPECT_GT(fs::file_size(prefix.string() + suffix), 50U) << suffix;
   }
+}
+
+// =============================================================================================
+// The tests' temporary directories (tests/tools/temp_dir.hpp)
+// =============================================================================================
+
+namespace {
+fs::path g_failed_test_dir;  // EXPECT_FATAL_FAILURE's statement may only use statics
+void fail_inside_a_temp_dir() {
+  const TempDir dir(kTempPrefix);
+  g_failed_test_dir = dir.path();
+  write_text(dir / "a", "x");
+  fs::create_directories(dir / "sub" / "deeper");
+  write_text(dir / "sub" / "deeper" / "b", "y");
+  ASSERT_TRUE(false) << "forced failure inside a TempDir";
+}
+}  // namespace
+
+TEST(TestTempDir, RemovedWithItsContentAlsoWhenTheTestFails) {
+  fs::path kept;
+  {
+    const TempDir dir(kTempPrefix);
+    kept = dir.path();
+    ASSERT_TRUE(fs::is_directory(kept));
+    EXPECT_EQ(kept.parent_path(), fs::temp_directory_path());
+    EXPECT_EQ(kept.filename().string().rfind(kTempPrefix, 0), 0U) << kept;
+    write_text(dir / "file", "z");
+    const TempDir other(kTempPrefix);
+    EXPECT_NE(other.path(), kept) << "two directories with one prefix must not collide";
+  }
+  EXPECT_FALSE(fs::exists(kept)) << "a TempDir must be removed when it goes out of scope";
+  EXPECT_FATAL_FAILURE(fail_inside_a_temp_dir(), "forced failure inside a TempDir");
+  ASSERT_FALSE(g_failed_test_dir.empty());
+  EXPECT_FALSE(fs::exists(g_failed_test_dir)) << "a failed ASSERT must still remove the directory and its files";
 }

@@ -1,4 +1,4 @@
-// CI check of the real laser scan experiment (tools/experiments/lidar) on the 10 x 10 m Lone
+// CI check of the real laser scan experiment (tools/experiments/lidar.cpp) on the 10 x 10 m Lone
 // Star crop: with the outlier cut, CCM's sub-cell height predicts held-out points better than
 // the piece-wise constant maps at the same resolution (the paper's cell: RMS and median at every
 // resolution; the full cell: median and 95th percentile at every resolution, RMS at 32 cm, see

@@ -3,25 +3,20 @@
 # tools/, so the tool targets are referenced by name (resolved at generation time).
 add_executable(ccmap_test_tools_sim ${CMAKE_CURRENT_LIST_DIR}/sim_test.cpp)
 target_link_libraries(ccmap_test_tools_sim PRIVATE GTest::gtest_main ccmap_sim ccmap_host_flags)
-gtest_discover_tests(ccmap_test_tools_sim DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                     PROPERTIES LABELS "tools" TIMEOUT 300)
+ccmap_tools_gtest(ccmap_test_tools_sim 300)
 
 add_executable(ccmap_test_tools_experiments ${CMAKE_CURRENT_LIST_DIR}/experiments_test.cpp)
 target_link_libraries(ccmap_test_tools_experiments PRIVATE GTest::gtest_main ccmap_sim ccmap_experiments ccmap_host_flags)
-gtest_discover_tests(ccmap_test_tools_experiments DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                     PROPERTIES LABELS "tools" TIMEOUT 300)
+ccmap_tools_gtest(ccmap_test_tools_experiments 300)
 
 add_executable(ccmap_test_tools_traverse ${CMAKE_CURRENT_LIST_DIR}/traverse_test.cpp)
 target_link_libraries(ccmap_test_tools_traverse PRIVATE GTest::gtest_main ccmap_traverse_lib ccmap_host_flags)
-gtest_discover_tests(ccmap_test_tools_traverse DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                     PROPERTIES LABELS "tools" TIMEOUT 300)
+ccmap_tools_gtest(ccmap_test_tools_traverse 300)
 
 add_executable(ccmap_test_tools_lidar ${CMAKE_CURRENT_LIST_DIR}/lidar_test.cpp)
 target_link_libraries(ccmap_test_tools_lidar PRIVATE GTest::gtest_main ccmap_experiments ccmap_sim ccmap_host_flags)
-gtest_discover_tests(ccmap_test_tools_lidar DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                     PROPERTIES LABELS "tools" TIMEOUT 300)
+ccmap_tools_gtest(ccmap_test_tools_lidar 300)
 
 add_executable(ccmap_test_tools_detection ${CMAKE_CURRENT_LIST_DIR}/detection_test.cpp)
 target_link_libraries(ccmap_test_tools_detection PRIVATE GTest::gtest_main ccmap_sim ccmap_experiments ccmap_host_flags)
-gtest_discover_tests(ccmap_test_tools_detection DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
-                     PROPERTIES LABELS "tools" TIMEOUT 300)
+ccmap_tools_gtest(ccmap_test_tools_detection 300)

@@ -14,10 +14,13 @@
 #include <system_error>
 #include <vector>
 
+#include "ccmap/cell/ccm_cell.hpp"
 #include "cloud_reader.hpp"
 #include "csv_writer.hpp"
 #include "layer_images.hpp"
 #include "map_runner.hpp"
+#include "origin.hpp"
+#include "tiling.hpp"
 
 namespace ccmap::tools {
 namespace {
@@ -36,7 +39,7 @@ constexpr const char* kMainHelp =
 constexpr const char* kMapHelp =
     "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR\n"
     "                 [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
-    "                 [--paper-cell]\n"
+    "                 [--bounds XMIN,YMIN,XMAX,YMAX] [--paper-cell]\n"
     "\n"
     "  --preset NAME   cadre: 4 cm piece-wise constant Kalman layer, then 8/16/32/64 cm CCM layers\n"
     "                  ccm, kf, omg: one 256 x 256 layer of CCM, Kalman or OMG cells\n"
@@ -52,26 +55,44 @@ constexpr const char* kMapHelp =
     "                  replaces the sensor model's weight for CCM and OMG cells (Kalman cells\n"
     "                  weigh by range variance); weights <= 0 or non-finite are counted as bad.\n"
     "  --poses FILE    one line 'x y z yaw' per frame: the sensor position in the map frame; the\n"
-    "                  map is re-centred on (x, y) before the frame. Without it the map stays\n"
-    "                  centred on the first cloud's centroid.\n"
+    "                  map is re-centred on (x, y) before the frame and follows the poses like a\n"
+    "                  rover's map: points beyond its windows count as outside map.\n"
     "  --sensor NAME   lidar (default): constant range noise --sigma (default 0.005 m);\n"
-    "                  stereo: the CADRE stereo model (noise grows with range^2 from the pose)\n"
+    "                  stereo: the CADRE stereo model (noise grows with range^2 from the pose;\n"
+    "                  without --poses, from the local origin)\n"
+    "  --bounds XMIN,YMIN,XMAX,YMAX\n"
+    "                  map only the points inside this map-frame rectangle (absolute coordinates,\n"
+    "                  edges included); the others count as outside map\n"
     "  --out DIR       writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
     "                  normal_var,class}.png; class colours: unknown grey, traversable green,\n"
     "                  obstacle red, steep orange, unobserved black\n"
     "\n"
-    "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the first\n"
-    "cloud's centroid rounded to the coarsest cell width) in double precision before the\n"
-    "float library sees them, and adds it back to every output coordinate and height.\n";
+    "Without --poses the whole of every cloud is mapped: the tool sweeps the stack over the\n"
+    "clouds in tiles (move the stack to a tile, fold the tile's points, export the tile's cells),\n"
+    "so every layer covers the clouds' extent and every point's cell appears once in each layer's\n"
+    "CSV, with all the points that fall in it. While its tile is mapped a point lies inside every\n"
+    "layer's window, so only its range noise routes it: with the lidar model every point goes to\n"
+    "the finest layer its noise allows (cadre: the Kalman layer while --sigma <= res / (4 sqrt 3),\n"
+    "5.8 mm for 4 cm cells) and the coarser layers answer by pooling their 2 x 2 children (paper\n"
+    "Section IV-F), as the cells next to a rover do. A progress line follows every tenth of the\n"
+    "tiles.\n"
+    "\n"
+    "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the per-axis\n"
+    "median of the points, rounded to the coarsest cell width; with --poses, of the first cloud)\n"
+    "in double precision before the float library sees them, and adds it back to every output\n"
+    "coordinate and height. Points beyond +-1e9 m, or farther than 1e5 m (the library's range)\n"
+    "from the origin on an axis, are counted as out of range.\n";
 
 constexpr const char* kQueryHelp =
     "usage: ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --at X,Y\n"
     "                   [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
-    "                   [--paper-cell]\n"
+    "                   [--bounds XMIN,YMIN,XMAX,YMAX] [--paper-cell]\n"
     "\n"
     "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
     "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
-    "variance, elevation variance and class, one 'key: value' per line.\n";
+    "variance, elevation variance and class, one 'key: value' per line. Without --poses only the\n"
+    "tile that holds (X, Y) is mapped (the answer is the whole map's); a point whose tile holds no\n"
+    "point of the clouds is outside the map (status: outside_map).\n";
 
 /// Thrown inside this file only, turned into "ccmap: error: ..." by run_cli.
 struct CliError {
@@ -105,6 +126,29 @@ double parse_positive(const std::string& flag, const std::string& text, double m
   return v;
 }
 
+/// --bounds XMIN,YMIN,XMAX,YMAX: four finite numbers, minimum below maximum on both axes.
+AreaBounds parse_bounds(const std::string& text) {
+  double v[4] = {0.0, 0.0, 0.0, 0.0};
+  std::size_t at = 0;
+  for (int i = 0; i < 4; ++i) {
+    const std::size_t comma = i < 3 ? text.find(',', at) : text.size();
+    if (comma == std::string::npos || (i == 3 && text.find(',', at) != std::string::npos)) {
+      fail("--bounds: expected XMIN,YMIN,XMAX,YMAX, got '" + text + "'", 2);
+    }
+    v[i] = parse_number("--bounds", text.substr(at, comma - at));
+    if (!std::isfinite(v[i])) fail("--bounds: coordinates must be finite", 2);
+    at = comma + 1;
+  }
+  if (!(v[0] < v[2]) || !(v[1] < v[3])) fail("--bounds: XMIN < XMAX and YMIN < YMAX expected, got '" + text + "'", 2);
+  AreaBounds b;
+  b.set = true;
+  b.x_min = v[0];
+  b.y_min = v[1];
+  b.x_max = v[2];
+  b.y_max = v[3];
+  return b;
+}
+
 struct Options {
   std::string command;
   std::string preset;
@@ -117,6 +161,7 @@ struct Options {
   double at_x = 0.0, at_y = 0.0;
   SensorChoice sensor = SensorChoice::kLidar;
   double sigma = 0.005;
+  AreaBounds bounds;
   bool paper_cell = false;
   bool help = false;
 };
@@ -143,7 +188,7 @@ Options parse_options(int argc, char** argv) {
       arg = arg.substr(0, eq);
       have_value = true;
     }
-    static const char* kKnown[] = {"--preset", "--res", "--wl", "--cloud", "--poses", "--out", "--at", "--sensor", "--sigma"};
+    static const char* kKnown[] = {"--preset", "--res", "--wl", "--cloud", "--poses", "--out", "--at", "--sensor", "--sigma", "--bounds"};
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
       fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
     }
@@ -178,6 +223,8 @@ Options parse_options(int argc, char** argv) {
       else fail("--sensor: unknown sensor '" + value + "' (expected lidar or stereo)", 2);
     } else if (arg == "--sigma") {
       o.sigma = parse_positive(arg, value, 10.0);
+    } else if (arg == "--bounds") {
+      o.bounds = parse_bounds(value);
     }
   }
   return o;
@@ -188,19 +235,164 @@ std::string base_name(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-/// A mapped sequence: the runner, the local origin and the per-frame accounting.
+/// A mapped sequence: the runner, the local origin, the per-frame accounting and, for a tiled
+/// map, the exported rows.
 struct MappedClouds {
   std::unique_ptr<MapRunner> runner;
-  double origin[3] = {0.0, 0.0, 0.0};  ///< map-frame position of the local origin (m)
-  std::int64_t origin_cells[3] = {0, 0, 0};  ///< origin / coarsest cell width (exact integers)
-  double coarsest_width = 0.0;
+  LocalOrigin origin;
   std::vector<double> widths;          ///< requested cell width per layer (m), finest first
   FrameStats totals;
-  std::uint64_t read = 0, reader_non_finite = 0;
+  std::uint64_t read = 0;
+  bool tiled = false;                  ///< no --poses: the stack was swept over the clouds
+  std::vector<std::vector<LayerCellRow>> rows;  ///< tiled: the rows of every layer
+  TileQuery query;                     ///< tiled query: where the answer is
 };
 
 const char* sensor_name(const Options& o) {
   return o.sensor == SensorChoice::kLidar ? "lidar" : "stereo (CADRE model)";
+}
+
+Cloud read_nonempty_cloud(const std::string& path) {
+  Cloud cloud = read_cloud(path);
+  if (!cloud.ok()) fail(cloud.error);
+  if (cloud.size() == 0) {
+    fail(path + ": empty cloud (" + std::to_string(cloud.declared) + " points, " +
+         std::to_string(cloud.skipped_non_finite) + " of them non-finite)");
+  }
+  return cloud;
+}
+
+void print_header(const Options& o, const MappedClouds& m, std::ostream& out) {
+  out << "ccmap " << o.command << ": preset " << o.preset << ", " << m.widths.size() << " layer(s), cell widths";
+  for (double w : m.widths) out << ' ' << fmt("%g", w);
+  out << " m, W_l " << fmt("%g", m.runner->weight_limit()) << ", min weight " << fmt("%g", m.runner->min_weight())
+      << ", sensor " << sensor_name(o);
+  if (o.sensor == SensorChoice::kLidar) out << " (sigma " << fmt("%g", o.sigma) << " m)";
+  if (preset_has_ccm(o.preset)) out << ", CCM cell " << (o.paper_cell ? "paper (9 floats)" : "full (10 floats)");
+  out << "\n";
+  out << "origin (map frame): " << fmt("%.3f", m.origin.xyz[0]) << ' ' << fmt("%.3f", m.origin.xyz[1]) << ' '
+      << fmt("%.3f", m.origin.xyz[2]) << "  (per-axis median of the " << (o.poses.empty() ? "" : "first cloud's ")
+      << "points in range, rounded to " << fmt("%g", m.origin.coarsest_width) << " m)\n";
+  if (o.bounds.set) {
+    out << "bounds: x " << fmt("%.3f", o.bounds.x_min) << " .. " << fmt("%.3f", o.bounds.x_max) << ", y "
+        << fmt("%.3f", o.bounds.y_min) << " .. " << fmt("%.3f", o.bounds.y_max)
+        << " (points outside are counted as outside map)\n";
+  }
+}
+
+std::string counts_text(const FrameStats& s) {
+  return "used " + std::to_string(s.used) + ", rejected: non-finite " + std::to_string(s.rejected_non_finite) +
+         ", out of range " + std::to_string(s.rejected_out_of_range) + ", bad weight " +
+         std::to_string(s.rejected_weight) + ", outside map " + std::to_string(s.outside_map) + ", too noisy " +
+         std::to_string(s.too_noisy);
+}
+
+void print_frame(const std::string& path, const Cloud& cloud, std::size_t f, const FrameStats& stats, double ms,
+                 std::ostream& out) {
+  out << "frame " << (f + 1) << ": " << base_name(path) << " [" << cloud.format << "]: " << cloud.declared
+      << " points, " << counts_text(stats) << "; " << fmt("%.1f", ms) << " ms\n";
+  if (cloud.has_weight) {
+    out << "note: " << base_name(path) << ": per-point weights from the file replace the sensor model's\n";
+  }
+}
+
+/// With --poses: the stack follows the poses, one frame per cloud, read and mapped one at a time.
+void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
+  std::string error;
+  std::vector<Pose> poses;
+  if (!read_poses(o.poses, &poses, &error)) fail(error);
+  if (poses.size() != o.clouds.size()) {
+    fail(o.poses + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(o.clouds.size()) +
+         " clouds (one line per --cloud expected)");
+  }
+  std::vector<float> xyz, weights;
+  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
+    const Cloud cloud = read_nonempty_cloud(o.clouds[f]);
+    m.read += cloud.declared;
+    if (f == 0) {
+      if (!robust_origin({&cloud}, o.bounds, m.widths.back(), &m.origin, &error)) fail(o.clouds[f] + ": " + error);
+      if (verbose) print_header(o, m, out);
+    }
+    // Pose: re-centre, and the sensor origin for the noise model (local frame).
+    const Pose& p = poses[f];
+    const double pose_local[3] = {p.x - m.origin.xyz[0], p.y - m.origin.xyz[1], p.z - m.origin.xyz[2]};
+    for (double v : pose_local) {
+      if (!(std::fabs(v) <= static_cast<double>(kMaxAbsCoordinateM))) {
+        fail(o.poses + ": pose " + std::to_string(f + 1) + " lies beyond +-1e5 m of the origin; is it in the clouds' frame?");
+      }
+    }
+    const float sensor[3] = {static_cast<float>(pose_local[0]), static_cast<float>(pose_local[1]),
+                             static_cast<float>(pose_local[2])};
+    if (!m.runner->move_to(sensor[0], sensor[1], &error)) {
+      fail(o.poses + ": pose " + std::to_string(f + 1) + ": " + error + "; is it in the clouds' frame?");
+    }
+    FrameStats stats;
+    stats.received = cloud.size() + cloud.skipped_non_finite;
+    stats.rejected_non_finite = cloud.skipped_non_finite;
+    xyz.clear();
+    weights.clear();
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], m.origin, o.bounds);
+      if (fate == PointFate::kOutOfRange) {
+        ++stats.rejected_out_of_range;
+        continue;
+      }
+      if (fate == PointFate::kOutsideBounds) {
+        ++stats.outside_map;
+        continue;
+      }
+      // Subtract the origin in double, then round to float (|difference| <= 1e5 m).
+      xyz.push_back(static_cast<float>(cloud.x[i] - m.origin.xyz[0]));
+      xyz.push_back(static_cast<float>(cloud.y[i] - m.origin.xyz[1]));
+      xyz.push_back(static_cast<float>(cloud.z[i] - m.origin.xyz[2]));
+      if (cloud.has_weight) weights.push_back(weight_to_float(cloud.w[i]));
+    }
+    FrameStats lib;
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!m.runner->update_frame(xyz, weights, sensor, &lib, &error)) fail(o.clouds[f] + ": " + error);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    lib.received = 0;  // counted above, with the points the tool kept back
+    stats.add(lib);
+    m.totals.add(stats);
+    if (verbose) print_frame(o.clouds[f], cloud, f, stats, ms, out);
+  }
+}
+
+/// Without --poses: the stack is swept over all clouds in tiles (tiling.hpp), so every layer
+/// covers their whole extent. For a query only the query point's tile is mapped.
+void map_in_tiles(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
+  std::string error;
+  std::vector<Cloud> clouds;
+  std::vector<const Cloud*> all;
+  clouds.reserve(o.clouds.size());
+  for (const std::string& path : o.clouds) {
+    clouds.push_back(read_nonempty_cloud(path));
+    m.read += clouds.back().declared;
+  }
+  for (const Cloud& c : clouds) all.push_back(&c);
+  if (!robust_origin(all, o.bounds, m.widths.back(), &m.origin, &error)) fail(error);
+  if (verbose) print_header(o, m, out);
+  TilePlan plan;
+  if (!plan_tiles(*m.runner, m.widths, 0, &plan, &error)) fail(error);
+  m.query.wanted = o.have_at;
+  m.query.x = o.at_x;
+  m.query.y = o.at_y;
+  if (verbose && !o.have_at) {
+    out << "tiles: " << plan.tile_cells << " x " << plan.tile_cells << " cells of " << fmt("%g", m.widths[0])
+        << " m (" << fmt("%g", plan.tile_cells * m.widths[0]) << " m), each mapped alone"
+        << (plan.margin_cells > 0 ? " with its 1-cell ring of neighbours" : "") << "; every layer covers the clouds\n";
+  }
+  TiledMap map;
+  if (!map_tiled(*m.runner, plan, clouds, m.origin, o.bounds, verbose ? &out : nullptr, &m.query, &map, &error)) {
+    fail(error);
+  }
+  m.tiled = true;
+  m.rows = std::move(map.layers);
+  for (std::size_t f = 0; f < clouds.size(); ++f) {
+    m.totals.add(map.frames[f]);
+    if (verbose) print_frame(o.clouds[f], clouds[f], f, map.frames[f], map.frame_ms[f], out);
+  }
+  if (verbose && !o.have_at) out << "tiles mapped: " << map.tiles << "\n";
 }
 
 MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
@@ -214,7 +406,6 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
   const int layers = preset_layer_count(o.preset);
   const double finest = o.res > 0.0 ? o.res : preset_default_cell_width(o.preset);
   for (int k = 0; k < layers; ++k) m.widths.push_back(finest * std::ldexp(1.0, k));
-  m.coarsest_width = m.widths.back();
 
   RunnerOptions ro;
   ro.preset = o.preset;
@@ -224,125 +415,24 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
   ro.lidar_sigma_m = o.sigma;
   if (!m.runner->init(ro, &error)) fail(error);
 
-  std::vector<Pose> poses;
-  if (!o.poses.empty()) {
-    if (!read_poses(o.poses, &poses, &error)) fail(error);
-    if (poses.size() != o.clouds.size()) {
-      fail(o.poses + ": " + std::to_string(poses.size()) + " poses for " + std::to_string(o.clouds.size()) +
-           " clouds (one line per --cloud expected)");
-    }
+  if (o.poses.empty()) {
+    map_in_tiles(o, m, out, verbose);
+  } else {
+    map_along_poses(o, m, out, verbose);
   }
-
-  std::vector<float> xyz;
-
-  std::vector<float> weights;
-  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
-    const Cloud cloud = read_cloud(o.clouds[f]);
-    if (!cloud.ok()) fail(cloud.error);
-    if (cloud.size() == 0) {
-      fail(o.clouds[f] + ": empty cloud (" + std::to_string(cloud.declared) + " points, " +
-           std::to_string(cloud.skipped_non_finite) + " of them non-finite)");
-    }
-    m.read += cloud.declared;
-    m.reader_non_finite += cloud.skipped_non_finite;
-    if (f == 0) {
-      // Local origin: the centroid (double), rounded to the coarsest cell width so that every
-      // layer's cell grid stays aligned with whole map-frame cells.
-      double sum[3] = {0.0, 0.0, 0.0};
-      const std::vector<double>* axes[3] = {&cloud.x, &cloud.y, &cloud.z};
-      for (int a = 0; a < 3; ++a) {
-        for (double v : *axes[a]) sum[a] += v;
-        const double centroid = sum[a] / static_cast<double>(cloud.size());
-        m.origin_cells[a] = std::llround(centroid / m.coarsest_width);
-        m.origin[a] = static_cast<double>(m.origin_cells[a]) * m.coarsest_width;
-      }
-      if (verbose) {
-        out << "ccmap " << o.command << ": preset " << o.preset << ", " << layers << " layer(s), cell widths";
-        for (double w : m.widths) out << ' ' << fmt("%g", w);
-        out << " m, W_l " << fmt("%g", m.runner->weight_limit()) << ", min weight "
-            << fmt("%g", m.runner->min_weight()) << ", sensor " << sensor_name(o);
-        if (preset_has_ccm(o.preset)) out << ", CCM cell " << (o.paper_cell ? "paper (9 floats)" : "full (10 floats)");
-        if (o.sensor == SensorChoice::kLidar) out << " (sigma " << fmt("%g", o.sigma) << " m)";
-        out << "\n";
-        out << "origin (map frame): " << fmt("%.3f", m.origin[0]) << ' ' << fmt("%.3f", m.origin[1]) << ' '
-            << fmt("%.3f", m.origin[2]) << "  (first cloud's centroid rounded to " << fmt("%g", m.coarsest_width)
-            << " m)\n";
-      }
-    }
-    // Pose: re-centre, and the sensor origin for the noise model (local frame).
-    float sensor[3] = {0.0F, 0.0F, 0.0F};
-    if (!poses.empty()) {
-      const Pose& p = poses[f];
-      sensor[0] = static_cast<float>(p.x - m.origin[0]);
-      sensor[1] = static_cast<float>(p.y - m.origin[1]);
-      sensor[2] = static_cast<float>(p.z - m.origin[2]);
-      if (!m.runner->move_to(sensor[0], sensor[1], &error)) {
-        fail(o.poses + ": pose " + std::to_string(f + 1) + ": " + error + "; is it in the clouds' frame?");
-      }
-    } else if (f == 0) {
-      if (!m.runner->move_to(0.0F, 0.0F, &error)) fail(error);
-    }
-    xyz.resize(3U * cloud.size());
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      // Subtract the origin in double, then round to float.
-      xyz[3 * i] = static_cast<float>(cloud.x[i] - m.origin[0]);
-      xyz[3 * i + 1] = static_cast<float>(cloud.y[i] - m.origin[1]);
-      xyz[3 * i + 2] = static_cast<float>(cloud.z[i] - m.origin[2]);
-    }
-    weights.clear();
-    if (cloud.has_weight) {
-      weights.reserve(cloud.size());
-      for (std::size_t i = 0; i < cloud.size(); ++i) weights.push_back(static_cast<float>(cloud.w[i]));
-    }
-    FrameStats stats;
-    const auto t0 = std::chrono::steady_clock::now();
-    if (!m.runner->update_frame(xyz, weights, sensor, &stats, &error)) fail(o.clouds[f] + ": " + error);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    stats.rejected_non_finite += cloud.skipped_non_finite;
-    stats.received += cloud.skipped_non_finite;
-    m.totals.add(stats);
-    if (verbose) {
-      out << "frame " << (f + 1) << ": " << base_name(o.clouds[f]) << " [" << cloud.format << "]: " << cloud.declared
-          << " points, used " << stats.used << ", rejected: non-finite " << stats.rejected_non_finite
-          << ", out of range " << stats.rejected_out_of_range << ", bad weight " << stats.rejected_weight
-          << ", outside map " << stats.outside_map << ", too noisy " << stats.too_noisy << "; "
-          << fmt("%.1f", ms) << " ms\n";
-      if (cloud.has_weight) {
-        out << "note: " << base_name(o.clouds[f]) << ": per-point weights from the file replace the sensor model's\n";
-      }
-    }
-  }
-  if (verbose) {
-    const FrameStats& t = m.totals;
-    out << "points: read " << m.read << ", used " << t.used << ", rejected: non-finite " << t.rejected_non_finite
-        << ", out of range " << t.rejected_out_of_range << ", bad weight " << t.rejected_weight << ", outside map "
-        << t.outside_map << ", too noisy " << t.too_noisy << "\n";
-  }
+  if (verbose) out << "points: read " << m.read << ", " << counts_text(m.totals) << "\n";
   return m;
 }
 
-/// Layer rows in the map frame (origin added back in double).
+/// Layer rows of the runner's current state in the map frame (origin added back in double).
 std::vector<LayerCellRow> layer_rows(const MappedClouds& m, int layer, const std::vector<LocalCell>& cells) {
   const double res = m.widths[static_cast<std::size_t>(layer)];
   const std::int64_t scale = std::int64_t{1} << (static_cast<int>(m.widths.size()) - 1 - layer);
   std::vector<LayerCellRow> rows;
   rows.reserve(cells.size());
   for (const LocalCell& c : cells) {
-    LayerCellRow r;
-    r.layer = layer;
-    r.ix = static_cast<std::int64_t>(c.ix) + m.origin_cells[0] * scale;
-    r.iy = static_cast<std::int64_t>(c.iy) + m.origin_cells[1] * scale;
-    r.cx = (static_cast<double>(r.ix) + 0.5) * res;
-    r.cy = (static_cast<double>(r.iy) + 0.5) * res;
-    r.res = res;
-    r.weight = c.weight;
-    r.height = static_cast<double>(c.height) + m.origin[2];
-    r.slope_x = c.slope_x;
-    r.slope_y = c.slope_y;
-    r.normal_var = c.normal_variance;
-    r.elev_var = c.elevation_variance;
-    r.cell_class = c.cell_class;
-    rows.push_back(std::move(r));
+    rows.push_back(make_row(layer, static_cast<std::int64_t>(c.ix) + m.origin.cells[0] * scale,
+                            static_cast<std::int64_t>(c.iy) + m.origin.cells[1] * scale, res, m.origin.xyz[2], c));
   }
   return rows;
 }
@@ -358,22 +448,32 @@ int run_map(const Options& o, std::ostream& out) {
   }
   std::string error;
   for (int k = 0; k < m.runner->layer_count(); ++k) {
-    std::vector<LocalCell> cells;
-    if (!m.runner->export_layer(k, &cells, &error)) fail(error);
-    const std::vector<LayerCellRow> rows = layer_rows(m, k, cells);
+    std::vector<LayerCellRow> rows;
+    if (m.tiled) {
+      rows = std::move(m.rows[static_cast<std::size_t>(k)]);
+    } else {
+      std::vector<LocalCell> cells;
+      if (!m.runner->export_layer(k, &cells, &error)) fail(error);
+      rows = layer_rows(m, k, cells);
+    }
     const std::string prefix = o.out_dir + "/layer_" + std::to_string(k);
     if (!write_layer_csv(prefix + ".csv", rows, &error)) fail(error);
     // Pictures show the bounding box of the observed cells (a small scan in a large layer
-    // would otherwise be a speck); a layer with no observed cell is drawn whole, black.
+    // would otherwise be a speck); a layer with no observed cell is drawn as its window around
+    // the origin, black.
+    const std::int64_t scale = std::int64_t{1} << (static_cast<int>(m.widths.size()) - 1 - k);
+    const int side = m.runner->layer_side(k);
     LayerWindow window{};
     if (rows.empty()) {
-      std::int32_t wx = 0, wy = 0;
-      m.runner->layer_window_min(k, &wx, &wy);
-      const std::int64_t scale = std::int64_t{1} << (static_cast<int>(m.widths.size()) - 1 - k);
-      window = LayerWindow{wx + m.origin_cells[0] * scale, wy + m.origin_cells[1] * scale, m.runner->layer_side(k),
-                           m.runner->layer_side(k)};
+      window = LayerWindow{m.origin.cells[0] * scale - side / 2, m.origin.cells[1] * scale - side / 2, side, side};
     }
-    if (!write_layer_images(prefix, rows, window, &error)) fail(error);
+    const LayerWindow extent = layer_extent(rows, window);
+    if (extent.nx > kMaxImageCells || extent.ny > kMaxImageCells) {
+      out << "note: layer " << k << " spans " << extent.nx << " x " << extent.ny << " cells, more than the "
+          << kMaxImageCells << " a picture may have: no pictures for it (the CSV holds every cell)\n";
+    } else if (!write_layer_images(prefix, rows, window, &error)) {
+      fail(error);
+    }
     std::size_t counts[4] = {0, 0, 0, 0};
     for (const LayerCellRow& r : rows) {
       if (r.cell_class == "traversable") ++counts[1];
@@ -381,9 +481,9 @@ int run_map(const Options& o, std::ostream& out) {
       else if (r.cell_class == "steep") ++counts[3];
       else ++counts[0];
     }
-    const int side = m.runner->layer_side(k);
-    out << "layer " << k << " (" << fmt("%g", m.widths[static_cast<std::size_t>(k)]) << " m, " << side << " x "
-        << side << ", " << (m.runner->layer_is_ccm(k) ? "CCM" : (o.preset == "omg" ? "OMG" : "Kalman"))
+    out << "layer " << k << " (" << fmt("%g", m.widths[static_cast<std::size_t>(k)]) << " m, "
+        << (m.tiled ? "tiled" : std::to_string(side) + " x " + std::to_string(side)) << ", "
+        << (m.runner->layer_is_ccm(k) ? "CCM" : (o.preset == "omg" ? "OMG" : "Kalman"))
         << "): " << (rows.size() - counts[0]) << " cells known of " << rows.size() << " observed (traversable "
         << counts[1] << ", obstacle " << counts[2] << ", steep " << counts[3] << ", unknown " << counts[0]
         << ") -> " << prefix << ".csv\n";
@@ -398,8 +498,16 @@ int run_query(const Options& o, std::ostream& out) {
   if (!o.out_dir.empty()) fail("--out belongs to 'ccmap map'", 2);
   std::ostringstream log;
   MappedClouds m = build_map(o, log, true);
-  const double lx = o.at_x - m.origin[0], ly = o.at_y - m.origin[1];
-  const LocalQuery q = m.runner->query(static_cast<float>(lx), static_cast<float>(ly));
+  LocalQuery q;
+  q.status = "outside_map";  // a tiled map holds only the tiles that hold points
+  if (!m.tiled) {
+    const double lx = o.at_x - m.origin.xyz[0], ly = o.at_y - m.origin.xyz[1];
+    if (std::fabs(lx) <= static_cast<double>(kMaxAbsCoordinateM) && std::fabs(ly) <= static_cast<double>(kMaxAbsCoordinateM)) {
+      q = m.runner->query(static_cast<float>(lx), static_cast<float>(ly));
+    }
+  } else if (m.query.mapped) {
+    q = m.runner->query(m.query.local_x, m.query.local_y);
+  }
   const double kPi = 3.14159265358979323846;
   out << "x: " << fmt("%.6f", o.at_x) << "\n";
   out << "y: " << fmt("%.6f", o.at_y) << "\n";
@@ -409,7 +517,7 @@ int run_query(const Options& o, std::ostream& out) {
   out << "cell_width_m: " << fmt("%g", layer_ok ? m.widths[static_cast<std::size_t>(q.layer)] : 0.0)
       << "\n";
   const bool ok = q.status == "ok";
-  out << "height_m: " << (ok ? fmt("%.6f", static_cast<double>(q.height) + m.origin[2]) : std::string("nan")) << "\n";
+  out << "height_m: " << (ok ? fmt("%.6f", static_cast<double>(q.height) + m.origin.xyz[2]) : std::string("nan")) << "\n";
   out << "slope_x: " << fmt("%.6g", q.slope_x) << "\n";
   out << "slope_y: " << fmt("%.6g", q.slope_y) << "\n";
   out << "inclination: " << fmt("%.6g", q.inclination) << "\n";

@@ -39,6 +39,19 @@ class StackRunner final : public MapRunner {
       *error = std::string("the map refused its parameters (") + to_string(status) + ")";
       return false;
     }
+    params_ = params;
+    for (int layer = 0; layer < StackType::kLayerCount; ++layer) {
+      params_.normal_variance_threshold[static_cast<std::size_t>(layer)] = stack_->normal_variance_threshold(layer);
+    }
+    return true;
+  }
+
+  bool reset(std::string* error) override {
+    const Status status = stack_->initialised() ? stack_->init(params_) : Status::kNotInitialised;
+    if (status != Status::kOk) {
+      *error = std::string("cannot reset the map (") + to_string(status) + ")";
+      return false;
+    }
     return true;
   }
 
@@ -135,6 +148,7 @@ class StackRunner final : public MapRunner {
 
  private:
   std::unique_ptr<StackType> stack_ = std::make_unique<StackType>();  // MBs: never on the stack
+  StackParams params_{};  ///< what init() accepted, thresholds as calibrated (for reset)
   std::vector<PointXYZ> points_;
 };
 
@@ -191,6 +205,10 @@ std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, bool paper
   if (preset == "omg") return std::make_unique<StackRunner<SingleOmgConfig>>();
   *error = "unknown preset '" + preset + "' (expected one of: cadre, ccm, kf, omg)";
   return nullptr;
+}
+
+std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, std::string* error) {
+  return make_map_runner(preset, false, error);
 }
 
 }  // namespace ccmap::tools

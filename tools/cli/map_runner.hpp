@@ -56,6 +56,10 @@ class MapRunner {
   virtual ~MapRunner() = default;
   /// Configures the stack; false with a one-line reason.
   virtual bool init(const RunnerOptions& options, std::string* error) = 0;
+  /// Empties the map: every cell unobserved, windows centred on the local origin, counters
+  /// zero, the parameters of init() (its calibrated normal-variance thresholds reused, so a
+  /// reset costs a clear of the cells, not a calibration). False before a successful init().
+  virtual bool reset(std::string* error) = 0;
   /// Re-centres the stack on (x, y), local metres.
   virtual bool move_to(float x, float y, std::string* error) = 0;
   /// Folds one frame (xyz interleaved, local metres); sensor origin in local metres. `weights`
@@ -88,5 +92,7 @@ bool preset_has_ccm(const std::string& preset);
 /// with paper_cell (PaperCell<Config>). nullptr with a message for an unknown preset, or for
 /// paper_cell with a preset without CCM layers.
 std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, bool paper_cell, std::string* error);
+/// The same with full CCM cells.
+std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, std::string* error);
 
 }  // namespace ccmap::tools

@@ -21,11 +21,13 @@ namespace {
 bool parse_range(const std::string& s, std::uint64_t* a, std::uint64_t* b) {
   const std::size_t colon = s.find(':');
   if (colon == std::string::npos) return false;
+  // Named strings: `end` points into them, so they must outlive the checks of *end.
+  const std::string first = s.substr(0, colon), second = s.substr(colon + 1);
   char* end = nullptr;
-  *a = std::strtoull(s.substr(0, colon).c_str(), &end, 10);
-  if (end == nullptr || *end != '\0') return false;
-  *b = std::strtoull(s.substr(colon + 1).c_str(), &end, 10);
-  return end != nullptr && *end == '\0' && *b > *a;
+  *a = std::strtoull(first.c_str(), &end, 10);
+  if (first.empty() || end == nullptr || *end != '\0') return false;
+  *b = std::strtoull(second.c_str(), &end, 10);
+  return !second.empty() && end != nullptr && *end == '\0' && *b > *a;
 }
 
 }  // namespace

@@ -16,25 +16,23 @@ void class_colour(const std::string& cell_class, std::uint8_t out[3]) {
   out[2] = b;
 }
 
+LayerWindow layer_extent(const std::vector<LayerCellRow>& rows, LayerWindow window) {
+  if (window.nx > 0 && window.ny > 0) return window;
+  if (rows.empty()) return LayerWindow{0, 0, 1, 1};
+  std::int64_t x0 = rows[0].ix, x1 = rows[0].ix, y0 = rows[0].iy, y1 = rows[0].iy;
+  for (const LayerCellRow& r : rows) {
+    x0 = std::min(x0, r.ix); x1 = std::max(x1, r.ix);
+    y0 = std::min(y0, r.iy); y1 = std::max(y1, r.iy);
+  }
+  // Differences of indices the tools produce (|ix| < 2^43) cannot overflow.
+  const std::int64_t limit = kMaxImageCells + 1;
+  return LayerWindow{x0, y0, static_cast<int>(std::min(x1 - x0 + 1, limit)), static_cast<int>(std::min(y1 - y0 + 1, limit))};
+}
+
 bool render_layer_images(const std::vector<LayerCellRow>& rows, LayerWindow window, RgbImage images[4],
                          std::string* error) {
-  if (window.nx <= 0 || window.ny <= 0) {
-    if (rows.empty()) {
-      window = LayerWindow{0, 0, 1, 1};
-    } else {
-      std::int64_t x0 = rows[0].ix, x1 = rows[0].ix, y0 = rows[0].iy, y1 = rows[0].iy;
-      for (const LayerCellRow& r : rows) {
-        x0 = std::min(x0, r.ix); x1 = std::max(x1, r.ix);
-        y0 = std::min(y0, r.iy); y1 = std::max(y1, r.iy);
-      }
-      if (x1 - x0 >= 8192 || y1 - y0 >= 8192) {
-        if (error != nullptr) *error = "layer too large to draw";
-        return false;
-      }
-      window = LayerWindow{x0, y0, static_cast<int>(x1 - x0 + 1), static_cast<int>(y1 - y0 + 1)};
-    }
-  }
-  if (window.nx > 8192 || window.ny > 8192) {
+  window = layer_extent(rows, window);
+  if (window.nx > kMaxImageCells || window.ny > kMaxImageCells) {
     if (error != nullptr) *error = "layer too large to draw";
     return false;
   }

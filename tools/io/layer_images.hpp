@@ -23,6 +23,13 @@ struct LayerWindow {
   int ny = 0;
 };
 
+/// Largest picture side in cells: larger layers are not drawn (render_layer_images refuses them).
+inline constexpr int kMaxImageCells = 8192;
+
+/// Cells drawn for `rows` with `window`: the window itself, or (nx == 0) the rows' bounding box
+/// (1 x 1 for no rows). nx, ny saturate at kMaxImageCells + 1 for larger extents.
+[[nodiscard]] LayerWindow layer_extent(const std::vector<LayerCellRow>& rows, LayerWindow window);
+
 /// Fixed class colours: unknown grey, traversable green, obstacle red, steep orange.
 void class_colour(const std::string& cell_class, std::uint8_t out[3]);
 

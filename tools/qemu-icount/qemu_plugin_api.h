@@ -1,6 +1,6 @@
 /* The part of QEMU's TCG plugin API that icount_plugin.c uses, declared here because Debian
  * ships no qemu-plugin.h. Written from QEMU's documented plugin API, version 1
- * (QEMU_PLUGIN_VERSION 1, the version of QEMU 7.2's include/qemu/qemu-plugin.h). Checked
+ * (QEMU_PLUGIN_VERSION 1, the version of qemu-plugin.h in QEMU 7.2's sources). Checked
  * against Debian 12's qemu-aarch64 7.2: it exports every qemu_plugin_* function declared
  * below and refuses a plugin whose `qemu_plugin_version` lies outside its [min, cur] range,
  * so a QEMU that dropped version 1 says so at load time instead of misbehaving.

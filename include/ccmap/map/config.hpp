@@ -69,6 +69,7 @@ struct SingleOmgConfig {
 /// Base is kept.
 template <typename Base, CcmCellKind Kind>
 struct WithCcmCell : Base {
+  // cppcheck-suppress duplInheritedMember ; hiding Base::kCcmCell is the point of WithCcmCell
   static constexpr CcmCellKind kCcmCell = Kind;
 };
 template <typename Base>

@@ -1,0 +1,32 @@
+# Runs tools/demo --quick --build-dir BUILD_DIR --out OUT_DIR (cmake -P, from tests/tools/demo.cmake)
+# and fails unless it exits 0, printed its four progress steps, a line per traverse frame and
+# the closing line, and wrote the report, the pictures and the single-cell output.
+foreach(var DEMO BUILD_DIR OUT_DIR)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "demo_check.cmake: -D${var}=... is required")
+  endif()
+endforeach()
+file(REMOVE_RECURSE "${OUT_DIR}")
+execute_process(COMMAND bash "${DEMO}" --quick --build-dir "${BUILD_DIR}" --out "${OUT_DIR}"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("${out}")
+if(NOT rc STREQUAL "0")
+  message(FATAL_ERROR "tools/demo --quick exited with '${rc}' (expected 0); stderr:\n${err}")
+endif()
+foreach(expected "ccmap demo: \\[1/4\\]" "ccmap demo: \\[2/4\\]" "ccmap demo: \\[3/4\\]" "ccmap demo: \\[4/4\\]"
+                 "frame +1/8" "frame +8/8" "frames: 8 updated of 8" "ccmap demo: done")
+  if(NOT out MATCHES "${expected}")
+    message(FATAL_ERROR "tools/demo --quick did not print a line matching '${expected}'")
+  endif()
+endforeach()
+foreach(file traverse/report.txt traverse/hazards_truth_vs_map.png traverse/layer0_04cm.png
+             traverse/layer4_64cm.png cell_demo.txt)
+  if(NOT EXISTS "${OUT_DIR}/${file}")
+    message(FATAL_ERROR "tools/demo --quick did not write ${OUT_DIR}/${file}")
+  endif()
+endforeach()
+file(READ "${OUT_DIR}/cell_demo.txt" cell_demo)
+string(FIND "${cell_demo}" "obstacle cell(s) found" at)
+if(at EQUAL -1)
+  message(FATAL_ERROR "the single-cell demo output ${OUT_DIR}/cell_demo.txt lacks its summary line")
+endif()

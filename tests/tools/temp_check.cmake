@@ -1,0 +1,15 @@
+# cmake -DMODE=setup|check -DDIR=... -P temp_check.cmake (tests/tools/temp_fixture.cmake):
+# setup empties DIR; check fails, naming what is there, unless DIR is empty.
+if(MODE STREQUAL "setup")
+  file(REMOVE_RECURSE "${DIR}")
+  file(MAKE_DIRECTORY "${DIR}")
+elseif(MODE STREQUAL "check")
+  file(GLOB left RELATIVE "${DIR}" "${DIR}/*")
+  if(left)
+    list(LENGTH left n)
+    list(JOIN left "\n  " names)
+    message(FATAL_ERROR "host-tool tests left ${n} entries in their TMPDIR ${DIR}:\n  ${names}")
+  endif()
+else()
+  message(FATAL_ERROR "temp_check.cmake: MODE must be setup or check, not '${MODE}'")
+endif()
