@@ -47,6 +47,8 @@ typedef enum ccmap_status {
   CCMAP_NOT_INITIALISED = 8,   /* map used before a successful ccmap_init or ccmap_load_snapshot */
   CCMAP_CORRUPT = 9,           /* snapshot failed its integrity or validity checks */
   CCMAP_VERSION_MISMATCH = 10, /* snapshot of another format version or another preset */
+  CCMAP_DUPLICATE = 11,        /* map exchange: delta already merged (sender, sequence) or this map's own */
+  CCMAP_MISALIGNED = 12,       /* map exchange: another cell width, or an origin offset off the coarsest grid */
   CCMAP_STATUS_MAX_ENUM_ = 0x7FFFFFFF /* not a status: keeps the enum 32 bits wide */
 } ccmap_status;
 
@@ -169,6 +171,13 @@ typedef struct ccmap_frame_counters {
  * out-of-range position. */
 ccmap_status ccmap_move_to(ccmap_map* map, float x, float y);
 
+/* The same move for a pose known only to position_sigma_m (m, 1-sigma, isotropic): the
+ * odometry's uncertainty of the position change since the last move. Every observed cell then
+ * forgets in proportion to inclination^2 sigma^2 (Stack::move_to(x, y, sigma); one pass over
+ * every cell). 0 is ccmap_move_to exactly. Refused (counted): as ccmap_move_to, and a non-finite
+ * (CCMAP_NON_FINITE_INPUT), negative (CCMAP_INVALID_ARGUMENT) or > 1e5 (CCMAP_OUT_OF_RANGE) sigma. */
+ccmap_status ccmap_move_to_uncertain(ccmap_map* map, float x, float y, float position_sigma_m);
+
 /* Folds n points, xyz[3*i .. 3*i+2] in the map frame (m). weights may be NULL (the noise
  * model's weight) or n weights, one per point (the w_t of eq. (1)); a weight outside
  * (0, 1e6] refuses its point. sensor_origin_xyz: the sensor position in the map frame (3 floats).
@@ -246,6 +255,129 @@ typedef struct ccmap_cell_record {
 ccmap_status ccmap_export_layer(const ccmap_map* map, int32_t layer, ccmap_cell_record* out, size_t capacity,
                                 size_t* written);
 
+/* ---- planner queries (include/ccmap/map/footprint.hpp, path_query.hpp, costmap.hpp) -------- */
+#define CCMAP_MAX_FOOTPRINT_CELLS 4096u      /* bounding box of a footprint, in finest-layer cells */
+#define CCMAP_DEFAULT_MAX_UNKNOWN_SHARE 0.1f
+#define CCMAP_MAX_PATH_SAMPLES 256u
+#define CCMAP_MAX_PATH_VERTICES 256u
+#define CCMAP_MAX_COSTMAP_SIDE 1024u
+#define CCMAP_MAX_INFLATION_PIXELS 32
+#define CCMAP_COST_FREE 0u
+#define CCMAP_COST_MAX_TRAVERSABLE 252u
+#define CCMAP_COST_INSCRIBED 253u
+#define CCMAP_COST_LETHAL 254u
+#define CCMAP_COST_UNKNOWN 255u
+
+/* An oriented rectangle (map frame): centre, direction of the length axis (any length >= 1e-6;
+ * build it from cos/sin of the yaw), full extents (m). */
+typedef struct ccmap_footprint {
+  float x;
+  float y;
+  float heading_x;
+  float heading_y;
+  float length_m;
+  float width_m;
+} ccmap_footprint;
+
+/* Answer of a footprint query (ccmap::FootprintResult). */
+typedef struct ccmap_footprint_result {
+  int32_t status;          /* CCMAP_OK, CCMAP_OUTSIDE_MAP (no layer holds any part), or the refusal */
+  int32_t worst_class;     /* ccmap_cell_class of the known parts (obstacle > steep > traversable);
+                              CCMAP_CLASS_UNKNOWN if none is known */
+  float unknown_share;     /* [0, 1] of the area */
+  float max_step_m;        /* height range over the known parts, or 4 sigma_s relief if larger */
+  float max_inclination;   /* dz/dxy */
+  float min_height_m;
+  float max_height_m;
+  float area_m2;
+  int32_t worst_layer;     /* answering layer of the worst part, -1 if none is known */
+  int32_t worst_index_x;   /* its cell (global index) */
+  int32_t worst_index_y;
+  float worst_x;           /* that cell's centre (m) */
+  float worst_y;
+  uint32_t cells_visited;  /* map cells read */
+} ccmap_footprint_result;
+
+/* Every part of the rectangle answered by the finest layer that knows it, as ccmap_query would
+ * answer its points. Returns out->status, or CCMAP_INVALID_ARGUMENT (NULL pointers, bad handle).
+ * Refusals: CCMAP_NON_FINITE_INPUT, CCMAP_INVALID_ARGUMENT (zero heading, extents not > 0),
+ * CCMAP_OUT_OF_RANGE (centre beyond 1e5 m; bounding box over CCMAP_MAX_FOOTPRINT_CELLS cells). */
+ccmap_status ccmap_query_footprint(const ccmap_map* map, const ccmap_footprint* footprint, ccmap_footprint_result* out);
+
+/* The verdict: obstacle/steep if a known part is; else unknown if unknown_share > max_unknown_share
+ * or nothing is known; else traversable (ccmap_cell_class). Unknown for NULL or a refused result. */
+int32_t ccmap_footprint_class(const ccmap_footprint_result* result, float max_unknown_share);
+
+typedef struct ccmap_path_pose {
+  float x;
+  float y;
+  float heading_x; /* unit direction of travel */
+  float heading_y;
+} ccmap_path_pose;
+
+/* The body swept along a path: length along the travel, width, distance between poses (all > 0),
+ * and the unknown share above which a footprint counts as unknown ([0, 1]). */
+typedef struct ccmap_path_sweep {
+  float length_m;
+  float width_m;
+  float step_m;
+  float max_unknown_share;
+} ccmap_path_sweep;
+
+typedef struct ccmap_path_result {
+  int32_t status;
+  int32_t hazard_found;            /* 1: a pose's footprint is obstacle or steep */
+  float first_hazard_m;            /* its distance along the path; 0 if none */
+  ccmap_path_pose hazard_pose;
+  ccmap_footprint_result hazard;
+  int32_t unknown_found;           /* 1: a pose's footprint has more unknown area than allowed */
+  float first_unknown_m;
+  ccmap_path_pose unknown_pose;
+  ccmap_footprint_result unknown;
+  float path_length_m;
+  float checked_m;                 /* distance of the last pose evaluated */
+  uint32_t samples;                /* poses evaluated (step apart from 0, and the end) */
+  uint32_t cells_visited;
+} ccmap_path_result;
+
+/* The body at poses every sweep->step_m along the polyline xy[2*i], xy[2*i+1] (count 2 ..
+ * CCMAP_MAX_PATH_VERTICES points, heading along each segment), until both a hazard and an unknown
+ * footprint are found. Returns out->status or CCMAP_INVALID_ARGUMENT; CCMAP_OUT_OF_RANGE for more
+ * than CCMAP_MAX_PATH_SAMPLES poses. */
+ccmap_status ccmap_query_path(const ccmap_map* map, const float* xy, size_t count, const ccmap_path_sweep* sweep,
+                              ccmap_path_result* out);
+/* The same along a circular arc from `start` (curvature 1/m, > 0 left; |curvature| length_m <= 2 pi). */
+ccmap_status ccmap_query_arc(const ccmap_map* map, const ccmap_path_pose* start, float curvature, float length_m,
+                             const ccmap_path_sweep* sweep, ccmap_path_result* out);
+
+/* A cost raster of side x side pixels of resolution_m around (centre_x, centre_y): pixel
+ * (ix, iy) at cost[ix + side * iy], row 0 at the lowest y (costmap_2d). inflation_radius_m 0: none. */
+typedef struct ccmap_costmap_spec {
+  float centre_x;
+  float centre_y;
+  float resolution_m;
+  uint32_t side;
+  float inflation_radius_m;
+} ccmap_costmap_spec;
+
+typedef struct ccmap_costmap_stats {
+  uint32_t free;       /* cost 0 */
+  uint32_t cost;       /* 1 .. 252 */
+  uint32_t inscribed;  /* 253 */
+  uint32_t lethal;     /* 254 */
+  uint32_t unknown;    /* 255 */
+  uint32_t cells_visited;
+} ccmap_costmap_stats;
+
+/* Fills cost[0 .. side^2) in the costmap_2d convention (0 free .. 252, 253 inscribed, 254 lethal,
+ * 255 unknown; the worst over each pixel's square; include/ccmap/map/costmap.hpp has the cost
+ * function). stats may be NULL. Refused, buffer untouched: CCMAP_INVALID_ARGUMENT (NULL, side 0 or
+ * above CCMAP_MAX_COSTMAP_SIDE, resolution not > 0, negative radius), CCMAP_BUFFER_TOO_SMALL,
+ * CCMAP_NON_FINITE_INPUT, CCMAP_OUT_OF_RANGE (raster beyond 1e5 m, radius above
+ * CCMAP_MAX_INFLATION_PIXELS pixels), CCMAP_NOT_INITIALISED. */
+ccmap_status ccmap_fill_costmap(const ccmap_map* map, const ccmap_costmap_spec* spec, uint8_t* cost, size_t capacity,
+                                ccmap_costmap_stats* stats);
+
 /* ---- counters ------------------------------------------------------------------------------- */
 typedef struct ccmap_counters {
   ccmap_frame_counters totals;  /* accumulated over the map's life (saturating) */
@@ -264,6 +396,102 @@ ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t c
 /* All-or-nothing restore (the map may be uninitialised): CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH
  * (another format version or a snapshot of another preset), CCMAP_INVALID_ARGUMENT. */
 ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size);
+
+/* ---- map exchange between rovers (include/ccmap/map/exchange.hpp: rules and byte format) ---- */
+/* An exchange holds one copy of its map's cells (what it last sent) and a table of 8 peers; it
+ * lives in caller storage like the map. Sizes: upper bounds with headroom, exact figures from
+ * ccmap_exchange_storage_size(). */
+#define CCMAP_CADRE_EXCHANGE_STORAGE_SIZE 475136u          /* 464 KiB */
+#define CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE 2686976u    /* 2624 KiB */
+#define CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE 802816u  /* 784 KiB */
+#define CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE 802816u     /* 784 KiB */
+CCMAP_DEFINE_STORAGE_(ccmap_cadre_exchange_storage, CCMAP_CADRE_EXCHANGE_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_ccm_exchange_storage, CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_kalman_exchange_storage, CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE);
+CCMAP_DEFINE_STORAGE_(ccmap_single_omg_exchange_storage, CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE);
+
+/* Largest delta of a preset (every cell) and the smallest (no cell); 0 for a bad preset. */
+#define CCMAP_CADRE_DELTA_MAX_SIZE 473240u
+size_t ccmap_delta_max_size(ccmap_preset preset);
+size_t ccmap_delta_min_size(ccmap_preset preset);
+
+typedef struct ccmap_exchange ccmap_exchange; /* opaque: lives at the start of the caller's storage */
+
+/* Exact bytes and alignment an exchange of `preset` needs; 0 for a bad preset. */
+size_t ccmap_exchange_storage_size(ccmap_preset preset);
+size_t ccmap_exchange_storage_align(ccmap_preset preset);
+/* Constructs an unbound exchange of `preset` in storage (as ccmap_place). */
+ccmap_status ccmap_exchange_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_exchange** out);
+
+/* Who this map is in the team, and where its map frame lies in the team frame. */
+typedef struct ccmap_exchange_params {
+  uint32_t rover_id;       /* unique per rover */
+  uint32_t session;        /* new value on every restart of this rover's map (e.g. a boot counter) */
+  int32_t origin_x_cells;  /* map-frame origin in the team frame, in finest-layer cells */
+  int32_t origin_y_cells;
+  float origin_z_m;        /* map-frame origin height in the team frame (m) */
+} ccmap_exchange_params;
+
+/* Binds the exchange to an initialised map of the same preset and starts afresh (nothing counts
+ * as sent: the first export sends the whole map). Re-initialising or re-loading the map retires
+ * the exchange (CCMAP_NOT_INITIALISED) until it is bound again. CCMAP_INVALID_ARGUMENT: NULL,
+ * bad handles, another preset, a bad origin. */
+ccmap_status ccmap_exchange_init(ccmap_exchange* exchange, ccmap_map* map, const ccmap_exchange_params* params);
+
+typedef struct ccmap_export_report {
+  uint32_t sequence;         /* the delta's sequence number */
+  uint32_t cells_written;
+  uint32_t cells_saturated;  /* of those, sent whole: weight limit or variance floor engaged */
+  uint32_t cells_pending;    /* changed, not written (below the floor or no room): sent later */
+  uint64_t bytes;
+} ccmap_export_report;
+
+/* Writes a delta of what the map gained since the last export (coarsest layer first, as many
+ * cells as fit) and counts it as sent. weight_floor >= 0: cells whose gain weighs less stay
+ * pending; so do the cells of layers finer than finest_layer (0: every layer). report may be
+ * NULL. CCMAP_BUFFER_TOO_SMALL: capacity < ccmap_delta_min_size; CCMAP_INVALID_ARGUMENT: a
+ * negative floor or a layer beyond the map's. */
+ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, size_t capacity, float weight_floor,
+                                   int32_t finest_layer, size_t* written, ccmap_export_report* report);
+
+typedef struct ccmap_merge_report {
+  uint32_t sender_id;      /* 0 for a snapshot */
+  uint32_t sequence;       /* 0 for a snapshot */
+  uint32_t cells_merged;
+  uint32_t cells_outside;  /* outside this map's windows: dropped */
+  uint32_t deltas_missed;  /* sequence numbers of this sender lost before this delta */
+} ccmap_merge_report;
+
+/* Folds another rover's delta into the map, all-or-nothing: CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH,
+ * CCMAP_MISALIGNED, CCMAP_DUPLICATE, CCMAP_BUFFER_TOO_SMALL (peer table full), CCMAP_OUT_OF_RANGE;
+ * on any of them the map is bitwise unchanged. report may be NULL. */
+ccmap_status ccmap_exchange_merge_delta(ccmap_exchange* exchange, const uint8_t* data, size_t size,
+                                        ccmap_merge_report* report);
+/* Folds a snapshot of an independently built map (its origin minus this one's: finest cells, m). */
+ccmap_status ccmap_exchange_merge_snapshot(ccmap_exchange* exchange, const uint8_t* data, size_t size,
+                                           int32_t offset_x_cells, int32_t offset_y_cells, float offset_z_m,
+                                           ccmap_merge_report* report);
+/* The same into a map without an exchange (e.g. merging saved maps on the ground). */
+ccmap_status ccmap_merge_snapshot(ccmap_map* map, const uint8_t* data, size_t size, int32_t offset_x_cells,
+                                  int32_t offset_y_cells, float offset_z_m, ccmap_merge_report* report);
+
+/* Life-time counters of an exchange (ccmap::ExchangeCounters). */
+typedef struct ccmap_exchange_counters {
+  uint32_t deltas_exported;
+  uint32_t deltas_merged;
+  uint32_t snapshots_merged;
+  uint32_t refused;
+  uint32_t refused_corrupt;
+  uint32_t refused_duplicate;
+  uint32_t refused_misaligned;
+  uint32_t deltas_missed;
+  uint64_t bytes_exported;
+  uint64_t bytes_merged;
+  uint64_t cells_exported;
+  uint64_t cells_merged;
+  uint64_t cells_outside;
+} ccmap_exchange_counters;
+ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_exchange_counters* out);
 
 /* Name of the linked platform implementation ("posix", "baremetal"). */
 const char* ccmap_platform_name(void);

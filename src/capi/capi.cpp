@@ -11,6 +11,10 @@
 #include <type_traits>
 
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
+#include "ccmap/map/exchange.hpp"
 #include "ccmap/map/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/platform/platform.hpp"
@@ -32,6 +36,8 @@ CCMAP_SAME_STATUS(CCMAP_BUFFER_TOO_SMALL, kBufferTooSmall);
 CCMAP_SAME_STATUS(CCMAP_NOT_INITIALISED, kNotInitialised);
 CCMAP_SAME_STATUS(CCMAP_CORRUPT, kCorrupt);
 CCMAP_SAME_STATUS(CCMAP_VERSION_MISMATCH, kVersionMismatch);
+CCMAP_SAME_STATUS(CCMAP_DUPLICATE, kDuplicate);
+CCMAP_SAME_STATUS(CCMAP_MISALIGNED, kMisaligned);
 #undef CCMAP_SAME_STATUS
 static_assert(static_cast<int>(CCMAP_CLASS_UNKNOWN) == static_cast<int>(CellClass::kUnknown), "class");
 static_assert(static_cast<int>(CCMAP_CLASS_TRAVERSABLE) == static_cast<int>(CellClass::kTraversable), "class");
@@ -50,6 +56,22 @@ static_assert(std::is_standard_layout<PointXYZ>::value && sizeof(PointXYZ) == 3U
 // place, record by record (same size, so record i occupies the same bytes in both forms).
 static_assert(sizeof(ccmap_cell_record) == sizeof(CellRecord) && alignof(ccmap_cell_record) >= alignof(CellRecord),
               "ccmap_cell_record and CellRecord must have the same size");
+
+// Planner queries: the C limits and costs are the C++ ones; path points are read as PathPoint.
+static_assert(CCMAP_MAX_FOOTPRINT_CELLS == kMaxFootprintCells, "CCMAP_MAX_FOOTPRINT_CELLS");
+static_assert(!(CCMAP_DEFAULT_MAX_UNKNOWN_SHARE < kDefaultMaxUnknownShare) &&
+                  !(CCMAP_DEFAULT_MAX_UNKNOWN_SHARE > kDefaultMaxUnknownShare),
+              "CCMAP_DEFAULT_MAX_UNKNOWN_SHARE");
+static_assert(CCMAP_MAX_PATH_SAMPLES == kMaxPathSamples && CCMAP_MAX_PATH_VERTICES == kMaxPathVertices, "path limits");
+static_assert(CCMAP_MAX_COSTMAP_SIDE == kMaxCostmapSide && CCMAP_MAX_INFLATION_PIXELS == kMaxInflationPixels,
+              "costmap limits");
+static_assert(CCMAP_COST_FREE == kCostFree && CCMAP_COST_MAX_TRAVERSABLE == kCostMaxTraversable &&
+                  CCMAP_COST_INSCRIBED == kCostInscribed && CCMAP_COST_LETHAL == kCostLethal &&
+                  CCMAP_COST_UNKNOWN == kCostUnknown,
+              "costmap values");
+static_assert(std::is_standard_layout<PathPoint>::value && sizeof(PathPoint) == 2U * sizeof(float) &&
+                  alignof(PathPoint) == alignof(float) && offsetof(PathPoint, y) == sizeof(float),
+              "PathPoint must be two packed floats");
 
 // ---- storage ----
 constexpr std::uint32_t kHandleMagic = 0x43434D48U;  // "CCMH"
@@ -84,6 +106,28 @@ static_assert(snapshot_size<SingleCcmConfig>() == CCMAP_SINGLE_CCM_SNAPSHOT_SIZE
 static_assert(snapshot_size<SingleKalmanConfig>() == CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE,
               "CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE");
 static_assert(snapshot_size<SingleOmgConfig>() == CCMAP_SINGLE_OMG_SNAPSHOT_SIZE, "CCMAP_SINGLE_OMG_SNAPSHOT_SIZE");
+
+// Exchanges: the same layout (header, then the MapExchange at kStackOffset), another magic.
+constexpr std::uint32_t kExchangeMagic = 0x43434D58U;  // "CCMX"
+
+template <typename Config>
+struct ExchangePreset {
+  using ExchangeType = MapExchange<Config>;
+  static_assert(kStackOffset % alignof(ExchangeType) == 0U, "exchange offset must respect its alignment");
+  static_assert(alignof(ExchangeType) <= CCMAP_STORAGE_ALIGN, "CCMAP_STORAGE_ALIGN too small");
+  static constexpr std::size_t kStorageSize = kStackOffset + sizeof(ExchangeType);
+  static constexpr std::size_t kStorageAlign = alignof(ExchangeType) > alignof(HandleHeader) ? alignof(ExchangeType)
+                                                                                             : alignof(HandleHeader);
+};
+static_assert(ExchangePreset<CadreConfig>::kStorageSize <= CCMAP_CADRE_EXCHANGE_STORAGE_SIZE,
+              "raise CCMAP_CADRE_EXCHANGE_STORAGE_SIZE");
+static_assert(ExchangePreset<SingleCcmConfig>::kStorageSize <= CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE,
+              "raise CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE");
+static_assert(ExchangePreset<SingleKalmanConfig>::kStorageSize <= CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE,
+              "raise CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE");
+static_assert(ExchangePreset<SingleOmgConfig>::kStorageSize <= CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE,
+              "raise CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE");
+static_assert(MapExchange<CadreConfig>::max_delta_size() == CCMAP_CADRE_DELTA_MAX_SIZE, "CCMAP_CADRE_DELTA_MAX_SIZE");
 
 ccmap_status to_c(Status status) noexcept { return static_cast<ccmap_status>(status); }
 
@@ -160,6 +204,66 @@ Result dispatch(const ccmap_map* map, Result bad, Fn&& fn) noexcept {
     default: break;
   }
   return bad;
+}
+
+const HandleHeader* exchange_header_of(const ccmap_exchange* exchange) noexcept {
+  if (exchange == nullptr) {
+    return nullptr;
+  }
+  const auto* header = std::launder(static_cast<const HandleHeader*>(static_cast<const void*>(exchange)));
+  if (header->magic != kExchangeMagic || !valid_preset(static_cast<std::int64_t>(header->preset))) {
+    return nullptr;
+  }
+  return header;
+}
+
+template <typename Config>
+MapExchange<Config>& exchange_of(const ccmap_exchange* exchange) noexcept {
+  const auto* bytes = static_cast<const unsigned char*>(static_cast<const void*>(exchange));
+  auto* exchange_bytes = const_cast<unsigned char*>(bytes + kStackOffset);  // the caller's storage, as stack_of
+  return *std::launder(static_cast<MapExchange<Config>*>(static_cast<void*>(exchange_bytes)));
+}
+
+/// Calls fn(MapExchange<Config>&) for the exchange's preset; `bad` for a NULL or foreign handle.
+template <typename Result, typename Fn>
+Result dispatch_exchange(const ccmap_exchange* exchange, Result bad, Fn&& fn) noexcept {
+  const HandleHeader* header = exchange_header_of(exchange);
+  if (header == nullptr) {
+    return bad;
+  }
+  switch (static_cast<ccmap_preset>(header->preset)) {
+    case CCMAP_PRESET_CADRE: return fn(exchange_of<CadreConfig>(exchange));
+    case CCMAP_PRESET_SINGLE_CCM: return fn(exchange_of<SingleCcmConfig>(exchange));
+    case CCMAP_PRESET_SINGLE_KALMAN: return fn(exchange_of<SingleKalmanConfig>(exchange));
+    case CCMAP_PRESET_SINGLE_OMG: return fn(exchange_of<SingleOmgConfig>(exchange));
+    default: break;
+  }
+  return bad;
+}
+
+/// Calls fn(MapExchange<C>&, Stack<C>&) when the exchange and the map are of the same preset.
+template <typename Fn>
+ccmap_status dispatch_pair(ccmap_exchange* exchange, ccmap_map* map, Fn&& fn) noexcept {
+  const HandleHeader* e = exchange_header_of(exchange);
+  const HandleHeader* m = header_of(map);
+  if (e == nullptr || m == nullptr || e->preset != m->preset) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  switch (static_cast<ccmap_preset>(e->preset)) {
+    case CCMAP_PRESET_CADRE: return fn(exchange_of<CadreConfig>(exchange), stack_of<CadreConfig>(map));
+    case CCMAP_PRESET_SINGLE_CCM: return fn(exchange_of<SingleCcmConfig>(exchange), stack_of<SingleCcmConfig>(map));
+    case CCMAP_PRESET_SINGLE_KALMAN:
+      return fn(exchange_of<SingleKalmanConfig>(exchange), stack_of<SingleKalmanConfig>(map));
+    case CCMAP_PRESET_SINGLE_OMG: return fn(exchange_of<SingleOmgConfig>(exchange), stack_of<SingleOmgConfig>(map));
+    default: break;
+  }
+  return CCMAP_INVALID_ARGUMENT;
+}
+
+void merge_report_to_c(const MergeReport& r, ccmap_merge_report* out) noexcept {
+  if (out != nullptr) {
+    *out = ccmap_merge_report{r.sender_id, r.sequence, r.cells_merged, r.cells_outside, r.deltas_missed};
+  }
 }
 
 template <typename Config>
@@ -244,6 +348,59 @@ void result_to_c(const QueryResult& q, ccmap_query_result* out) noexcept {
   out->cell_class = static_cast<std::int32_t>(q.cell_class);
 }
 
+ccmap_footprint_result footprint_to_c(const FootprintResult& r) noexcept {
+  ccmap_footprint_result c{};
+  c.status = static_cast<std::int32_t>(r.status);
+  c.worst_class = static_cast<std::int32_t>(r.worst_class);
+  c.unknown_share = r.unknown_share;
+  c.max_step_m = r.max_step_m;
+  c.max_inclination = r.max_inclination;
+  c.min_height_m = r.min_height_m;
+  c.max_height_m = r.max_height_m;
+  c.area_m2 = r.area_m2;
+  c.worst_layer = r.worst_layer;
+  c.worst_index_x = r.worst_index.x;
+  c.worst_index_y = r.worst_index.y;
+  c.worst_x = r.worst_x;
+  c.worst_y = r.worst_y;
+  c.cells_visited = r.cells_visited;
+  return c;
+}
+
+FootprintResult footprint_from_c(const ccmap_footprint_result& c) noexcept {
+  FootprintResult r{};
+  r.status = c.status >= 0 && c.status <= static_cast<std::int32_t>(CCMAP_VERSION_MISMATCH) ? static_cast<Status>(c.status)
+                                                                                           : Status::kInvalidArgument;
+  r.worst_class = c.worst_class >= CCMAP_CLASS_UNKNOWN && c.worst_class <= CCMAP_CLASS_STEEP
+                      ? static_cast<CellClass>(c.worst_class)
+                      : CellClass::kUnknown;
+  r.unknown_share = c.unknown_share;
+  return r;
+}
+
+ccmap_path_pose pose_to_c(const PathPose& p) noexcept { return ccmap_path_pose{p.x, p.y, p.heading_x, p.heading_y}; }
+
+void path_to_c(const PathResult& r, ccmap_path_result* out) noexcept {
+  *out = ccmap_path_result{};
+  out->status = static_cast<std::int32_t>(r.status);
+  out->hazard_found = r.hazard_found ? 1 : 0;
+  out->first_hazard_m = r.first_hazard_m;
+  out->hazard_pose = pose_to_c(r.hazard_pose);
+  out->hazard = footprint_to_c(r.hazard);
+  out->unknown_found = r.unknown_found ? 1 : 0;
+  out->first_unknown_m = r.first_unknown_m;
+  out->unknown_pose = pose_to_c(r.unknown_pose);
+  out->unknown = footprint_to_c(r.unknown);
+  out->path_length_m = r.path_length_m;
+  out->checked_m = r.checked_m;
+  out->samples = r.samples;
+  out->cells_visited = r.cells_visited;
+}
+
+PathSweep sweep_from_c(const ccmap_path_sweep& s) noexcept {
+  return PathSweep{s.length_m, s.width_m, s.step_m, s.max_unknown_share};
+}
+
 void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
   *out = ccmap_frame_counters{f.received, f.used, f.rejected_non_finite, f.rejected_out_of_range,
                               f.rejected_weight, f.outside_map, f.too_noisy};
@@ -258,7 +415,7 @@ extern "C" {
 
 const char* ccmap_status_string(ccmap_status status) {
   const int s = static_cast<int>(status);
-  if (s < static_cast<int>(CCMAP_OK) || s > static_cast<int>(CCMAP_VERSION_MISMATCH)) {
+  if (s < static_cast<int>(CCMAP_OK) || s > static_cast<int>(CCMAP_MISALIGNED)) {
     return "invalid_status";
   }
   return ccmap::to_string(static_cast<Status>(s));
@@ -330,6 +487,11 @@ ccmap_status ccmap_move_to(ccmap_map* map, float x, float y) {
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [x, y](auto& stack) { return ccmap::to_c(stack.move_to(x, y)); });
 }
 
+ccmap_status ccmap_move_to_uncertain(ccmap_map* map, float x, float y, float position_sigma_m) {
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT,
+                         [=](auto& stack) { return ccmap::to_c(stack.move_to(x, y, position_sigma_m)); });
+}
+
 ccmap_status ccmap_update_frame(ccmap_map* map, const float* xyz, const float* weights, size_t n,
                                 const float* sensor_origin_xyz, ccmap_frame_counters* counters) {
   if (sensor_origin_xyz == nullptr) {
@@ -390,6 +552,74 @@ ccmap_status ccmap_query_layer(const ccmap_map* map, int32_t layer, float x, flo
     const ccmap::QueryResult q = stack.query_layer(layer, x, y);
     ccmap::result_to_c(q, out);
     return ccmap::to_c(q.status);
+  });
+}
+
+ccmap_status ccmap_query_footprint(const ccmap_map* map, const ccmap_footprint* footprint, ccmap_footprint_result* out) {
+  if (footprint == nullptr || out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::Footprint f{footprint->x,        footprint->y,        footprint->heading_x,
+                           footprint->heading_y, footprint->length_m, footprint->width_m};
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::FootprintResult r = ccmap::query_footprint(stack, f);
+    *out = ccmap::footprint_to_c(r);
+    return ccmap::to_c(r.status);
+  });
+}
+
+int32_t ccmap_footprint_class(const ccmap_footprint_result* result, float max_unknown_share) {
+  if (result == nullptr) {
+    return CCMAP_CLASS_UNKNOWN;
+  }
+  return static_cast<std::int32_t>(ccmap::footprint_class(ccmap::footprint_from_c(*result), max_unknown_share));
+}
+
+ccmap_status ccmap_query_path(const ccmap_map* map, const float* xy, size_t count, const ccmap_path_sweep* sweep,
+                              ccmap_path_result* out) {
+  if (sweep == nullptr || out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  // NULL xy is refused by the query itself (kInvalidArgument, in out->status).
+  const auto* points = reinterpret_cast<const ccmap::PathPoint*>(xy);
+  const ccmap::PathSweep s = ccmap::sweep_from_c(*sweep);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::PathResult r = ccmap::query_path(stack, points, count, s);
+    ccmap::path_to_c(r, out);
+    return ccmap::to_c(r.status);
+  });
+}
+
+ccmap_status ccmap_query_arc(const ccmap_map* map, const ccmap_path_pose* start, float curvature, float length_m,
+                             const ccmap_path_sweep* sweep, ccmap_path_result* out) {
+  if (start == nullptr || sweep == nullptr || out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::PathPose p{start->x, start->y, start->heading_x, start->heading_y};
+  const ccmap::PathSweep s = ccmap::sweep_from_c(*sweep);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::PathResult r = ccmap::query_arc(stack, p, curvature, length_m, s);
+    ccmap::path_to_c(r, out);
+    return ccmap::to_c(r.status);
+  });
+}
+
+ccmap_status ccmap_fill_costmap(const ccmap_map* map, const ccmap_costmap_spec* spec, uint8_t* cost, size_t capacity,
+                                ccmap_costmap_stats* stats) {
+  if (stats != nullptr) {
+    *stats = ccmap_costmap_stats{};
+  }
+  if (spec == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::CostmapSpec s{spec->centre_x, spec->centre_y, spec->resolution_m, spec->side, spec->inflation_radius_m};
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    ccmap::CostmapStats st{};
+    const Status status = ccmap::fill_costmap(stack, s, cost, capacity, &st);
+    if (stats != nullptr) {
+      *stats = ccmap_costmap_stats{st.free, st.cost, st.inscribed, st.lethal, st.unknown, st.cells_visited};
+    }
+    return ccmap::to_c(status);
   });
 }
 
@@ -489,6 +719,152 @@ ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t c
 ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size) {
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack) {
     return ccmap::to_c(ccmap::load_snapshot(stack, data, size));
+  });
+}
+
+// ---- map exchange ----
+size_t ccmap_delta_max_size(ccmap_preset preset) {
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: return ccmap::MapExchange<ccmap::CadreConfig>::max_delta_size();
+    case CCMAP_PRESET_SINGLE_CCM: return ccmap::MapExchange<ccmap::SingleCcmConfig>::max_delta_size();
+    case CCMAP_PRESET_SINGLE_KALMAN: return ccmap::MapExchange<ccmap::SingleKalmanConfig>::max_delta_size();
+    case CCMAP_PRESET_SINGLE_OMG: return ccmap::MapExchange<ccmap::SingleOmgConfig>::max_delta_size();
+    default: break;
+  }
+  return 0U;
+}
+
+size_t ccmap_delta_min_size(ccmap_preset preset) {
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: return ccmap::MapExchange<ccmap::CadreConfig>::min_delta_size();
+    case CCMAP_PRESET_SINGLE_CCM: return ccmap::MapExchange<ccmap::SingleCcmConfig>::min_delta_size();
+    case CCMAP_PRESET_SINGLE_KALMAN: return ccmap::MapExchange<ccmap::SingleKalmanConfig>::min_delta_size();
+    case CCMAP_PRESET_SINGLE_OMG: return ccmap::MapExchange<ccmap::SingleOmgConfig>::min_delta_size();
+    default: break;
+  }
+  return 0U;
+}
+
+size_t ccmap_exchange_storage_size(ccmap_preset preset) {
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: return ccmap::ExchangePreset<ccmap::CadreConfig>::kStorageSize;
+    case CCMAP_PRESET_SINGLE_CCM: return ccmap::ExchangePreset<ccmap::SingleCcmConfig>::kStorageSize;
+    case CCMAP_PRESET_SINGLE_KALMAN: return ccmap::ExchangePreset<ccmap::SingleKalmanConfig>::kStorageSize;
+    case CCMAP_PRESET_SINGLE_OMG: return ccmap::ExchangePreset<ccmap::SingleOmgConfig>::kStorageSize;
+    default: break;
+  }
+  return 0U;
+}
+
+size_t ccmap_exchange_storage_align(ccmap_preset preset) {
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: return ccmap::ExchangePreset<ccmap::CadreConfig>::kStorageAlign;
+    case CCMAP_PRESET_SINGLE_CCM: return ccmap::ExchangePreset<ccmap::SingleCcmConfig>::kStorageAlign;
+    case CCMAP_PRESET_SINGLE_KALMAN: return ccmap::ExchangePreset<ccmap::SingleKalmanConfig>::kStorageAlign;
+    case CCMAP_PRESET_SINGLE_OMG: return ccmap::ExchangePreset<ccmap::SingleOmgConfig>::kStorageAlign;
+    default: break;
+  }
+  return 0U;
+}
+
+ccmap_status ccmap_exchange_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_exchange** out) {
+  if (storage == nullptr || out == nullptr || !ccmap::valid_preset(static_cast<std::int64_t>(preset))) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  if (reinterpret_cast<std::uintptr_t>(storage) % ccmap_exchange_storage_align(preset) != 0U) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  if (storage_size < ccmap_exchange_storage_size(preset)) {
+    return CCMAP_BUFFER_TOO_SMALL;
+  }
+  auto* bytes = static_cast<unsigned char*>(storage) + ccmap::kStackOffset;
+  switch (preset) {
+    case CCMAP_PRESET_CADRE: new (bytes) ccmap::MapExchange<ccmap::CadreConfig>(); break;
+    case CCMAP_PRESET_SINGLE_CCM: new (bytes) ccmap::MapExchange<ccmap::SingleCcmConfig>(); break;
+    case CCMAP_PRESET_SINGLE_KALMAN: new (bytes) ccmap::MapExchange<ccmap::SingleKalmanConfig>(); break;
+    case CCMAP_PRESET_SINGLE_OMG: new (bytes) ccmap::MapExchange<ccmap::SingleOmgConfig>(); break;
+    default: return CCMAP_INVALID_ARGUMENT;
+  }
+  new (storage) ccmap::HandleHeader{ccmap::kExchangeMagic, static_cast<std::uint32_t>(preset)};
+  *out = static_cast<ccmap_exchange*>(storage);
+  return CCMAP_OK;
+}
+
+ccmap_status ccmap_exchange_init(ccmap_exchange* exchange, ccmap_map* map, const ccmap_exchange_params* params) {
+  if (params == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::ExchangeParams p{params->rover_id, params->session,
+                                ccmap::CellIndex{params->origin_x_cells, params->origin_y_cells}, params->origin_z_m};
+  return ccmap::dispatch_pair(exchange, map, [&p](auto& ex, auto& stack) { return ccmap::to_c(ex.init(stack, p)); });
+}
+
+ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, size_t capacity, float weight_floor,
+                                   int32_t finest_layer, size_t* written, ccmap_export_report* report) {
+  if (written != nullptr) {
+    *written = 0U;
+  }
+  if (report != nullptr) {
+    *report = ccmap_export_report{};
+  }
+  return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
+    ccmap::ExportReport r{};
+    const Status status = ex.export_delta(buffer, capacity, ccmap::ExportOptions{weight_floor, finest_layer}, written, &r);
+    if (report != nullptr) {
+      *report = ccmap_export_report{r.sequence, r.cells_written, r.cells_saturated, r.cells_pending,
+                                    static_cast<std::uint64_t>(r.bytes)};
+    }
+    return ccmap::to_c(status);
+  });
+}
+
+ccmap_status ccmap_exchange_merge_delta(ccmap_exchange* exchange, const uint8_t* data, size_t size,
+                                        ccmap_merge_report* report) {
+  ccmap::merge_report_to_c(ccmap::MergeReport{}, report);
+  return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
+    ccmap::MergeReport r{};
+    const Status status = ex.merge_delta(data, size, &r);
+    ccmap::merge_report_to_c(r, report);
+    return ccmap::to_c(status);
+  });
+}
+
+ccmap_status ccmap_exchange_merge_snapshot(ccmap_exchange* exchange, const uint8_t* data, size_t size,
+                                           int32_t offset_x_cells, int32_t offset_y_cells, float offset_z_m,
+                                           ccmap_merge_report* report) {
+  ccmap::merge_report_to_c(ccmap::MergeReport{}, report);
+  return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
+    ccmap::MergeReport r{};
+    const Status status =
+        ex.merge_snapshot(data, size, ccmap::CellIndex{offset_x_cells, offset_y_cells}, offset_z_m, &r);
+    ccmap::merge_report_to_c(r, report);
+    return ccmap::to_c(status);
+  });
+}
+
+ccmap_status ccmap_merge_snapshot(ccmap_map* map, const uint8_t* data, size_t size, int32_t offset_x_cells,
+                                  int32_t offset_y_cells, float offset_z_m, ccmap_merge_report* report) {
+  ccmap::merge_report_to_c(ccmap::MergeReport{}, report);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack) {
+    ccmap::MergeReport r{};
+    const Status status =
+        ccmap::merge_snapshot(stack, data, size, ccmap::CellIndex{offset_x_cells, offset_y_cells}, offset_z_m, &r);
+    ccmap::merge_report_to_c(r, report);
+    return ccmap::to_c(status);
+  });
+}
+
+ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_exchange_counters* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [out](const auto& ex) {
+    const ccmap::ExchangeCounters& c = ex.counters();
+    *out = ccmap_exchange_counters{c.deltas_exported,   c.deltas_merged,      c.snapshots_merged, c.refused,
+                                   c.refused_corrupt,   c.refused_duplicate,  c.refused_misaligned, c.deltas_missed,
+                                   c.bytes_exported,    c.bytes_merged,       c.cells_exported,   c.cells_merged,
+                                   c.cells_outside};
+    return CCMAP_OK;
   });
 }
 

@@ -42,6 +42,42 @@ Status merge(Cell& cell, const Cell& other, float weight_limit) noexcept {
   return Status::kOk;
 }
 
+template <typename Cell>
+Status unmerge(const Cell& total, const Cell& part, Cell* rest) noexcept {
+  bool done = false;
+  const Status start = detail::unmerge_start(total, part, rest, &done);
+  if (start != Status::kOk || done) {
+    return start;
+  }
+  const float weight = total.weight - part.weight;  // W_r
+  if (!(weight > 0.0F)) {
+    return Status::kBadWeight;
+  }
+  const float ratio = part.weight / weight;  // W_p / W_r
+  Cell out{};
+  out.weight = weight;
+  out.mean_x = total.mean_x + (total.mean_x - part.mean_x) * ratio;
+  out.mean_y = total.mean_y + (total.mean_y - part.mean_y) * ratio;
+  out.mean_z = total.mean_z + (total.mean_z - part.mean_z) * ratio;
+  const float dx = out.mean_x - part.mean_x;  // d = mu_r - mu_p
+  const float dy = out.mean_y - part.mean_y;
+  const float dz = out.mean_z - part.mean_z;
+  const float k = part.weight * (weight / total.weight);  // W_p W_r / W_t
+  const float s_xx = total.s_xx - part.s_xx - k * dx * dx;
+  const float s_yy = total.s_yy - part.s_yy - k * dy * dy;
+  const float s_zz = total.s_zz - part.s_zz - k * dz * dz;
+  out.s_xx = s_xx > 0.0F ? s_xx : 0.0F;
+  out.s_yy = s_yy > 0.0F ? s_yy : 0.0F;
+  out.s_zz = s_zz > 0.0F ? s_zz : 0.0F;
+  out.s_xz = total.s_xz - part.s_xz - k * dx * dz;
+  out.s_yz = total.s_yz - part.s_yz - k * dy * dz;
+  if constexpr (kHasLateralCovariance<Cell>) {
+    out.s_xy = total.s_xy - part.s_xy - k * dx * dy;
+  }
+  *rest = out;
+  return Status::kOk;
+}
+
 bool batch_point_usable(const float* x, const float* y, const float* z, const float* weights,
                         float constant_weight, std::size_t i, CcmBatchCounts* counts) noexcept {
   const Status point_status = ccm_check_point(x[i], y[i], z[i]);
@@ -256,6 +292,13 @@ Status ccm_merge(CcmCell& cell, const CcmCell& other, float weight_limit) noexce
 }
 Status ccm_merge(CcmPaperCell& cell, const CcmPaperCell& other, float weight_limit) noexcept {
   return merge(cell, other, weight_limit);
+}
+
+Status ccm_unmerge(const CcmCell& total, const CcmCell& part, CcmCell* rest) noexcept {
+  return unmerge(total, part, rest);
+}
+Status ccm_unmerge(const CcmPaperCell& total, const CcmPaperCell& part, CcmPaperCell* rest) noexcept {
+  return unmerge(total, part, rest);
 }
 
 CcmBatchCounts ccm_update_batch(CcmCell& cell, const float* x, const float* y, const float* z, const float* weights,

@@ -15,6 +15,8 @@ const char* to_string(Status status) noexcept {
     case Status::kNotInitialised: return "not_initialised";
     case Status::kCorrupt: return "corrupt";
     case Status::kVersionMismatch: return "version_mismatch";
+    case Status::kDuplicate: return "duplicate";
+    case Status::kMisaligned: return "misaligned";
   }
   return "invalid_status";
 }

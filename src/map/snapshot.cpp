@@ -149,6 +149,10 @@ void snapshot_write_header(SnapshotWriter& w, std::size_t total_size, const Snap
   w.u16(kSnapshotFormatVersion);
   w.u16(0U);
   w.u32(static_cast<std::uint32_t>(total_size));
+  snapshot_write_fingerprint(w, f);
+}
+
+void snapshot_write_fingerprint(SnapshotWriter& w, const SnapshotFingerprint& f) noexcept {
   w.u8(f.fine_kind);
   w.u8(f.layer_count);
   w.u16(0U);
@@ -159,20 +163,21 @@ void snapshot_write_header(SnapshotWriter& w, std::size_t total_size, const Snap
   w.u16(f.ccm_cell_bytes);
 }
 
-Status snapshot_check_envelope(const std::uint8_t* data, std::size_t size) noexcept {
+Status check_envelope(const std::uint8_t* data, std::size_t size, const std::uint8_t (&magic)[4],
+                      std::uint16_t version, std::size_t min_size) noexcept {
   if (data == nullptr) {
     return Status::kInvalidArgument;
   }
-  if (size < kSnapshotHeaderBytes + kSnapshotTrailerBytes) {
+  if (size < min_size || size < kSnapshotHeaderBytes + kSnapshotTrailerBytes) {
     return Status::kCorrupt;
   }
   SnapshotReader r(data, size);
-  for (const std::uint8_t b : kMagic) {
+  for (const std::uint8_t b : magic) {
     if (r.u8() != b) {
       return Status::kCorrupt;
     }
   }
-  if (r.u16() != kSnapshotFormatVersion) {
+  if (r.u16() != version) {
     return Status::kVersionMismatch;
   }
   if (r.u16() != 0U) {
@@ -189,6 +194,10 @@ Status snapshot_check_envelope(const std::uint8_t* data, std::size_t size) noexc
     return Status::kCorrupt;
   }
   return Status::kOk;
+}
+
+Status snapshot_check_envelope(const std::uint8_t* data, std::size_t size) noexcept {
+  return check_envelope(data, size, kMagic, kSnapshotFormatVersion, 0U);
 }
 
 Status snapshot_check_fingerprint(SnapshotReader& r, const SnapshotFingerprint& expected) noexcept {

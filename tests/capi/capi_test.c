@@ -1,6 +1,8 @@
 /* The C API from plain C99: placement in static storage, init, frames (with and without
- * weights, map and sensor frame), queries, export, counters, snapshots, every preset and the
- * refusal of NULL pointers, foreign handles and bad enum values.
+ * weights, map and sensor frame), queries, export, counters, snapshots, map exchange (two half
+ * maps exchanging deltas, and a snapshot merge, against one map fed everything), every preset, the
+ * planner queries (footprint, path, arc, cost raster), uncertain moves, and the refusal of NULL
+ * pointers, foreign handles and bad enum values.
  *
  * One case of the portable harness (tests/baremetal/harness.h; capi_case.cpp registers it), so
  * the same file runs on the host, on aarch64 Linux and on the bare-metal board. No stdio and no
@@ -283,6 +285,132 @@ static void test_snapshots(ccmap_map* map) {
   CHECK_STATUS(ccmap_load_snapshot(other, g_snapshot, written), CCMAP_VERSION_MISMATCH);
 }
 
+static uint8_t g_cost[60 * 60];
+
+/* The plane of make_plane with a 15 cm box on [0.42, 0.62] x [-0.21, 0.19]: its edges inside
+ * 8 cm cells (a step exactly on a cell edge is no cell's normal variance). */
+static size_t make_box_plane(void) {
+  const size_t n = make_plane();
+  size_t i;
+  for (i = 0; i < n; ++i) {
+    const float x = g_xyz[3 * i], y = g_xyz[3 * i + 1];
+    if (x >= 0.42f && x <= 0.62f && y >= -0.21f && y <= 0.19f) g_xyz[3 * i + 2] += 0.15f;
+  }
+  return n;
+}
+
+static void test_planner_queries(ccmap_map* map) {
+  const size_t n = make_box_plane();
+  const float sensor[3] = {0.0f, 0.0f, 0.5f};
+  const ccmap_footprint flat = {-0.5f, 0.01f, 1.0f, 0.0f, 0.6f, 0.4f};
+  const ccmap_footprint on_box = {0.52f, -0.01f, 1.0f, 0.0f, 0.6f, 0.4f};
+  const ccmap_footprint off_map = {40.0f, 0.0f, 1.0f, 0.0f, 0.6f, 0.4f};
+  ccmap_footprint bad = flat;
+  const float path[4] = {-0.8f, 0.0f, 0.8f, 0.0f};
+  const ccmap_path_pose start = {-0.8f, 0.0f, 1.0f, 0.0f};
+  const ccmap_path_sweep sweep = {0.6f, 0.4f, 0.02f, CCMAP_DEFAULT_MAX_UNKNOWN_SHARE};
+  ccmap_path_sweep bad_sweep = sweep;
+  ccmap_footprint_result f;
+  ccmap_path_result pr;
+  ccmap_costmap_spec spec;
+  ccmap_costmap_stats stats;
+  ccmap_frame_counters c;
+  ccmap_params p = precise_lidar_params(CCMAP_PRESET_CADRE);
+  CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_update_frame(map, g_xyz, NULL, n, sensor, &c), CCMAP_OK);
+
+  /* Footprints: flat ground (the plane's range over 0.6 x 0.4: 0.1 * 0.6 + 0.05 * 0.4 = 0.08, give
+   * or take a 4 cm constant cell's step), the box, off the map. */
+  CHECK_STATUS(ccmap_query_footprint(map, &flat, &f), CCMAP_OK);
+  CHECK(f.worst_class == CCMAP_CLASS_TRAVERSABLE);
+  CHECK_NEAR(f.unknown_share, 0.0, 1e-6);
+  CHECK_NEAR(f.max_step_m, 0.08, 0.012);
+  CHECK_NEAR(f.max_inclination, 0.1118, 0.01);
+  CHECK_NEAR(f.area_m2, 0.24, 1e-4);
+  CHECK(f.cells_visited > 0u);
+  CHECK(ccmap_footprint_class(&f, CCMAP_DEFAULT_MAX_UNKNOWN_SHARE) == CCMAP_CLASS_TRAVERSABLE);
+  CHECK_STATUS(ccmap_query_footprint(map, &on_box, &f), CCMAP_OK);
+  CHECK(f.worst_class == CCMAP_CLASS_OBSTACLE);
+  CHECK(f.max_step_m > 0.12f);
+  CHECK(f.worst_x > 0.3f && f.worst_x < 0.7f);
+  CHECK(ccmap_footprint_class(&f, CCMAP_DEFAULT_MAX_UNKNOWN_SHARE) == CCMAP_CLASS_OBSTACLE);
+  CHECK_STATUS(ccmap_query_footprint(map, &off_map, &f), CCMAP_OUTSIDE_MAP);
+  CHECK_NEAR(f.unknown_share, 1.0, 1e-6);
+  CHECK(ccmap_footprint_class(&f, 1.0f) == CCMAP_CLASS_UNKNOWN);
+  CHECK(ccmap_footprint_class(NULL, 1.0f) == CCMAP_CLASS_UNKNOWN);
+  CHECK_STATUS(ccmap_query_footprint(map, NULL, &f), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_footprint(map, &flat, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_footprint(NULL, &flat, &f), CCMAP_INVALID_ARGUMENT);
+  bad.x = (float)NAN;
+  CHECK_STATUS(ccmap_query_footprint(map, &bad, &f), CCMAP_NON_FINITE_INPUT);
+  CHECK(f.worst_layer == -1);
+  bad = flat;
+  bad.heading_x = 0.0f;
+  CHECK_STATUS(ccmap_query_footprint(map, &bad, &f), CCMAP_INVALID_ARGUMENT);
+  bad = flat;
+  bad.length_m = 3.0f;
+  bad.width_m = 3.0f;
+  CHECK_STATUS(ccmap_query_footprint(map, &bad, &f), CCMAP_OUT_OF_RANGE);
+
+  /* Path at the box: the body's front (0.3 m ahead) reaches the 8 cm cell [0.40, 0.48] that
+   * holds the box edge at 0.9 m (give or take a step). */
+  CHECK_STATUS(ccmap_query_path(map, path, 2, &sweep, &pr), CCMAP_OK);
+  CHECK(pr.hazard_found == 1);
+  CHECK(pr.first_hazard_m > 0.8f && pr.first_hazard_m < 1.0f);
+  CHECK_NEAR(pr.hazard_pose.x, -0.8f + pr.first_hazard_m, 1e-5f);
+  CHECK(pr.hazard.worst_class == CCMAP_CLASS_OBSTACLE || pr.hazard.worst_class == CCMAP_CLASS_STEEP);
+  CHECK_NEAR(pr.path_length_m, 1.6, 1e-6);
+  CHECK(pr.samples >= 2u && pr.samples <= 81u);
+  CHECK_STATUS(ccmap_query_arc(map, &start, 0.0f, 1.6f, &sweep, &pr), CCMAP_OK);
+  CHECK(pr.hazard_found == 1);
+  CHECK(pr.first_hazard_m > 0.8f && pr.first_hazard_m < 1.0f);
+  CHECK_STATUS(ccmap_query_arc(map, &start, 10.0f, 1.0f, &sweep, &pr), CCMAP_OUT_OF_RANGE);
+  CHECK_STATUS(ccmap_query_path(map, NULL, 2, &sweep, &pr), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_path(map, path, 1, &sweep, &pr), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_path(map, path, 2, NULL, &pr), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_arc(map, NULL, 0.0f, 1.0f, &sweep, &pr), CCMAP_INVALID_ARGUMENT);
+  bad_sweep.step_m = 0.001f;
+  CHECK_STATUS(ccmap_query_path(map, path, 2, &bad_sweep, &pr), CCMAP_OUT_OF_RANGE);
+  CHECK(pr.samples == 0u);
+
+  /* Cost raster: 60 x 60 at 4 cm over [-1.2, 1.2]^2 (on the cell grid): the box lethal, the plane
+   * costed, the unobserved rim unknown; inflated by 12 cm around the box. */
+  spec.centre_x = 0.0f;
+  spec.centre_y = 0.0f;
+  spec.resolution_m = 0.04f;
+  spec.side = 60u;
+  spec.inflation_radius_m = 0.0f;
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, &stats), CCMAP_OK);
+  CHECK(g_cost[(size_t)(41 + 60 * 30)] == CCMAP_COST_LETHAL);  /* (0.46, 0.02): the box edge's cell */
+  CHECK(g_cost[(size_t)(12 + 60 * 30)] <= CCMAP_COST_MAX_TRAVERSABLE); /* (-0.7, 0.02) */
+  CHECK(g_cost[(size_t)(12 + 60 * 30)] > 0u);  /* a 6 % slope costs something */
+  CHECK(g_cost[(size_t)(2 + 60 * 30)] == CCMAP_COST_UNKNOWN);  /* (-1.1, 0.02): never observed */
+  CHECK(stats.lethal > 10u && stats.unknown > 100u);
+  CHECK(stats.free + stats.cost + stats.inscribed + stats.lethal + stats.unknown == 3600u);
+  CHECK(stats.inscribed == 0u);
+  spec.inflation_radius_m = 0.12f;
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, &stats), CCMAP_OK);
+  CHECK(stats.inscribed > 10u);
+  CHECK(g_cost[(size_t)(41 + 60 * 30)] == CCMAP_COST_LETHAL);
+  CHECK(g_cost[(size_t)(38 + 60 * 30)] == CCMAP_COST_INSCRIBED);  /* 12 cm before the edge's cell */
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost - 1, &stats), CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, NULL, sizeof g_cost, &stats), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_fill_costmap(map, NULL, g_cost, sizeof g_cost, &stats), CCMAP_INVALID_ARGUMENT);
+  spec.resolution_m = (float)NAN;
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, NULL), CCMAP_NON_FINITE_INPUT);
+  spec.resolution_m = 0.04f;
+  spec.side = CCMAP_MAX_COSTMAP_SIDE + 1u;
+  CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, NULL), CCMAP_INVALID_ARGUMENT);
+
+  /* Uncertain moves. */
+  CHECK_STATUS(ccmap_move_to_uncertain(map, 0.05f, 0.0f, 0.01f), CCMAP_OK);
+  CHECK_STATUS(ccmap_move_to_uncertain(map, 0.05f, 0.0f, (float)NAN), CCMAP_NON_FINITE_INPUT);
+  CHECK_STATUS(ccmap_move_to_uncertain(map, 0.05f, 0.0f, -1.0f), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_move_to_uncertain(NULL, 0.05f, 0.0f, 0.01f), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_query_footprint(map, &on_box, &f), CCMAP_OK);
+  CHECK(f.worst_class == CCMAP_CLASS_OBSTACLE); /* forgetting keeps classes */
+}
+
 static void test_single_layer_presets(void) {
   const ccmap_preset presets[3] = {CCMAP_PRESET_SINGLE_CCM, CCMAP_PRESET_SINGLE_KALMAN, CCMAP_PRESET_SINGLE_OMG};
   const char* const names[3] = {"single CCM", "single Kalman", "single OMG"};
@@ -312,6 +440,157 @@ static void test_single_layer_presets(void) {
   }
 }
 
+/* Every `step`-th point of the plane from `first` on, into the map, one point per frame. */
+static void feed_every(ccmap_map* map, size_t n, size_t first, size_t step) {
+  const float sensor[3] = {0.0f, 0.0f, 0.5f};
+  size_t i;
+  for (i = first; i < n; i += step) {
+    ccmap_frame_counters c;
+    CHECK_STATUS(ccmap_update_frame(map, &g_xyz[3 * i], NULL, 1, sensor, &c), CCMAP_OK);
+  }
+}
+
+/* Largest height difference between two maps' answers on a raster; -1 if the answers differ in
+ * status, layer or class anywhere. */
+static float max_height_difference(const ccmap_map* a, const ccmap_map* b) {
+  float worst = 0.0f;
+  float x, y;
+  for (y = -0.95f; y < 0.95f; y += 0.05f) {
+    for (x = -0.95f; x < 0.95f; x += 0.05f) {
+      ccmap_query_result qa, qb;
+      const ccmap_status sa = ccmap_query(a, x, y, &qa);
+      const ccmap_status sb = ccmap_query(b, x, y, &qb);
+      if (sa != sb || qa.cell_class != qb.cell_class || qa.layer != qb.layer) {
+        return -1.0f;
+      }
+      if (fabsf(qa.height_m - qb.height_m) > worst) {
+        worst = fabsf(qa.height_m - qb.height_m);
+      }
+    }
+  }
+  return worst;
+}
+
+/* Rounds a pointer into g_single up to the storage alignment. */
+static unsigned char* aligned_in_single(size_t offset) {
+  const uintptr_t base = (uintptr_t)(void*)&g_single.bytes[offset];
+  const uintptr_t align = CCMAP_STORAGE_ALIGN;
+  return &g_single.bytes[offset + (size_t)((align - base % align) % align)];
+}
+
+/* Two half maps (the even and the odd points of the plane, maps A and B in the CADRE storages)
+ * exchange deltas and must then answer as a map fed every point (the reference, placed with the
+ * two exchanges and the delta buffer in the single-layer storage, free by now). No limiter and no
+ * effective floor: the merge is exact up to float rounding. */
+static void test_exchange(void) {
+  const size_t exchange_size = ccmap_exchange_storage_size(CCMAP_PRESET_CADRE) + CCMAP_STORAGE_ALIGN;
+  const size_t map_size = ccmap_storage_size(CCMAP_PRESET_CADRE) + CCMAP_STORAGE_ALIGN;
+  const size_t delta_capacity = 131072u;
+  unsigned char* ex_a_storage = aligned_in_single(0u);
+  unsigned char* ex_b_storage = aligned_in_single(exchange_size);
+  unsigned char* all_storage = aligned_in_single(2u * exchange_size);
+  unsigned char* delta = aligned_in_single(2u * exchange_size + map_size);
+  ccmap_map *a = NULL, *b = NULL, *all = NULL;
+  ccmap_exchange *ex_a = NULL, *ex_b = NULL;
+  ccmap_exchange_params pa, pb;
+  ccmap_export_report er;
+  ccmap_merge_report mr;
+  ccmap_exchange_counters counters;
+  size_t written = 0, delta_size = 0, snapshot_size = 0;
+  unsigned char crc_before[4];
+  const size_t n = make_plane();
+  ccmap_params p = precise_lidar_params(CCMAP_PRESET_CADRE);
+  p.weight_limit = (float)INFINITY;
+  p.kalman_min_variance = 1e-30f;
+
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_CADRE) <= CCMAP_CADRE_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_CCM) <= CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_KALMAN) <= CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_OMG) <= CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE);
+  CHECK(ccmap_exchange_storage_size((ccmap_preset)9) == 0u);
+  CHECK(ccmap_delta_max_size(CCMAP_PRESET_CADRE) == CCMAP_CADRE_DELTA_MAX_SIZE);
+  CHECK(ccmap_delta_min_size(CCMAP_PRESET_CADRE) == 152u);
+  CHECK(strcmp(ccmap_status_string(CCMAP_DUPLICATE), "duplicate") == 0);
+  CHECK(strcmp(ccmap_status_string(CCMAP_MISALIGNED), "misaligned") == 0);
+  if ((size_t)(delta + delta_capacity - g_single.bytes) > sizeof g_single) {
+    ccmap_test_note("  map exchange skipped (two exchanges and a map do not fit this target's RAM)");
+    return;
+  }
+
+  CHECK_STATUS(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, &a), CCMAP_OK);
+  CHECK_STATUS(ccmap_place(&g_storage_copy, sizeof g_storage_copy, CCMAP_PRESET_CADRE, &b), CCMAP_OK);
+  CHECK_STATUS(ccmap_place(all_storage, map_size, CCMAP_PRESET_CADRE, &all), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(a, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(b, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_init(all, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_place(ex_a_storage, ccmap_exchange_storage_size(CCMAP_PRESET_CADRE) - 1u,
+                                    CCMAP_PRESET_CADRE, &ex_a),
+               CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_exchange_place(ex_a_storage, exchange_size, (ccmap_preset)7, &ex_a), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_place(ex_a_storage, exchange_size, CCMAP_PRESET_CADRE, &ex_a), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_place(ex_b_storage, exchange_size, CCMAP_PRESET_CADRE, &ex_b), CCMAP_OK);
+  pa.rover_id = 1u;
+  pa.session = 1u;
+  pa.origin_x_cells = 0;
+  pa.origin_y_cells = 0;
+  pa.origin_z_m = 0.0f;
+  pb = pa;
+  pb.rover_id = 2u;
+  CHECK_STATUS(ccmap_exchange_init(ex_a, (ccmap_map*)(void*)ex_b_storage, &pa), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_init(ex_a, a, NULL), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_init(NULL, a, &pa), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_init(ex_a, a, &pa), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_init(ex_b, b, &pb), CCMAP_OK);
+
+  feed_every(a, n, 0u, 2u); /* the even points */
+  feed_every(b, n, 1u, 2u); /* the odd points */
+  feed_every(all, n, 0u, 1u);
+  CHECK_STATUS(ccmap_save_snapshot(b, g_snapshot, sizeof g_snapshot, &snapshot_size), CCMAP_OK);
+
+  /* A -> B, B -> A. */
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, 100u, 0.0f, 0, &written, &er), CCMAP_BUFFER_TOO_SMALL);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, -1.0f, 0, &written, &er), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 5, &written, &er), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_OK);
+  CHECK(er.sequence == 1u && er.cells_written > 100u && er.bytes == written && er.cells_pending == 0u);
+  delta_size = written;
+  /* A flipped bit is refused and leaves B's map as it was: its snapshot, saved again, has the
+   * same CRC-32 trailer (no frame ran in between, so even the timing field is the same). */
+  memcpy(crc_before, &g_snapshot[snapshot_size - 4u], 4u);
+  delta[delta_size / 2u] ^= 0x04u;
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_CORRUPT);
+  delta[delta_size / 2u] ^= 0x04u;
+  CHECK_STATUS(ccmap_save_snapshot(b, g_snapshot, sizeof g_snapshot, &written), CCMAP_OK);
+  CHECK(written == snapshot_size && memcmp(crc_before, &g_snapshot[snapshot_size - 4u], 4u) == 0);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_a, delta, delta_size, &mr), CCMAP_DUPLICATE); /* its own */
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_OK);
+  CHECK(mr.sender_id == 1u && mr.sequence == 1u && mr.cells_merged == er.cells_written && mr.cells_outside == 0u);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_DUPLICATE); /* twice */
+  CHECK_STATUS(ccmap_exchange_export(ex_b, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_OK);
+  CHECK(er.cells_pending == 0u);
+  CHECK_STATUS(ccmap_exchange_merge_delta(ex_a, delta, written, &mr), CCMAP_OK);
+  CHECK(max_height_difference(a, all) >= 0.0f && max_height_difference(a, all) < 1e-5f);
+  CHECK(max_height_difference(b, all) >= 0.0f && max_height_difference(b, all) < 1e-5f);
+
+  CHECK_STATUS(ccmap_exchange_get_counters(ex_b, &counters), CCMAP_OK);
+  CHECK(counters.deltas_exported == 1u && counters.deltas_merged == 1u && counters.refused == 2u &&
+        counters.refused_corrupt == 1u && counters.refused_duplicate == 1u);
+  CHECK_STATUS(ccmap_exchange_get_counters(NULL, &counters), CCMAP_INVALID_ARGUMENT);
+  CHECK_STATUS(ccmap_exchange_merge_delta((ccmap_exchange*)(void*)&g_storage, delta, written, &mr),
+               CCMAP_INVALID_ARGUMENT); /* a map handle is not an exchange */
+
+  /* Re-initialising A retires its exchange; A fed the even points again, plus the snapshot of B's
+   * half, is the map fed everything. */
+  CHECK_STATUS(ccmap_init(a, &p), CCMAP_OK);
+  CHECK_STATUS(ccmap_exchange_export(ex_a, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_NOT_INITIALISED);
+  feed_every(a, n, 0u, 2u);
+  CHECK_STATUS(ccmap_merge_snapshot(a, g_snapshot, snapshot_size, 1, 0, 0.0f, &mr), CCMAP_MISALIGNED);
+  CHECK_STATUS(ccmap_merge_snapshot(a, g_snapshot, snapshot_size - 1u, 0, 0, 0.0f, &mr), CCMAP_CORRUPT);
+  CHECK_STATUS(ccmap_merge_snapshot(a, g_snapshot, snapshot_size, 0, 0, 0.0f, &mr), CCMAP_OK);
+  CHECK(mr.cells_merged > 100u && mr.sender_id == 0u);
+  CHECK(max_height_difference(a, all) >= 0.0f && max_height_difference(a, all) < 1e-5f);
+}
+
 /* The whole C API test: one case (capi_case.cpp). CCMAP_TEST_PLATFORM_NAME: the platform
  * library the build links ("posix" or "baremetal"). */
 void ccmap_capi_test(void) {
@@ -327,5 +606,7 @@ void ccmap_capi_test(void) {
   test_params(map);
   test_frames_queries_export(map);
   test_snapshots(map);
+  test_planner_queries(map);
   test_single_layer_presets();
+  test_exchange();
 }

@@ -44,7 +44,7 @@ TEST(Assert, DefaultHookGoesToPlatformFaultAndReturns) {
 }
 
 TEST(Status, EveryStatusHasAName) {
-  for (int i = 0; i <= static_cast<int>(Status::kVersionMismatch); ++i) {
+  for (int i = 0; i <= static_cast<int>(Status::kMisaligned); ++i) {
     const char* name = to_string(static_cast<Status>(i));
     ASSERT_NE(name, nullptr);
     EXPECT_STRNE(name, "invalid_status") << "status " << i << " has no name";

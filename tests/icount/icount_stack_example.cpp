@@ -21,19 +21,10 @@
 
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/count_arg.hpp"
 #include "support/icount_marker.hpp"
 
 namespace {
-bool parse(const char* text, int max, int* value) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < 1 || v > max) {
-    return false;
-  }
-  *value = static_cast<int>(v);
-  return true;
-}
-
 template <typename Config>
 int run(int frames, int width_px, int height_px, bool sensor_frame) {
   const std::size_t points = static_cast<std::size_t>(width_px) * static_cast<std::size_t>(height_px);
@@ -68,6 +59,7 @@ int run(int frames, int width_px, int height_px, bool sensor_frame) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  using ccmap::test::parse_count;
   int frames = 3;
   int width_px = 80;
   int height_px = 50;
@@ -75,8 +67,8 @@ int main(int argc, char** argv) {
   const bool paper_cell = argc >= 6 && std::strcmp(argv[5], "paper") == 0;
   const bool good_path = argc < 5 || sensor_frame || std::strcmp(argv[4], "map") == 0;
   const bool good_cell = argc < 6 || paper_cell || std::strcmp(argv[5], "full") == 0;
-  if (argc != 1 && (argc < 4 || argc > 6 || !good_path || !good_cell || !parse(argv[1], 1000, &frames) ||
-                    !parse(argv[2], 4000, &width_px) || !parse(argv[3], 4000, &height_px))) {
+  if (argc != 1 && (argc < 4 || argc > 6 || !good_path || !good_cell || !parse_count(argv[1], 1000, &frames) ||
+                    !parse_count(argv[2], 4000, &width_px) || !parse_count(argv[3], 4000, &height_px))) {
     std::fprintf(stderr,
                  "usage: icount_stack_example [frames (1..1000) width_px height_px (1..4000) [map|sensor [full|paper]]]\n");
     return 2;

@@ -2,7 +2,7 @@
 // counted under QEMU by the project's plugin (tools/qemu-icount) between markers around the cycle
 // alone (frame generation is outside them). The same binary counts the same instructions: the
 // ctest cannot flake. Registered in tests/map/CMakeLists.txt with the limits (label timing):
-//   region 1: every cycle (move_to + update_frame_sensor + corridor queries)
+//   region 1: every cycle (move_to + update_frame_sensor + corridor footprint + 2 m path)
 //   region 2: the update_frame_sensor calls alone (for the per-point figures)
 //   region 3: the update_frame calls of the same points in the map frame (the 1.25x ratio)
 // On other targets the markers are empty and the program only checks the cycles.

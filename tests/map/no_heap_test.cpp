@@ -1,7 +1,9 @@
 // Proof of "no heap after initialisation": this test binary replaces the global allocation
 // functions (operator new/delete in all forms, and malloc/calloc/realloc/free through glibc's
 // __libc_* entry points) with counting versions, builds a CADRE stack, and asserts that
-// feeding frames, moving, querying and exporting allocate nothing.
+// feeding frames, moving (also with a position sigma), querying, exporting, the planner queries
+// (footprint, path, arc, cost raster) and map exchange's export, delta merge and snapshot merge
+// allocate nothing.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -10,6 +12,11 @@
 #include <new>
 #include <vector>
 
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
+#include "ccmap/map/exchange.hpp"
+#include "ccmap/map/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/poses.hpp"
 
@@ -69,6 +76,7 @@ namespace {
 // Stack in static storage, as flight software would place it.
 Stack<CadreConfig> g_stack;
 CellRecord g_records[64 * 64];
+std::uint8_t g_cost[125 * 125];
 
 TEST(NoHeap, CountingAllocatorSeesAllocations) {
   // The instrument works: a vector allocation is counted.
@@ -110,6 +118,15 @@ TEST(NoHeap, CadreStackRunsWithoutAllocatingAfterInit) {
       std::size_t written = 0;
       status_errors += g_stack.export_layer(layer, g_records, 64 * 64, &written) != Status::kOk;
     }
+    // The planner queries and the uncertain move.
+    status_errors += g_stack.move_to(0.3F * static_cast<float>(step), 0.1F, 0.01F) != Status::kOk;
+    status_errors += query_footprint(g_stack, Footprint{0.5F, 0.2F, 0.8F, 0.6F, 2.0F, 1.0F}).status != Status::kOk;
+    const PathPoint route[] = {{0.0F, 0.0F}, {2.0F, 0.5F}, {2.5F, 2.0F}};
+    status_errors += query_path(g_stack, route, 3, PathSweep{0.6F, 0.4F, 0.05F, 1.0F}).status != Status::kOk;
+    status_errors += query_arc(g_stack, PathPose{0.0F, 0.0F, 1.0F, 0.0F}, 0.5F, 2.0F, PathSweep{0.6F, 0.4F, 0.05F, 1.0F})
+                         .status != Status::kOk;
+    status_errors += fill_costmap(g_stack, CostmapSpec{0.0F, 0.0F, 0.04F, 125U, 0.3F}, g_cost, sizeof g_cost, nullptr) !=
+                     Status::kOk;
   }
   (void)g_stack.move_to(std::numeric_limits<float>::quiet_NaN(), 0.0F);
   (void)g_stack.move_to(1000.0F, 1000.0F);
@@ -117,6 +134,41 @@ TEST(NoHeap, CadreStackRunsWithoutAllocatingAfterInit) {
   EXPECT_EQ(status_errors, 0);
   EXPECT_EQ(g_allocations.load(), 0L) << "the map allocated on the heap after init";
   EXPECT_GT(g_stack.total_counters().used, 100000U);
+}
+
+Stack<CadreConfig> g_mate;
+MapExchange<CadreConfig> g_exchange, g_mate_exchange;
+std::uint8_t g_delta[MapExchange<CadreConfig>::max_delta_size()];
+std::uint8_t g_snapshot[snapshot_size<CadreConfig>()];
+
+TEST(NoHeap, MapExchangeExportsAndMergesWithoutAllocating) {
+  ASSERT_EQ(g_stack.init(default_stack_params(0.04F)), Status::kOk);
+  ASSERT_EQ(g_mate.init(default_stack_params(0.04F)), Status::kOk);
+  ASSERT_EQ(g_exchange.init(g_stack, ExchangeParams{1U, 1U, CellIndex{0, 0}, 0.0F}), Status::kOk);
+  ASSERT_EQ(g_mate_exchange.init(g_mate, ExchangeParams{2U, 1U, CellIndex{0, 0}, 0.0F}), Status::kOk);
+  std::vector<PointXYZ> frame;
+  for (int i = 0; i < 20000; ++i) {
+    const float x = -3.0F + 6.0F * static_cast<float>(i % 200) / 200.0F;
+    const float y = -3.0F + 6.0F * static_cast<float>(i / 200) / 100.0F;
+    frame.push_back(PointXYZ{x, y, 0.05F * y});
+  }
+  std::size_t snapshot_bytes = 0;
+  ASSERT_EQ(save_snapshot(g_mate, g_snapshot, sizeof g_snapshot, &snapshot_bytes), Status::kOk);
+  g_allocations = 0;
+  g_counting = true;
+  long status_errors = 0;
+  for (int step = 0; step < 3; ++step) {
+    status_errors += g_stack.move_to(0.2F * static_cast<float>(step), 0.0F) != Status::kOk;
+    status_errors += g_stack.update_frame(frame.data(), frame.size(), PointXYZ{0.0F, 0.0F, 0.175F}, nullptr) != Status::kOk;
+    std::size_t written = 0;
+    status_errors += g_exchange.export_delta(g_delta, sizeof g_delta, ExportOptions{0.0F, 0}, &written, nullptr) != Status::kOk;
+    status_errors += g_mate_exchange.merge_delta(g_delta, written, nullptr) != Status::kOk;
+    status_errors += g_mate_exchange.merge_delta(g_delta, written, nullptr) != Status::kDuplicate;
+  }
+  status_errors += g_exchange.merge_snapshot(g_snapshot, snapshot_bytes, CellIndex{0, 0}, 0.0F, nullptr) != Status::kOk;
+  g_counting = false;
+  EXPECT_EQ(status_errors, 0);
+  EXPECT_EQ(g_allocations.load(), 0L) << "map exchange allocated on the heap";
 }
 
 }  // namespace

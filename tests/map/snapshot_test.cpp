@@ -10,6 +10,7 @@
 
 #include "ccmap/map/snapshot.hpp"
 #include "support/reference.hpp"
+#include "support/wire_bytes.hpp"
 
 namespace ccmap {
 namespace {
@@ -51,20 +52,10 @@ Bytes save(const Stack<Config>& stack) {
   return bytes;
 }
 
-std::uint32_t get_u32(const Bytes& b, std::size_t at) {
-  return static_cast<std::uint32_t>(b[at]) | static_cast<std::uint32_t>(b[at + 1]) << 8 |
-         static_cast<std::uint32_t>(b[at + 2]) << 16 | static_cast<std::uint32_t>(b[at + 3]) << 24;
-}
-void put_u32(Bytes& b, std::size_t at, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) b[at + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-void put_f32(Bytes& b, std::size_t at, float v) {
-  std::uint32_t bits = 0;
-  std::memcpy(&bits, &v, 4);
-  put_u32(b, at, bits);
-}
-// Recomputes the trailer so that a forged field passes the CRC and must be caught by validation.
-void reseal(Bytes& b) { put_u32(b, b.size() - 4, crc32_update(0U, b.data(), b.size() - 4)); }
+using test::get_u32;
+using test::put_f32;
+using test::put_u32;
+using test::reseal;
 
 // Byte offsets of the format (snapshot.hpp).
 constexpr std::size_t kVersionAt = 4;

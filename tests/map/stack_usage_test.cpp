@@ -4,7 +4,8 @@
 // call's high-water mark (minus the same measurement of a no-op call: the harness's own share).
 // Portable: runs under QEMU too.
 //
-// Contract (docs/integration.md): every public call of Stack<CadreConfig> uses < 4 KiB of stack
+// Contract (docs/integration.md): every public call of Stack<CadreConfig> (and the planner queries
+// over it: map/footprint.hpp, map/path_query.hpp, map/costmap.hpp) uses < 4 KiB of stack
 // in an optimised build (asserted when built with optimisation and without sanitizers; debug and
 // sanitizer builds only report). Worst cases: query/export pool recursively over all layers
 // (depth <= layer count), so the deepest call is measured with data in every layer.
@@ -19,10 +20,25 @@
 #include <string>
 #include <vector>
 
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/poses.hpp"
 
-extern template class ccmap::Stack<ccmap::CadreConfig>;  // tests/map/stack_instances.cpp
+// tests/map/stack_instances.cpp
+extern template class ccmap::Stack<ccmap::CadreConfig>;
+extern template ccmap::FootprintResult ccmap::query_footprint<ccmap::CadreConfig>(
+    const ccmap::Stack<ccmap::CadreConfig>&, const ccmap::Footprint&) noexcept;
+extern template ccmap::PathResult ccmap::query_path<ccmap::CadreConfig>(const ccmap::Stack<ccmap::CadreConfig>&,
+                                                                       const ccmap::PathPoint*, std::size_t,
+                                                                       const ccmap::PathSweep&) noexcept;
+extern template ccmap::PathResult ccmap::query_arc<ccmap::CadreConfig>(const ccmap::Stack<ccmap::CadreConfig>&,
+                                                                      const ccmap::PathPose&, float, float,
+                                                                      const ccmap::PathSweep&) noexcept;
+extern template ccmap::Status ccmap::fill_costmap<ccmap::CadreConfig>(const ccmap::Stack<ccmap::CadreConfig>&,
+                                                                     const ccmap::CostmapSpec&, std::uint8_t*,
+                                                                     std::size_t, ccmap::CostmapStats*) noexcept;
 
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer)
@@ -99,6 +115,10 @@ struct Fixture {
   std::unique_ptr<S> stack = std::make_unique<S>();
   std::vector<PointXYZ> points;
   std::vector<CellRecord> records = std::vector<CellRecord>(64 * 64);
+  std::vector<std::uint8_t> cost = std::vector<std::uint8_t>(125 * 125);
+  std::vector<PathPoint> path = std::vector<PathPoint>{PathPoint{0.0F, 0.0F}, PathPoint{2.0F, 0.3F}};
+  PathSweep sweep{0.6F, 0.4F, 0.05F, 0.1F};
+  PathPose start{0.0F, 0.0F, 1.0F, 0.0F};
   Pose pose;
   volatile float sink = 0.0F;  // keeps results alive
   Fixture() {
@@ -152,6 +172,21 @@ TEST(StackUsage, EveryPublicCallUsesLessThanFourKiB) {
       CCMAP_CALL("export_layer (fine)", {
         std::size_t n = 0;
         f.sink = f.stack->export_layer(0, f.records.data(), f.records.size(), &n) == Status::kOk ? static_cast<float>(n) : -1.0F;
+      }),
+      CCMAP_CALL("move_to with uncertainty", { f.sink = f.stack->move_to(0.0F, 0.0F, 0.01F) == Status::kOk ? 1.0F : 0.0F; }),
+      CCMAP_CALL("query_footprint (0.6 x 0.4 m)", {
+        f.sink = query_footprint(*f.stack, Footprint{0.3F, 0.1F, 0.8F, 0.6F, 0.6F, 0.4F}).max_step_m;
+      }),
+      CCMAP_CALL("query_footprint (far: coarse layers pool)", {
+        f.sink = query_footprint(*f.stack, Footprint{7.0F, 7.0F, 0.8F, 0.6F, 2.0F, 1.0F}).max_step_m;
+      }),
+      CCMAP_CALL("query_path (2 m)",
+                 { f.sink = query_path(*f.stack, f.path.data(), f.path.size(), f.sweep).first_hazard_m; }),
+      CCMAP_CALL("query_arc (2 m)", { f.sink = query_arc(*f.stack, f.start, 0.5F, 2.0F, f.sweep).checked_m; }),
+      CCMAP_CALL("fill_costmap (5 m at 4 cm, inflated)", {
+        CostmapStats st{};
+        f.sink = fill_costmap(*f.stack, CostmapSpec{0.0F, 0.0F, 0.04F, 125U, 0.3F}, f.cost.data(), f.cost.size(), &st) ==
+                         Status::kOk ? static_cast<float>(st.lethal) : -1.0F;
       }),
       CCMAP_CALL("move_to (teleport)", { f.sink = f.stack->move_to(500.0F, 500.0F) == Status::kOk ? 1.0F : 0.0F; }),
   };

@@ -1,7 +1,7 @@
 // The 80 ms budget of the flight cycle (paper: 850 x 650 px stereo at 80 ms on a Snapdragon 820),
 // measured as a rover runs it: per frame move_to the new pose, update_frame_sensor with a CADRE
-// frame in the sensor frame (2 % NaN, 6 % beyond every IV-G range), and the planner's corridor
-// queries (tests/support/flight_cycle.hpp). Ten cycles, one attempt.
+// frame in the sensor frame (2 % NaN, 6 % beyond every IV-G range), and the planner's questions:
+// the corridor footprint and the 2 m path (tests/support/flight_cycle.hpp). Ten cycles, one attempt.
 //
 // What is asserted: the median thread CPU time of the ten cycles (platform::thread_cpu_ns: time
 // the other core's load and preemption do not inflate) is below 80 ms; wall time is printed
@@ -49,14 +49,14 @@ TEST(Timing, FlightCycleMedianUnderTheEightyMillisecondBudget) {
     const std::uint64_t cpu1 = platform::thread_cpu_ns();
     ASSERT_TRUE(test::cycle_ok(outcome, frame.sensor_points.size()))
         << "cycle " << k << ": used " << outcome.counters.used << ", non-finite " << outcome.counters.rejected_non_finite
-        << ", too noisy " << outcome.counters.too_noisy << ", corridor unknown " << outcome.corridor_unknown << " of "
-        << outcome.corridor_cells;
+        << ", too noisy " << outcome.counters.too_noisy << ", corridor unknown share " << outcome.corridor.unknown_share
+        << ", path poses " << outcome.path.samples;
     cpu_ms.push_back(static_cast<double>(cpu1 - cpu0) * 1e-6);
     wall_ms.push_back(static_cast<double>(wall1 - wall0) * 1e-6);
   }
   const double cpu = median(cpu_ms);
   const double wall = median(wall_ms);
-  std::printf("[ timing ] flight cycle (move, sensor-frame update of 552,500 points, 1250 corridor queries), %s: "
+  std::printf("[ timing ] flight cycle (move, sensor-frame update of 552,500 points, corridor footprint, 2 m path), %s: "
               "median CPU %.2f ms (max %.2f), median wall %.2f ms (max %.2f) over %d cycles (budget %.0f ms)\n",
               platform::name(), cpu, *std::max_element(cpu_ms.begin(), cpu_ms.end()), wall,
               *std::max_element(wall_ms.begin(), wall_ms.end()), kCycles, kBudgetMs);

@@ -44,6 +44,32 @@ struct CcmCellDouble {
   double cov_xz() const { return weight > 0.0 ? s_xz / weight : 0.0; }
   double cov_yz() const { return weight > 0.0 ? s_yz / weight : 0.0; }
   double cov_xy() const { return weight > 0.0 ? s_xy / weight : 0.0; }
+
+  /// Slopes (a, b) by the documented rule (docs/design.md section 2), in double. Paper cell:
+  /// eq. (9) per axis, 0 along an axis of variance <= 1e-12. Full cell: the 2 x 2 solve with
+  /// the lateral covariance; trace <= 1e-12: no slope; det <= 1e-4 trace^2 (a line of points):
+  /// the pseudo-inverse Sigma / trace^2.
+  void slopes(bool full_cell, double* a, double* b) const {
+    const double vxx = var_xx(), vyy = var_yy(), cxz = cov_xz(), cyz = cov_yz();
+    if (!full_cell) {
+      *a = vxx > 1e-12 ? cxz / vxx : 0.0;
+      *b = vyy > 1e-12 ? cyz / vyy : 0.0;
+      return;
+    }
+    const double cxy = cov_xy(), trace = vxx + vyy, det = vxx * vyy - cxy * cxy;
+    double ixx = 0.0, iyy = 0.0, ixy = 0.0;
+    if (trace > 1e-12 && det > 1e-4 * trace * trace) {
+      ixx = vyy / det;
+      iyy = vxx / det;
+      ixy = -cxy / det;
+    } else if (trace > 1e-12) {
+      ixx = vxx / (trace * trace);
+      iyy = vyy / (trace * trace);
+      ixy = cxy / (trace * trace);
+    }
+    *a = ixx * cxz + ixy * cyz;
+    *b = ixy * cxz + iyy * cyz;
+  }
 };
 
 }  // namespace ccmap::test

@@ -11,15 +11,19 @@
 // pixels have no disparity (NaN) and 6 % lie beyond every IV-G range (6..15 m): a real matcher's
 // frame is not all usable ground.
 //
-// The planner's question: the cells of the rover's 1 m x 2 m corridor ahead (0.3 .. 2.3 m in
-// front, +-0.5 m to the sides), one query per finest cell (4 cm): the worst class and the
-// unknown share. (A footprint query in the library will replace the per-cell queries.)
+// The planner's questions (map/footprint.hpp, map/path_query.hpp): the footprint query of the
+// rover's 1 m x 2 m corridor ahead (0.3 .. 2.3 m in front, +-0.5 m to the sides), and the path
+// query of the next 2 m straight ahead swept by the 0.6 m x 0.4 m body every 5 cm (41 poses).
+// corridor_queries() keeps the per-cell form (1250 point queries over the same corridor) that
+// tests/icount/icount_corridor_example.cpp compares with the footprint query.
 #pragma once
 
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
 
@@ -74,18 +78,21 @@ struct CycleOutcome {
   Status move_status;
   Status update_status;
   FrameCounters counters;
-  int corridor_cells;    ///< cells queried
-  int corridor_unknown;  ///< of them unknown or outside the map
-  int corridor_hazards;  ///< of them obstacle or steep
+  FootprintResult corridor;  ///< the 1 m x 2 m corridor ahead
+  PathResult path;           ///< the next 2 m swept by the rover body
 };
 
-/// One cycle: move_to, update_frame_sensor, the corridor queries. No allocation.
+/// The corridor ahead of the rover as a footprint: 2 m long from 0.3 m in front, 1 m wide.
+inline Footprint corridor_footprint(const CyclePose& pose) noexcept {
+  return Footprint{pose.x + 1.3F * pose.heading_cos, pose.y + 1.3F * pose.heading_sin, pose.heading_cos,
+                   pose.heading_sin, 2.0F, 1.0F};
+}
+
+/// The per-cell form of the corridor question: one point query per 4 cm cell (25 x 50);
+/// returns the unknown count and adds the hazardous count to *hazards.
 template <typename Config>
-CycleOutcome run_cycle(Stack<Config>& stack, const CyclePose& pose, const CadreFrame& frame) noexcept {
-  CycleOutcome out{};
-  out.move_status = stack.move_to(pose.x, pose.y);
-  out.update_status =
-      stack.update_frame_sensor(frame.sensor_points.data(), frame.sensor_points.size(), frame.pose, &out.counters);
+int corridor_queries(const Stack<Config>& stack, const CyclePose& pose, int* hazards) noexcept {
+  int unknown = 0;
   const float step = 0.04F;  // the CADRE finest cell
   for (int i = 0; i < 50; ++i) {
     const float ahead = 0.3F + (static_cast<float>(i) + 0.5F) * step;
@@ -94,23 +101,38 @@ CycleOutcome run_cycle(Stack<Config>& stack, const CyclePose& pose, const CadreF
       const float x = pose.x + pose.heading_cos * ahead - pose.heading_sin * side;
       const float y = pose.y + pose.heading_sin * ahead + pose.heading_cos * side;
       const QueryResult q = stack.query(x, y);
-      ++out.corridor_cells;
-      out.corridor_unknown += q.status != Status::kOk ? 1 : 0;
-      out.corridor_hazards += (q.cell_class == CellClass::kObstacle || q.cell_class == CellClass::kSteep) ? 1 : 0;
+      unknown += q.status != Status::kOk ? 1 : 0;
+      *hazards += (q.cell_class == CellClass::kObstacle || q.cell_class == CellClass::kSteep) ? 1 : 0;
     }
   }
+  return unknown;
+}
+
+/// One cycle: move_to, update_frame_sensor, the corridor footprint and the 2 m path. No allocation.
+template <typename Config>
+CycleOutcome run_cycle(Stack<Config>& stack, const CyclePose& pose, const CadreFrame& frame) noexcept {
+  CycleOutcome out{};
+  out.move_status = stack.move_to(pose.x, pose.y);
+  out.update_status =
+      stack.update_frame_sensor(frame.sensor_points.data(), frame.sensor_points.size(), frame.pose, &out.counters);
+  out.corridor = query_footprint(stack, corridor_footprint(pose));
+  const PathPose start{pose.x + 0.3F * pose.heading_cos, pose.y + 0.3F * pose.heading_sin, pose.heading_cos,
+                       pose.heading_sin};
+  out.path = query_arc(stack, start, 0.0F, 2.0F, PathSweep{0.6F, 0.4F, 0.05F, kDefaultMaxUnknownShare});
   return out;
 }
 
 /// True if the cycle did what a rover needs: accepted move and frame, most points used, the
-/// unusable ones refused for the right reasons, and the corridor (seen by the previous frames
-/// and this one) mostly known.
+/// unusable ones refused for the right reasons, the corridor (seen by the previous frames and
+/// this one) answered and mostly known, the path swept to its end or to its first hazard (the
+/// rover's question is the distance to it: the sweep stops there).
 inline bool cycle_ok(const CycleOutcome& o, std::size_t frame_points) noexcept {
   const FrameCounters& c = o.counters;
   const auto n = static_cast<double>(frame_points);
   return o.move_status == Status::kOk && o.update_status == Status::kOk && c.received == frame_points &&
          static_cast<double>(c.rejected_non_finite) > 0.015 * n && static_cast<double>(c.too_noisy) > 0.05 * n &&
-         static_cast<double>(c.used) > 0.8 * n && o.corridor_cells == 1250 && o.corridor_unknown < o.corridor_cells / 2;
+         static_cast<double>(c.used) > 0.8 * n && o.corridor.status == Status::kOk && o.corridor.unknown_share < 0.5F &&
+         o.path.status == Status::kOk && (o.path.samples == 41U || o.path.hazard_found);
 }
 
 }  // namespace ccmap::test

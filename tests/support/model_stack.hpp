@@ -88,6 +88,80 @@ class ModelStack {
     }
   }
 
+  /// The documented uncertain move (docs/design.md, "Uncertainty with motion"), in double: the
+  /// window move, then for every observed CCM cell W' = W s2 / (s2 + W i^2 sigma^2) from its own
+  /// slope and normal variance (eqs. 9, 11 for the paper cell; the least-squares plane of the full
+  /// cell, CcmCellDouble::slopes), at least min(W, max(min_weight, 1e-3)), every co-moment (s_xy
+  /// too) scaled by W' / W; for every observed constant cell the height variance grows by
+  /// (gx^2 + gy^2) sigma^2 (gradient from the observed 4-neighbours' heights: central,
+  /// one-sided, or 0), at most 1e4 m^2.
+  void move_to(float x, float y, double sigma) {
+    move_to(x, y);
+    if (!(sigma > 0.0)) return;
+    faded_ = true;
+    const double s2 = sigma * sigma;
+    const StackParams& params = stack_.params();
+    for (int k = 0; k < S::kLayerCount; ++k) {
+      Layer& l = layers_[k];
+      if (S::layer_is_ccm(k)) {
+        for (auto& [key, cell] : l.cells) {
+          CcmCellDouble& c = cell.ccm;
+          if (!(c.weight > 0.0)) continue;
+          double a = 0.0, b = 0.0;
+          c.slopes(kHasLateralCovariance<typename S::CcmCellType>, &a, &b);
+          const double i2 = a * a + b * b;
+          if (!(i2 > 0.0)) continue;
+          const double residual = std::max(0.0, c.var_zz() - c.cov_xz() * a - c.cov_yz() * b);
+          double w = residual > 0.0 ? c.weight * residual / (residual + c.weight * i2 * s2) : 0.0;
+          const double floor = std::min(c.weight, std::max(double{params.min_weight}, 1e-3));
+          w = std::max(w, floor);
+          if (w >= c.weight) continue;
+          const double scale = w / c.weight;
+          c.s_xx *= scale;
+          c.s_yy *= scale;
+          c.s_zz *= scale;
+          c.s_xz *= scale;
+          c.s_yz *= scale;
+          c.s_xy *= scale;
+          c.weight = w;
+        }
+      } else {
+        const double width = l.width;
+        const auto seen = [&](CellIndex i, double* h) {
+          const auto it = l.cells.find(cell_key(i));
+          if (it == l.cells.end() || !(it->second.weight > 0.0)) return false;
+          *h = it->second.height;
+          return true;
+        };
+        const auto gradient = [&](CellIndex lo, CellIndex hi, double h) {
+          double a = 0.0, b = 0.0;
+          const bool sa = seen(lo, &a), sb = seen(hi, &b);
+          if (sa && sb) return (b - a) / (2.0 * width);
+          if (sb) return (b - h) / width;
+          if (sa) return (h - a) / width;
+          return 0.0;
+        };
+        std::vector<std::pair<std::uint64_t, double>> grown;
+        for (const auto& [key, cell] : l.cells) {
+          if (!(cell.weight > 0.0)) continue;
+          const CellIndex i = cell.index;
+          const double gx = gradient(CellIndex{i.x - 1, i.y}, CellIndex{i.x + 1, i.y}, cell.height);
+          const double gy = gradient(CellIndex{i.x, i.y - 1}, CellIndex{i.x, i.y + 1}, cell.height);
+          const double variance = Config::kFineKind == FineKind::kOmg ? cell.omg_s / cell.weight : cell.variance;
+          grown.emplace_back(key, std::min(1e4, variance + (gx * gx + gy * gy) * s2));
+        }
+        for (const auto& [key, v] : grown) {
+          Cell& cell = l.cells[key];
+          if (Config::kFineKind == FineKind::kOmg) {
+            cell.omg_s = v * cell.weight;
+          } else {
+            cell.variance = v;
+          }
+        }
+      }
+    }
+  }
+
   /// One map-frame frame (weights may be nullptr).
   Counts frame_map(const std::vector<PointXYZ>& pts, const float* weights, PointXYZ origin) {
     Counts c;
@@ -177,7 +251,9 @@ class ModelStack {
       const double pos_tol = position_tolerance_m + 2e-6;  // + float rounding of a mean
       // Weights count points exactly with the constant model; the inverse-variance model weighs
       // by range, which the front quantises (Q16): relative 1e-3.
-      const bool counting = stack_.params().noise.weight_mode() == sensor::WeightMode::kConstant;
+      // After an uncertain move CCM weights follow from the statistics (W' of the fading rule):
+      // compared like them, 1e-3.
+      const bool counting = stack_.params().noise.weight_mode() == sensor::WeightMode::kConstant && !faded_;
       const double weight_tol = counting ? 1e-5 : 1e-3;
       const auto check = [&](bool ok, CellIndex i, const char* field) {
         if (!ok && mismatches++ == 0) {
@@ -321,6 +397,7 @@ class ModelStack {
     double sum_z = 0.0, sum_r2 = 0.0;
   };
   const S& stack_;
+  bool faded_ = false;  ///< an uncertain move happened: weights are no longer counts
   Layer layers_[S::kLayerCount];
   std::unordered_map<std::uint64_t, Batch> batches_;
 };

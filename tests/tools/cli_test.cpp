@@ -475,6 +475,192 @@ TEST(CliQuery, AnswersAtAMapFramePoint) {
   EXPECT_NE(huge.out.find("status: outside_map"), std::string::npos) << huge.out;
 }
 
+/// "key: value" lines of a query's output.
+std::map<std::string, std::string> key_values(const std::string& text) {
+  std::map<std::string, std::string> kv;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    const std::size_t colon = line.find(": ");
+    EXPECT_NE(colon, std::string::npos) << "not 'key: value': " << line;
+    if (colon != std::string::npos) kv[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  return kv;
+}
+
+TEST(CliQuery, FootprintOfTheBodyOnThePlaneAndOnTheStep) {
+  // The scene's plane (0.2, -0.1) with its 30 cm step at local x = 0.84, the ccm preset (8 cm).
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "utm.ply", s);
+  char at[128];
+  // A 0.6 x 0.4 m body along x, 0.5 m clear of the step: traversable, the plane's height range
+  // 0.2 * 0.6 + 0.1 * 0.4 = 0.16 m, its inclination atan(|(0.2, -0.1)|) = 12.6 deg.
+  std::snprintf(at, sizeof at, "%.6f,%.6f", s.x0 - 0.2, s.y0 + 0.1);
+  const CliRun flat = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                           "--footprint", "0.6,0.4"});
+  ASSERT_EQ(flat.code, 0) << flat.err;
+  std::map<std::string, std::string> kv = key_values(flat.out);
+  EXPECT_EQ(kv["class"], "traversable") << "the point answer is still there";
+  EXPECT_EQ(kv["footprint_class"], "traversable");
+  EXPECT_NEAR(std::stod(kv["footprint_unknown_share"]), 0.0, 1e-6);
+  EXPECT_NEAR(std::stod(kv["footprint_max_step_m"]), 0.16, 2e-3);
+  EXPECT_NEAR(std::stod(kv["footprint_max_inclination_deg"]), 12.604, 0.05);
+  // Turned by 90 deg the body spans 0.6 m along y: 0.2 * 0.4 + 0.1 * 0.6 = 0.14 m.
+  const CliRun turned = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                             "--footprint", "0.6,0.4,90"});
+  ASSERT_EQ(turned.code, 0) << turned.err;
+  EXPECT_NEAR(std::stod(key_values(turned.out)["footprint_max_step_m"]), 0.14, 2e-3);
+  // Over the step: obstacle, a step of at least the 30 cm edge.
+  std::snprintf(at, sizeof at, "%.6f,%.6f", s.x0 + 0.84, s.y0 + 0.1);
+  const CliRun step = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                           "--footprint", "0.6,0.4,30"});
+  ASSERT_EQ(step.code, 0) << step.err;
+  kv = key_values(step.out);
+  EXPECT_EQ(kv["footprint_class"], "obstacle");
+  EXPECT_GT(std::stod(kv["footprint_max_step_m"]), 0.3);
+  // Half off the observed square (x local 1.6): unknown at the default 10 %, traversable at 60 %.
+  std::snprintf(at, sizeof at, "%.6f,%.6f", s.x0 + 1.6, s.y0 - 1.0);
+  const CliRun edge = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                           "--footprint", "0.64,0.4"});
+  ASSERT_EQ(edge.code, 0) << edge.err;
+  kv = key_values(edge.out);
+  EXPECT_EQ(kv["footprint_class"], "unknown");
+  EXPECT_NEAR(std::stod(kv["footprint_unknown_share"]), 0.5, 1e-4);
+  const CliRun tolerant = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--at", at,
+                               "--footprint", "0.64,0.4", "--max-unknown-share", "0.6"});
+  ASSERT_EQ(tolerant.code, 0) << tolerant.err;
+  EXPECT_EQ(key_values(tolerant.out)["footprint_class"], "traversable");
+}
+
+TEST(CliQuery, PathFindsTheStepAndTheEndOfTheObservedGround) {
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "utm.ply", s);
+  // Along +x from local (-1.0, 0.1): the body's front (0.3 m ahead) enters the 8 cm cell
+  // [0.80, 0.88) that holds the step just after 1.5 m (2 cm steps: at 1.52).
+  char path[256];
+  std::snprintf(path, sizeof path, "%.6f,%.6f:%.6f,%.6f", s.x0 - 1.0, s.y0 + 0.1, s.x0 + 0.7, s.y0 + 0.1);
+  const CliRun r = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--path", path,
+                        "--footprint", "0.6,0.4", "--step", "0.02"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::map<std::string, std::string> kv = key_values(r.out);
+  ASSERT_NE(kv["first_hazard_m"], "none") << r.out;
+  EXPECT_NEAR(std::stod(kv["first_hazard_m"]), 1.52, 0.025);
+  EXPECT_EQ(kv["hazard_class"], "obstacle");
+  EXPECT_NEAR(std::stod(kv["hazard_x"]), s.x0 - 1.0 + std::stod(kv["first_hazard_m"]), 1e-3) << "absolute coordinates";
+  EXPECT_EQ(kv["first_unknown_m"], "none");
+  EXPECT_NEAR(std::stod(kv["path_length_m"]), 1.7, 1e-5);
+  EXPECT_EQ(kv["path_poses"], "86") << "no unknown footprint: every pose evaluated (1.7 m / 2 cm + 1)";
+  // Along -y from local (-0.5, 0): more than 10 % of the body (0.06 m of its 0.6 m) is beyond the
+  // observed square (y = -1.6) once its front (0.3 m ahead) passes -1.66: 1.6 - 0.3 + 0.06 = 1.36 m.
+  std::snprintf(path, sizeof path, "%.6f,%.6f:%.6f,%.6f:%.6f,%.6f", s.x0 - 0.5, s.y0, s.x0 - 0.5, s.y0 - 0.5, s.x0 - 0.5,
+                s.y0 - 2.0);
+  const CliRun out = run({"query", "--preset", "ccm", "--cloud", (dir / "utm.ply").string(), "--path", path,
+                          "--footprint", "0.6,0.4"});
+  ASSERT_EQ(out.code, 0) << out.err;
+  kv = key_values(out.out);
+  EXPECT_EQ(kv["first_hazard_m"], "none");
+  ASSERT_NE(kv["first_unknown_m"], "none") << out.out;
+  EXPECT_NEAR(std::stod(kv["first_unknown_m"]), 1.36, 0.05);
+}
+
+TEST(CliMap, CostmapPerLayerAsPgmAndPng) {
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "utm.ply", s);
+  const CliRun r = run({"map", "--preset", "cadre", "--cloud", (dir / "utm.ply").string(), "--out",
+                        (dir / "out").string(), "--costmap", "--inflate", "0.1"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const double widths[5] = {0.04, 0.08, 0.16, 0.32, 0.64};
+  for (int k = 0; k < 5; ++k) {
+    SCOPED_TRACE(testing::Message() << "layer " << k);
+    const fs::path png = dir / "out" / ("costmap_" + std::to_string(k) + ".png");
+    const fs::path pgm = dir / "out" / ("costmap_" + std::to_string(k) + ".pgm");
+    ASSERT_TRUE(fs::exists(png)) << png;
+    ASSERT_TRUE(fs::exists(pgm)) << pgm;
+    std::ifstream in(pgm, std::ios::binary);
+    std::string magic;
+    int w = 0, h = 0, maxval = 0;
+    in >> magic >> w >> h >> maxval;
+    in.get();
+    EXPECT_EQ(magic, "P5");
+    EXPECT_EQ(maxval, 255);
+    std::vector<unsigned char> pixels(static_cast<std::size_t>(w * h));
+    in.read(reinterpret_cast<char*>(pixels.data()), static_cast<std::streamsize>(pixels.size()));
+    ASSERT_TRUE(in) << "truncated " << pgm;
+    // One pixel per cell of the layer's observed area (the 3.2 m square, tiled: every cell), rows
+    // north first; each pixel's class from the layer's CSV.
+    const std::vector<LayerCellRow> rows = read_rows(dir / "out" / ("layer_" + std::to_string(k) + ".csv"));
+    ASSERT_FALSE(rows.empty());
+    std::int64_t ix0 = rows[0].ix, ix1 = rows[0].ix, iy0 = rows[0].iy, iy1 = rows[0].iy;
+    for (const LayerCellRow& row : rows) {
+      ix0 = std::min(ix0, row.ix);
+      ix1 = std::max(ix1, row.ix);
+      iy0 = std::min(iy0, row.iy);
+      iy1 = std::max(iy1, row.iy);
+    }
+    ASSERT_EQ(w, ix1 - ix0 + 1);
+    ASSERT_EQ(h, iy1 - iy0 + 1);
+    EXPECT_GE(w, static_cast<int>(std::lround(3.2 / widths[k])));  // 64 cm cells straddle the square: 6
+    EXPECT_LE(w, static_cast<int>(std::lround(3.2 / widths[k])) + 1);
+    int lethal = 0, inscribed = 0, wrong = 0;
+    for (const LayerCellRow& row : rows) {
+      const unsigned char v = pixels[static_cast<std::size_t>((iy1 - row.iy) * w + (row.ix - ix0))];
+      const bool hazard = row.cell_class == "obstacle" || row.cell_class == "steep";
+      const bool ok = hazard ? v == 254 : (row.cell_class == "unknown" ? v == 255 : v <= 253);
+      wrong += ok ? 0 : 1;
+      lethal += v == 254 ? 1 : 0;
+      inscribed += v == 253 ? 1 : 0;
+    }
+    EXPECT_EQ(wrong, 0) << "pixels whose value does not match their cell's class";
+    if (k <= 2) {
+      EXPECT_GT(lethal, 0) << "the step is lethal";
+    }
+    // 10 cm of inflation: 2.5 pixels at 4 cm, 1.25 at 8 cm, less than a pixel beyond.
+    EXPECT_EQ(inscribed > 0, k <= 1) << inscribed << " inscribed pixels";
+  }
+  EXPECT_NE(r.out.find("costmap 0 (80 x 80 at 0.04 m)"), std::string::npos) << r.out;
+}
+
+TEST(CliErrors, PlannerOptionsAreCheckedWithOneLine) {
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.0, 0.0, 0.0};
+  write_scene_ply(dir / "scene.ply", s);
+  const std::string cloud = (dir / "scene.ply").string();
+  const std::string out = (dir / "out").string();
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "0.6"}),
+                        "--footprint", "one number");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "0.6,-1"}),
+                        "--footprint", "negative width");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "30,30"}),
+                        "refused the footprint", "beyond the footprint limit");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0"}), "--path needs --footprint",
+                        "path without a body");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0", "--footprint", "0.6,0.4,10"}),
+                        "YAW_DEG", "yaw with a path");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0", "--footprint", "0.6,0.4"}),
+                        "--path", "one point");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,x", "--footprint", "0.6,0.4"}),
+                        "--path", "not a number");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0", "--footprint",
+                             "0.6,0.4", "--step", "0.001"}),
+                        "refused the path query", "too many poses");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--path", "0,0:1,0",
+                             "--footprint", "0.6,0.4"}),
+                        "give one", "both queries");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--max-unknown-share", "2"}),
+                        "--max-unknown-share", "share above 1");
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--costmap"}), "--costmap",
+                        "costmap on a query");
+  expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--inflate", "0.1"}),
+                        "--inflate needs --costmap", "inflate alone");
+  expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--footprint", "0.6,0.4"}),
+                        "belong to 'ccmap query'", "footprint on map");
+  expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--costmap", "--inflate", "5"}),
+                        "--inflate: 5 m is 62.5 cells of layer 0", "inflation beyond 32 pixels");
+}
+
 // =============================================================================================
 // The CCM cell: full (lateral covariance) by default, the paper's 9 floats with --paper-cell
 // =============================================================================================
@@ -688,4 +874,166 @@ TEST(CliRealData, LoneStarCropAndScan) {
       EXPECT_GT(y_max - y_min, 38.0) << preset << " layer " << k << ": the scan is 40.8 m long";
     }
   }
+}
+
+// =============================================================================================
+// Saving and merging maps
+// =============================================================================================
+
+namespace {
+
+/// Rows of a layer CSV keyed by their absolute cell index.
+std::map<std::pair<long long, long long>, LayerCellRow> by_index(const std::vector<LayerCellRow>& rows) {
+  std::map<std::pair<long long, long long>, LayerCellRow> out;
+  for (const LayerCellRow& r : rows) out[{r.ix, r.iy}] = r;
+  return out;
+}
+
+/// Every cell of `got` is in `want` and agrees in weight and class exactly, in height, slope and
+/// normal variance within float rounding (the merge adds in another order).
+void expect_same_layer(const std::vector<LayerCellRow>& got_rows, const std::vector<LayerCellRow>& want_rows,
+                       const std::string& what) {
+  const auto got = by_index(got_rows), want = by_index(want_rows);
+  ASSERT_EQ(got.size(), want.size()) << what;
+  for (const auto& [index, g] : got) {
+    const auto it = want.find(index);
+    ASSERT_NE(it, want.end()) << what << ": cell (" << index.first << ", " << index.second << ") only in the merge";
+    const LayerCellRow& w = it->second;
+    ASSERT_EQ(g.weight, w.weight) << what;
+    ASSERT_EQ(g.cell_class, w.cell_class) << what << " at (" << g.cx << ", " << g.cy << ")";
+    ASSERT_NEAR(g.height, w.height, 2e-5) << what << " at (" << g.cx << ", " << g.cy << ")";
+    ASSERT_NEAR(g.slope_x, w.slope_x, 1e-4 * (1.0 + std::fabs(w.slope_x))) << what;
+    ASSERT_NEAR(g.slope_y, w.slope_y, 1e-4 * (1.0 + std::fabs(w.slope_y))) << what;
+    ASSERT_NEAR(g.normal_var, w.normal_var, 1e-7 + 1e-4 * w.normal_var) << what;
+  }
+}
+
+}  // namespace
+
+TEST(CliMerge, TwoHalvesSavedAndMergedEqualOneMapOfBothInAbsoluteCoordinates) {
+  // West and east halves of the scene at UTM-sized coordinates: their centroids, and so the
+  // origins each 'ccmap map' subtracts, lie 1.6 m apart. Merged through the saved origins they
+  // must give the map of both clouds made in one run.
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "west.ply", s, -kHalfSide, 0.0);
+  write_scene_ply(dir / "east.ply", s, 0.0, kHalfSide);
+  const CliRun west = run({"map", "--preset", "ccm", "--cloud", (dir / "west.ply").string(), "--out",
+                           (dir / "west").string(), "--save", (dir / "west.map").string()});
+  ASSERT_EQ(west.code, 0) << west.err;
+  EXPECT_NE(west.out.find("saved: "), std::string::npos) << west.out;
+  const CliRun east = run({"map", "--preset", "ccm", "--cloud", (dir / "east.ply").string(), "--out",
+                           (dir / "east").string(), "--save", (dir / "east.map").string()});
+  ASSERT_EQ(east.code, 0) << east.err;
+  EXPECT_EQ(fs::file_size(dir / "west.map"), 2621632U + 48U) << "the single-CCM snapshot (full cells) and the origin record";
+  const CliRun both = run({"map", "--preset", "ccm", "--cloud", (dir / "west.ply").string(), "--cloud",
+                           (dir / "east.ply").string(), "--out", (dir / "both").string()});
+  ASSERT_EQ(both.code, 0) << both.err;
+  const CliRun merged = run({"merge", "--preset", "ccm", "--in", (dir / "west.map").string(), "--in",
+                             (dir / "east.map").string(), "--out", (dir / "merged").string()});
+  ASSERT_EQ(merged.code, 0) << merged.err;
+  EXPECT_NE(merged.out.find(" 0 outside the first map's windows"), std::string::npos) << merged.out;
+  const std::vector<LayerCellRow> rows = read_rows(dir / "merged" / "layer_0.csv");
+  check_ccm_layer(rows, s, 0.08, 40U * 40U);  // absolute coordinates, the whole square
+  expect_same_layer(rows, read_rows(dir / "both" / "layer_0.csv"), "merged halves vs one run");
+  EXPECT_TRUE(fs::exists(dir / "merged" / "layer_0_class.png"));
+}
+
+TEST(CliMerge, CadreHalvesMergeWhereTheFirstMapsWindowsReach) {
+  // Without --poses a saved CADRE map is one stack at the origin (the CSV files cover every
+  // tile): the 4 cm layer holds +-1.28 m of it, the 64 cm layer +-10.24 m. Merged into the west
+  // map, the east map's coarse cells land in the west map's windows, its fine cells beyond them
+  // are counted as outside.
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.64 * 805292.0, 0.64 * 7684950.0, 2235.0};
+  write_scene_ply(dir / "west.ply", s, -kHalfSide, 0.0);
+  write_scene_ply(dir / "east.ply", s, 0.0, kHalfSide);
+  for (const char* half : {"west", "east"}) {
+    const CliRun r = run({"map", "--preset", "cadre", "--cloud", (dir / (std::string(half) + ".ply")).string(), "--out",
+                          (dir / half).string(), "--save", (dir / (std::string(half) + ".map")).string()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("saved map: one stack at the origin"), std::string::npos) << r.out;
+  }
+  const CliRun merged = run({"merge", "--preset", "cadre", "--in", (dir / "west.map").string(), "--in",
+                             (dir / "east.map").string(), "--out", (dir / "merged").string()});
+  ASSERT_EQ(merged.code, 0) << merged.err;
+  long long merged_cells = 0, outside = 0;
+  const std::size_t at = merged.out.find("cells merged, ");
+  ASSERT_NE(at, std::string::npos) << merged.out;
+  ASSERT_EQ(std::sscanf(merged.out.c_str() + merged.out.rfind(", ", at - 1) + 2, "%lld cells merged, %lld outside",
+                        &merged_cells, &outside),
+            2)
+      << merged.out;
+  EXPECT_GT(merged_cells, 0);
+  EXPECT_GT(outside, 0) << "the east map's 4 cm cells beyond the west map's 4 cm window";
+  // The 64 cm layer knows both halves.
+  bool west_cell = false, east_cell = false;
+  for (const LayerCellRow& row : read_rows(dir / "merged" / "layer_4.csv")) {
+    west_cell = west_cell || row.cx < s.x0 - 0.64;
+    east_cell = east_cell || row.cx > s.x0 + 0.64;
+  }
+  EXPECT_TRUE(west_cell && east_cell) << "the merged 64 cm layer does not span both halves";
+}
+
+TEST(CliMerge, RefusalsSayWhy) {
+  const TempDir dir(kTempPrefix);
+  const Scene s{0.0, 0.0, 0.0};
+  write_scene_ply(dir / "scene.ply", s);
+  ASSERT_EQ(run({"map", "--preset", "ccm", "--cloud", (dir / "scene.ply").string(), "--out", (dir / "a").string(),
+                 "--save", (dir / "a.map").string()})
+                .code,
+            0);
+  ASSERT_EQ(run({"map", "--preset", "ccm", "--res", "0.16", "--cloud", (dir / "scene.ply").string(), "--out",
+                 (dir / "b").string(), "--save", (dir / "coarse.map").string()})
+                .code,
+            0);
+  const std::string a = (dir / "a.map").string(), out = (dir / "m").string();
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--out", out}), "two or more --in", "one input");
+  expect_one_line_error(run({"merge", "--preset", "cadre", "--in", a, "--in", a, "--out", out}), "is it a cadre map",
+                        "another preset");
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", (dir / "coarse.map").string(), "--out", out}),
+                        "misaligned", "another cell width");
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", a, "--offset", "0.05,0", "--out", out}),
+                        "misaligned", "an offset off the grid");
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", a, "--cloud", "x.ply", "--out", out}),
+                        "bring their own parameters", "a cloud");
+  expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", (dir / "scene.ply").string(), "--in", a, "--out", out}),
+                        "--in belongs to 'ccmap merge'", "--in with map");
+  // A corrupt origin record, a truncated file, a flipped snapshot byte.
+  std::vector<char> bytes;
+  {
+    std::ifstream in(a, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  auto write = [&](const std::string& name, const std::vector<char>& b) {
+    std::ofstream o(dir / name, std::ios::binary);
+    o.write(b.data(), static_cast<std::streamsize>(b.size()));
+    return (dir / name).string();
+  };
+  std::vector<char> bad = bytes;
+  bad[bad.size() - 30] ^= 1;
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", write("bad_origin.map", bad), "--out", out}),
+                        "origin record after the snapshot is corrupt", "a corrupt origin record");
+  expect_one_line_error(
+      run({"merge", "--preset", "ccm", "--in", a, "--in",
+           write("short.map", std::vector<char>(bytes.begin(), bytes.end() - 10)), "--out", out}),
+      "expected a snapshot of this preset", "a truncated file");
+  bad = bytes;
+  bad[1000] ^= 1;
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", write("bad_snapshot.map", bad), "--out", out}),
+                        "does not merge (corrupt)", "a flipped snapshot byte");
+  // A plain snapshot (flight software's, no origin record) has its origin at 0: --offset places
+  // it in x and y; its heights are relative to 0, the first map's to its origin, so z moves by
+  // minus the first map's origin height.
+  const std::string plain = write("plain.snap", std::vector<char>(bytes.begin(), bytes.end() - 48));
+  const CliRun r = run({"merge", "--preset", "ccm", "--in", a, "--in", plain, "--offset", "0.08,-0.16", "--out", out});
+  ASSERT_EQ(r.code, 0) << r.err;
+  double ox = 0.0, oy = 0.0, oz = 0.0, dz = 1.0;
+  const std::size_t origin_at = r.out.find("(origin ");
+  const std::size_t offset_at = r.out.find("offset 0.080 -0.160 ");
+  ASSERT_NE(origin_at, std::string::npos) << r.out;
+  ASSERT_NE(offset_at, std::string::npos) << r.out;
+  ASSERT_EQ(std::sscanf(r.out.c_str() + origin_at, "(origin %lf %lf %lf", &ox, &oy, &oz), 3) << r.out;
+  ASSERT_EQ(std::sscanf(r.out.c_str() + offset_at, "offset 0.080 -0.160 %lf", &dz), 1) << r.out;
+  EXPECT_NEAR(dz, -oz, 1e-9) << r.out;
 }

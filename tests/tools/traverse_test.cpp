@@ -1,6 +1,7 @@
 // CI check of the simulated CADRE traverse (tools/traverse) at its --quick size, in-process:
 // 8 CADRE stereo frames (stride 4) along the start of the path, Stack<CadreConfig> updated in
-// the sensor frame, final map judged against the hazard ground truth.
+// the sensor frame, final map judged against the hazard ground truth, the planner's look-ahead
+// (query_path) after every frame.
 #include <gtest/gtest.h>
 
 #include "traverse/traverse.hpp"
@@ -63,9 +64,29 @@ void few_false_obstacles_on_free_ground() {
   }
 }
 
+void the_look_ahead_runs_after_every_frame() {
+  const tr::TraverseResult& r = quick_run();
+  ASSERT_EQ(r.frames.size(), 8U);
+  for (const tr::FrameRecord& f : r.frames) {
+    EXPECT_TRUE(f.ahead_ok) << "frame " << f.index << ": the path query refused the look-ahead";
+    EXPECT_GT(f.ahead_poses, 0U) << "frame " << f.index;
+    // The route's corridor is cleared of rocks (0.45 m each side, the body is 0.4 m wide) and the
+    // first 3.6 m are level lunar ground: nothing ahead is a hazard.
+    EXPECT_FALSE(f.ahead_hazard) << "frame " << f.index << ": " << f.ahead_hazard_class << " at " << f.ahead_hazard_m
+                                 << " m ahead on the cleared corridor";
+  }
+  // Before the rover has driven, its body's rear is unseen: the first look-ahead starts unknown;
+  // once the camera has seen the ground under the body, it does not.
+  EXPECT_TRUE(r.frames.front().ahead_unknown);
+  EXPECT_NEAR(r.frames.front().ahead_unknown_m, 0.0, 1e-9);
+  EXPECT_FALSE(r.frames.back().ahead_unknown);
+  EXPECT_EQ(r.stop_frame, -1);
+  EXPECT_GT(r.ahead_ms_max, 0.0);
+}
+
 }  // namespace
 
-// One test, four checks: ctest runs every TEST in its own process, and the quick traverse
+// One test, five checks: ctest runs every TEST in its own process, and the quick traverse
 // (~9 s) would otherwise be simulated once per check.
 TEST(ToolsTraverse, QuickTraverseUpdatesEveryFrameAndFindsTheHazards) {
   {
@@ -83,5 +104,9 @@ TEST(ToolsTraverse, QuickTraverseUpdatesEveryFrameAndFindsTheHazards) {
   {
     SCOPED_TRACE("few false obstacles on free ground");
     few_false_obstacles_on_free_ground();
+  }
+  {
+    SCOPED_TRACE("the look-ahead runs after every frame");
+    the_look_ahead_runs_after_every_frame();
   }
 }

@@ -6,6 +6,9 @@
 #include <memory>
 #include <vector>
 
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/flight_cycle.hpp"
@@ -77,7 +80,7 @@ void BM_CellCcmPaperCell(benchmark::State& s) {
   frame_update<ccmap::PaperCell<ccmap::SingleCcmConfig>>(s, 400, 250, 0.08F, Path::kMapFrame);
 }
 // The flight cycle of the timing test (tests/support/flight_cycle.hpp): move_to, a sensor-frame
-// frame with 8 % unusable pixels, the 1250 corridor queries; ten frames of the drive, cycled.
+// frame with 8 % unusable pixels, the corridor footprint and the 2 m path; ten frames of the drive, cycled.
 void BM_FlightCycle(benchmark::State& state) {
   static const std::vector<CadreFrame> drive = [] {
     std::vector<CadreFrame> f;
@@ -144,6 +147,89 @@ void BM_Move1m(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_Move1m)->Unit(benchmark::kMicrosecond);
+
+void BM_MoveUncertain(benchmark::State& state) {
+  // Its own map: the fading changes the weights the other cases read.
+  auto stack = make_stack<ccmap::CadreConfig>(0.04F);
+  for (const CadreFrame& f : frames(850, 650)) {
+    (void)stack->update_frame(f.map_points.data(), f.map_points.size(), f.sensor_origin, nullptr);
+  }
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(stack->move_to(0.0F, 0.0F, 0.005F));
+  }
+}
+BENCHMARK(BM_MoveUncertain)->Unit(benchmark::kMicrosecond);
+
+// Planner queries on the mapped CADRE stack: the rover body 0.6 m x 0.4 m 0.9 m ahead, a
+// 2 m x 1 m body at 37 deg, a 2 m path (a footprint every 5 cm, all 41 evaluated: no footprint
+// counts as unknown with max_unknown_share 1), a 5 m x 5 m cost raster at 4 cm.
+void BM_Footprint(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ccmap::query_footprint(stack, ccmap::Footprint{0.9F, 0.05F, 1.0F, 0.0F, 0.6F, 0.4F}));
+  }
+}
+void BM_FootprintLarge(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ccmap::query_footprint(stack, ccmap::Footprint{1.0F, 0.05F, 0.8F, 0.6F, 2.0F, 1.0F}));
+  }
+}
+void BM_Path2m(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  const ccmap::PathPoint route[] = {{0.3F, 0.0F}, {2.3F, 0.0F}};
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        ccmap::query_path(stack, route, 2, ccmap::PathSweep{0.6F, 0.4F, 0.05F, 1.0F}));
+  }
+}
+void BM_Costmap5m(benchmark::State& state) {
+  const auto& stack = mapped_cadre();
+  std::vector<std::uint8_t> cost(125U * 125U);
+  const float radius = static_cast<float>(state.range(0)) * 0.01F;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        ccmap::fill_costmap(stack, ccmap::CostmapSpec{0.0F, 0.0F, 0.04F, 125U, radius}, cost.data(), cost.size(), nullptr));
+  }
+}
+// The flight cycle's corridor (1 m x 2 m, 0.3 .. 2.3 m ahead) after three cycles of the drive:
+// the 1250 per-cell point queries (test::corridor_queries), and the footprint query run_cycle asks.
+const ccmap::Stack<ccmap::CadreConfig>& cycle_map() {
+  static std::unique_ptr<ccmap::Stack<ccmap::CadreConfig>> stack = [] {
+    auto s = make_stack<ccmap::CadreConfig>(0.04F);
+    for (int k = 0; k < 3; ++k) {
+      const ccmap::test::CyclePose p = ccmap::test::cycle_pose(k);
+      const CadreFrame f = ccmap::test::cycle_frame(k);
+      (void)s->move_to(p.x, p.y);
+      (void)s->update_frame_sensor(f.sensor_points.data(), f.sensor_points.size(), f.pose, nullptr);
+    }
+    return s;
+  }();
+  return *stack;
+}
+void BM_CorridorCells(benchmark::State& state) {
+  const auto& stack = cycle_map();
+  const ccmap::test::CyclePose p = ccmap::test::cycle_pose(2);
+  for (auto _ : state) {
+    int hazards = 0;
+    benchmark::DoNotOptimize(ccmap::test::corridor_queries(stack, p, &hazards));
+    benchmark::DoNotOptimize(hazards);
+  }
+}
+void BM_CorridorFootprint(benchmark::State& state) {
+  const auto& stack = cycle_map();
+  const ccmap::test::CyclePose p = ccmap::test::cycle_pose(2);
+  const ccmap::Footprint corridor = ccmap::test::corridor_footprint(p);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ccmap::query_footprint(stack, corridor));
+  }
+}
+BENCHMARK(BM_CorridorCells)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CorridorFootprint)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Footprint)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_FootprintLarge)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Path2m)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Costmap5m)->Arg(0)->Arg(30)->Unit(benchmark::kMicrosecond);
 
 void BM_StaticMemory(benchmark::State& state) {
   for (auto _ : state) {

@@ -12,6 +12,9 @@
 #include <memory>
 #include <vector>
 
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/platform/platform.hpp"
 #include "support/cadre_frames.hpp"
@@ -195,6 +198,43 @@ int main(int argc, char** argv) {
       move_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
     }
     report("move_to, 1 m step", move_us, "us");
+    (void)stack->move_to(0.0F, 0.0F);
+
+    // Planner queries (map/footprint.hpp, path_query.hpp, costmap.hpp) on the same map.
+    std::vector<double> body_us, large_us, path_us, cost_us, inflated_us;
+    std::vector<std::uint8_t> cost(125U * 125U);
+    const PathPoint route[] = {{0.3F, 0.0F}, {2.3F, 0.0F}};
+    for (int r = 0; r < reps; ++r) {
+      std::uint64_t t0 = monotonic_ns();
+      sink = sink + query_footprint(*stack, Footprint{0.9F, 0.05F, 1.0F, 0.0F, 0.6F, 0.4F}).max_step_m;
+      body_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
+      t0 = monotonic_ns();
+      sink = sink + query_footprint(*stack, Footprint{1.0F, 0.05F, 0.8F, 0.6F, 2.0F, 1.0F}).max_step_m;
+      large_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
+      t0 = monotonic_ns();
+      sink = sink + query_path(*stack, route, 2, PathSweep{0.6F, 0.4F, 0.05F, 1.0F}).checked_m;
+      path_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
+      CostmapStats st{};
+      t0 = monotonic_ns();
+      (void)fill_costmap(*stack, CostmapSpec{0.0F, 0.0F, 0.04F, 125U, 0.0F}, cost.data(), cost.size(), &st);
+      cost_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
+      t0 = monotonic_ns();
+      (void)fill_costmap(*stack, CostmapSpec{0.0F, 0.0F, 0.04F, 125U, 0.3F}, cost.data(), cost.size(), &st);
+      inflated_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
+    }
+    report("footprint 0.6 x 0.4 m", body_us, "us");
+    report("footprint 2 x 1 m at 37 deg", large_us, "us");
+    report("path 2 m, 0.6 x 0.4 m body every 5 cm", path_us, "us");
+    report("cost raster 5 x 5 m at 4 cm", cost_us, "us");
+    report("cost raster 5 x 5 m at 4 cm, 0.3 m inflation", inflated_us, "us");
+    // Last: the fading changes the weights the cases above read.
+    std::vector<double> uncertain_us;
+    for (int r = 0; r < reps; ++r) {
+      const std::uint64_t t0 = monotonic_ns();
+      (void)stack->move_to(0.0F, 0.0F, 0.005F);
+      uncertain_us.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-3);
+    }
+    report("move_to with uncertainty (every cell)", uncertain_us, "us");
   }
   return 0;
 }

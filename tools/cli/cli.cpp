@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -18,8 +19,11 @@
 #include "cloud_reader.hpp"
 #include "csv_writer.hpp"
 #include "layer_images.hpp"
+#include "ccmap/map/costmap.hpp"
 #include "map_runner.hpp"
 #include "origin.hpp"
+#include "png.hpp"
+#include "saved_map.hpp"
 #include "tiling.hpp"
 
 namespace ccmap::tools {
@@ -33,11 +37,12 @@ constexpr const char* kMainHelp =
     "commands:\n"
     "  map     map clouds and write per-layer CSV files and pictures\n"
     "  query   map clouds and print the map's answer at one point\n"
+    "  merge   merge maps saved by 'ccmap map --save' (or snapshots) and write the same output\n"
     "\n"
-    "Run 'ccmap map --help' or 'ccmap query --help' for the options.\n";
+    "Run 'ccmap map --help', 'ccmap query --help' or 'ccmap merge --help' for the options.\n";
 
 constexpr const char* kMapHelp =
-    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR\n"
+    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR [--save FILE]\n"
     "                 [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
     "                 [--bounds XMIN,YMIN,XMAX,YMAX] [--paper-cell]\n"
     "\n"
@@ -66,6 +71,16 @@ constexpr const char* kMapHelp =
     "  --out DIR       writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
     "                  normal_var,class}.png; class colours: unknown grey, traversable green,\n"
     "                  obstacle red, steep orange, unobserved black\n"
+    "  --costmap       also writes DIR/costmap_<k>.png and .pgm per layer: a planner's cost raster\n"
+    "                  of layer k's cells (one pixel per cell of the picture's area, north up) in\n"
+    "                  costmap_2d values as grey levels: 0 free .. 252 cost (inclination and\n"
+    "                  relief against the layer's limits), 253 inscribed, 254 lethal (obstacle or\n"
+    "                  steep), 255 unknown or unobserved\n"
+    "  --inflate M     with --costmap: cost pixels within M metres of a lethal one are inscribed\n"
+    "  --save FILE     also writes a map for 'ccmap merge': the library's snapshot followed by the\n"
+    "                  origin below (tools/cli/saved_map.hpp). With --poses, the final map; without,\n"
+    "                  the map of one stack at the origin holding the points that fall in its\n"
+    "                  windows (what a rover there holds; the CSV files cover every tile)\n"
     "\n"
     "Without --poses the whole of every cloud is mapped: the tool sweeps the stack over the\n"
     "clouds in tiles (move the stack to a tile, fold the tile's points, export the tile's cells),\n"
@@ -85,6 +100,9 @@ constexpr const char* kMapHelp =
 
 constexpr const char* kQueryHelp =
     "usage: ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --at X,Y\n"
+    "                   [--footprint LENGTH,WIDTH[,YAW_DEG]] [--max-unknown-share F]\n"
+    "       ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --path X1,Y1:X2,Y2[:...]\n"
+    "                   --footprint LENGTH,WIDTH [--step METRES] [--max-unknown-share F]\n"
     "                   [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
     "                   [--bounds XMIN,YMIN,XMAX,YMAX] [--paper-cell]\n"
     "\n"
@@ -92,7 +110,41 @@ constexpr const char* kQueryHelp =
     "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
     "variance, elevation variance and class, one 'key: value' per line. Without --poses only the\n"
     "tile that holds (X, Y) is mapped (the answer is the whole map's); a point whose tile holds no\n"
-    "point of the clouds is outside the map (status: outside_map).\n";
+    "point of the clouds is outside the map (status: outside_map).\n"
+    "\n"
+    "  --footprint L,W[,YAW_DEG]  with --at: also the rover body, an L x W m rectangle centred\n"
+    "                  there, its length along YAW_DEG (degrees from +x, default 0): adds\n"
+    "                  footprint_class (traversable|obstacle|steep|unknown), footprint_unknown_share,\n"
+    "                  footprint_max_step_m, footprint_max_inclination_deg\n"
+    "  --path X1,Y1:X2,Y2[:...]  the body swept along this polyline (map frame, 2 .. 256 points),\n"
+    "                  its length along each segment: prints first_hazard_m (obstacle or steep)\n"
+    "                  and first_unknown_m, each a distance along the path or 'none'\n"
+    "  --step M        distance between the body's poses along --path (default: the finest cell)\n"
+    "  --max-unknown-share F  a footprint with a larger unknown share is unknown (default 0.1)\n"
+    "\n"
+    "With --footprint (or --path) and without --poses the clouds are not tiled: the stack is\n"
+    "centred on the footprint's centre (the path's first point) and every cloud folded into it as\n"
+    "one frame, as a rover standing there would map the ground; points beyond its windows count\n"
+    "as outside map, and the point answer of --at comes from the same map. With --poses the\n"
+    "queries read the map at the last pose.\n";
+
+constexpr const char* kMergeHelp =
+    "usage: ccmap merge --preset NAME --in FILE --in FILE [--in FILE ...] [--offset DX,DY] --out DIR\n"
+    "\n"
+    "Merges maps of the same preset and cell width: each --in is a map saved by 'ccmap map --save'\n"
+    "or a snapshot written by flight software (save_snapshot; its origin is then 0). The result\n"
+    "holds the first map's parameters and windows; the cells of the others are merged exactly\n"
+    "(CCM cells as sufficient statistics, Kalman cells in information form, docs/design.md) where\n"
+    "they fall in those windows, and counted as outside otherwise. Writes the same CSV files and\n"
+    "pictures as 'ccmap map', in absolute coordinates (the first map's origin added back).\n"
+    "\n"
+    "  --in FILE       a saved map; give two or more. Merge only maps built independently: a map\n"
+    "                  that already holds another's points counts them twice\n"
+    "  --offset DX,DY  the map origin of every further --in relative to the first's (m): for\n"
+    "                  snapshots without a saved origin; replaces the saved origins' difference.\n"
+    "                  Must be a whole number of coarsest cells (cadre: 0.64 m), or the maps are\n"
+    "                  refused as misaligned\n"
+    "  --out DIR       as for 'ccmap map'\n";
 
 /// Thrown inside this file only, turned into "ccmap: error: ..." by run_cli.
 struct CliError {
@@ -126,6 +178,15 @@ double parse_positive(const std::string& flag, const std::string& text, double m
   return v;
 }
 
+/// "X,Y" into two finite numbers.
+void parse_pair(const std::string& flag, const std::string& value, double* x, double* y) {
+  const std::size_t comma = value.find(',');
+  if (comma == std::string::npos) fail(flag + ": expected X,Y, got '" + value + "'", 2);
+  *x = parse_number(flag, value.substr(0, comma));
+  *y = parse_number(flag, value.substr(comma + 1));
+  if (!std::isfinite(*x) || !std::isfinite(*y)) fail(flag + ": coordinates must be finite", 2);
+}
+
 /// --bounds XMIN,YMIN,XMAX,YMAX: four finite numbers, minimum below maximum on both axes.
 AreaBounds parse_bounds(const std::string& text) {
   double v[4] = {0.0, 0.0, 0.0, 0.0};
@@ -157,6 +218,10 @@ struct Options {
   std::vector<std::string> clouds;
   std::string poses;
   std::string out_dir;
+  std::string save;
+  std::vector<std::string> inputs;
+  bool have_offset = false;
+  double offset_x = 0.0, offset_y = 0.0;
   bool have_at = false;
   double at_x = 0.0, at_y = 0.0;
   SensorChoice sensor = SensorChoice::kLidar;
@@ -164,7 +229,31 @@ struct Options {
   AreaBounds bounds;
   bool paper_cell = false;
   bool help = false;
+  bool have_footprint = false;
+  double footprint_length = 0.0, footprint_width = 0.0, footprint_yaw_deg = 0.0;
+  bool footprint_has_yaw = false;
+  std::vector<double> path;  ///< x0 y0 x1 y1 ... (map frame, as given)
+  double step = 0.0;         ///< <= 0: the finest cell width
+  double max_unknown_share = 0.1;
+  bool costmap = false;
+  double inflate = 0.0;
+  /// A planner query (--footprint or --path) without --poses: a map centred on it, not tiles.
+  [[nodiscard]] bool centred_map() const { return (have_footprint || !path.empty()) && poses.empty(); }
 };
+
+
+/// "A,B[,C]" -> numbers; `what` names the option in errors.
+std::vector<double> parse_list(const std::string& flag, const std::string& text, char separator) {
+  std::vector<double> out;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = text.find(separator, start);
+    out.push_back(parse_number(flag, text.substr(start, end == std::string::npos ? std::string::npos : end - start)));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return out;
+}
 
 Options parse_options(int argc, char** argv) {
   Options o;
@@ -181,6 +270,10 @@ Options parse_options(int argc, char** argv) {
       o.paper_cell = true;
       continue;
     }
+    if (arg == "--costmap") {
+      o.costmap = true;
+      continue;
+    }
     if (arg.rfind("--", 0) != 0) fail("unexpected argument '" + arg + "' (options start with --)", 2);
     const std::size_t eq = arg.find('=');
     if (eq != std::string::npos) {
@@ -188,7 +281,10 @@ Options parse_options(int argc, char** argv) {
       arg = arg.substr(0, eq);
       have_value = true;
     }
-    static const char* kKnown[] = {"--preset", "--res", "--wl", "--cloud", "--poses", "--out", "--at", "--sensor", "--sigma", "--bounds"};
+    static const char* kKnown[] = {"--preset", "--res",    "--wl",   "--cloud", "--poses",
+                                   "--out",    "--at",     "--sensor", "--sigma", "--bounds",
+                                   "--footprint", "--path", "--step", "--max-unknown-share", "--inflate",
+                                   "--save",   "--in",     "--offset"};
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
       fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
     }
@@ -211,12 +307,17 @@ Options parse_options(int argc, char** argv) {
       if (value.empty()) fail("--out needs a directory", 2);
       o.out_dir = value;
     } else if (arg == "--at") {
-      const std::size_t comma = value.find(',');
-      if (comma == std::string::npos) fail("--at: expected X,Y, got '" + value + "'", 2);
-      o.at_x = parse_number("--at", value.substr(0, comma));
-      o.at_y = parse_number("--at", value.substr(comma + 1));
-      if (!std::isfinite(o.at_x) || !std::isfinite(o.at_y)) fail("--at: coordinates must be finite", 2);
+      parse_pair("--at", value, &o.at_x, &o.at_y);
       o.have_at = true;
+    } else if (arg == "--save") {
+      if (value.empty()) fail("--save needs a file name", 2);
+      o.save = value;
+    } else if (arg == "--in") {
+      if (value.empty()) fail("--in needs a file name", 2);
+      o.inputs.push_back(value);
+    } else if (arg == "--offset") {
+      parse_pair("--offset", value, &o.offset_x, &o.offset_y);
+      o.have_offset = true;
     } else if (arg == "--sensor") {
       if (value == "lidar") o.sensor = SensorChoice::kLidar;
       else if (value == "stereo") o.sensor = SensorChoice::kCadreStereo;
@@ -225,6 +326,44 @@ Options parse_options(int argc, char** argv) {
       o.sigma = parse_positive(arg, value, 10.0);
     } else if (arg == "--bounds") {
       o.bounds = parse_bounds(value);
+    } else if (arg == "--footprint") {
+      const std::vector<double> v = parse_list(arg, value, ',');
+      if (v.size() < 2 || v.size() > 3) fail("--footprint: expected LENGTH,WIDTH[,YAW_DEG], got '" + value + "'", 2);
+      for (std::size_t k = 0; k < v.size(); ++k) {
+        if (!std::isfinite(v[k]) || (k < 2 && !(v[k] > 0.0))) {
+          fail("--footprint: '" + value + "': length and width must be > 0, all finite", 2);
+        }
+      }
+      o.footprint_length = v[0];
+      o.footprint_width = v[1];
+      o.footprint_has_yaw = v.size() == 3;
+      o.footprint_yaw_deg = o.footprint_has_yaw ? v[2] : 0.0;
+      o.have_footprint = true;
+    } else if (arg == "--path") {
+      o.path.clear();
+      std::size_t start = 0;
+      while (true) {
+        const std::size_t end = value.find(':', start);
+        const std::string point = value.substr(start, end == std::string::npos ? std::string::npos : end - start);
+        const std::vector<double> xy = parse_list(arg, point, ',');
+        if (xy.size() != 2 || !std::isfinite(xy[0]) || !std::isfinite(xy[1])) {
+          fail("--path: expected X1,Y1:X2,Y2[:...] (finite), got '" + point + "'", 2);
+        }
+        o.path.insert(o.path.end(), xy.begin(), xy.end());
+        if (end == std::string::npos) break;
+        start = end + 1;
+      }
+      if (o.path.size() < 4) fail("--path: at least two points X1,Y1:X2,Y2", 2);
+    } else if (arg == "--step") {
+      o.step = parse_positive(arg, value, 100.0);
+    } else if (arg == "--max-unknown-share") {
+      o.max_unknown_share = parse_number(arg, value);
+      if (!(o.max_unknown_share >= 0.0 && o.max_unknown_share <= 1.0)) {
+        fail("--max-unknown-share: " + value + " is out of range (expected 0 .. 1)", 2);
+      }
+    } else if (arg == "--inflate") {
+      o.inflate = parse_number(arg, value);
+      if (!(o.inflate >= 0.0) || !std::isfinite(o.inflate)) fail("--inflate: " + value + " is out of range (expected >= 0)", 2);
     }
   }
   return o;
@@ -296,6 +435,49 @@ void print_frame(const std::string& path, const Cloud& cloud, std::size_t f, con
   }
 }
 
+/// The cloud's points in range and bounds as local-frame floats (the origin subtracted in double,
+/// then rounded: |difference| <= 1e5 m) and their weights; the others counted in *kept_back as
+/// out of range or outside map.
+void local_frame_points(const Cloud& cloud, const LocalOrigin& origin, const AreaBounds& bounds,
+                        std::vector<float>* xyz, std::vector<float>* weights, FrameStats* kept_back) {
+  xyz->clear();
+  weights->clear();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], origin, bounds);
+    if (fate == PointFate::kOutOfRange) {
+      ++kept_back->rejected_out_of_range;
+      continue;
+    }
+    if (fate == PointFate::kOutsideBounds) {
+      ++kept_back->outside_map;
+      continue;
+    }
+    xyz->push_back(static_cast<float>(cloud.x[i] - origin.xyz[0]));
+    xyz->push_back(static_cast<float>(cloud.y[i] - origin.xyz[1]));
+    xyz->push_back(static_cast<float>(cloud.z[i] - origin.xyz[2]));
+    if (cloud.has_weight) weights->push_back(weight_to_float(cloud.w[i]));
+  }
+}
+
+/// Folds cloud number f as one frame, the sensor at `sensor` (local metres): the points the tool
+/// maps (local_frame_points), the others counted.
+void fold_cloud(const Options& o, MappedClouds& m, const Cloud& cloud, std::size_t f, const float sensor[3],
+                std::vector<float>* xyz, std::vector<float>* weights, std::ostream& out, bool verbose) {
+  std::string error;
+  FrameStats stats;
+  stats.received = cloud.size() + cloud.skipped_non_finite;
+  stats.rejected_non_finite = cloud.skipped_non_finite;
+  local_frame_points(cloud, m.origin, o.bounds, xyz, weights, &stats);
+  FrameStats lib;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!m.runner->update_frame(*xyz, *weights, sensor, &lib, &error)) fail(o.clouds[f] + ": " + error);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  lib.received = 0;  // counted above, with the points the tool kept back
+  stats.add(lib);
+  m.totals.add(stats);
+  if (verbose) print_frame(o.clouds[f], cloud, f, stats, ms, out);
+}
+
 /// With --poses: the stack follows the poses, one frame per cloud, read and mapped one at a time.
 void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
   std::string error;
@@ -326,41 +508,13 @@ void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool 
     if (!m.runner->move_to(sensor[0], sensor[1], &error)) {
       fail(o.poses + ": pose " + std::to_string(f + 1) + ": " + error + "; is it in the clouds' frame?");
     }
-    FrameStats stats;
-    stats.received = cloud.size() + cloud.skipped_non_finite;
-    stats.rejected_non_finite = cloud.skipped_non_finite;
-    xyz.clear();
-    weights.clear();
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      const PointFate fate = classify_point(cloud.x[i], cloud.y[i], cloud.z[i], m.origin, o.bounds);
-      if (fate == PointFate::kOutOfRange) {
-        ++stats.rejected_out_of_range;
-        continue;
-      }
-      if (fate == PointFate::kOutsideBounds) {
-        ++stats.outside_map;
-        continue;
-      }
-      // Subtract the origin in double, then round to float (|difference| <= 1e5 m).
-      xyz.push_back(static_cast<float>(cloud.x[i] - m.origin.xyz[0]));
-      xyz.push_back(static_cast<float>(cloud.y[i] - m.origin.xyz[1]));
-      xyz.push_back(static_cast<float>(cloud.z[i] - m.origin.xyz[2]));
-      if (cloud.has_weight) weights.push_back(weight_to_float(cloud.w[i]));
-    }
-    FrameStats lib;
-    const auto t0 = std::chrono::steady_clock::now();
-    if (!m.runner->update_frame(xyz, weights, sensor, &lib, &error)) fail(o.clouds[f] + ": " + error);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    lib.received = 0;  // counted above, with the points the tool kept back
-    stats.add(lib);
-    m.totals.add(stats);
-    if (verbose) print_frame(o.clouds[f], cloud, f, stats, ms, out);
+    fold_cloud(o, m, cloud, f, sensor, &xyz, &weights, out, verbose);
   }
 }
 
-/// Without --poses: the stack is swept over all clouds in tiles (tiling.hpp), so every layer
-/// covers their whole extent. For a query only the query point's tile is mapped.
-void map_in_tiles(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
+/// Every cloud read at once (tiles and the centred map need them all), the local origin from
+/// all of them, the header printed.
+std::vector<Cloud> read_all_clouds(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
   std::string error;
   std::vector<Cloud> clouds;
   std::vector<const Cloud*> all;
@@ -372,6 +526,34 @@ void map_in_tiles(const Options& o, MappedClouds& m, std::ostream& out, bool ver
   for (const Cloud& c : clouds) all.push_back(&c);
   if (!robust_origin(all, o.bounds, m.widths.back(), &m.origin, &error)) fail(error);
   if (verbose) print_header(o, m, out);
+  return clouds;
+}
+
+/// A planner query without --poses: the stack centred on (x, y) (map frame), every cloud folded
+/// into it as one frame with the sensor there (at the origin's height), as a rover standing at
+/// (x, y) would map the ground. The origin is that of all clouds, as for tiles.
+void map_centred(const Options& o, MappedClouds& m, double x, double y, std::ostream& out, bool verbose) {
+  std::string error;
+  const std::vector<Cloud> clouds = read_all_clouds(o, m, out, verbose);
+  const double local[2] = {x - m.origin.xyz[0], y - m.origin.xyz[1]};
+  if (!(std::fabs(local[0]) <= static_cast<double>(kMaxAbsCoordinateM)) ||
+      !(std::fabs(local[1]) <= static_cast<double>(kMaxAbsCoordinateM))) {
+    fail("the query lies beyond +-1e5 m of the clouds' origin", 2);
+  }
+  const float sensor[3] = {static_cast<float>(local[0]), static_cast<float>(local[1]), 0.0F};
+  if (!m.runner->move_to(sensor[0], sensor[1], &error)) fail(error);
+  if (verbose) {
+    out << "map centred on the query (" << fmt("%.3f", x) << ", " << fmt("%.3f", y) << "), every cloud one frame\n";
+  }
+  std::vector<float> xyz, weights;
+  for (std::size_t f = 0; f < clouds.size(); ++f) fold_cloud(o, m, clouds[f], f, sensor, &xyz, &weights, out, verbose);
+}
+
+/// Without --poses: the stack is swept over all clouds in tiles (tiling.hpp), so every layer
+/// covers their whole extent. For a query only the query point's tile is mapped.
+void map_in_tiles(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
+  std::string error;
+  const std::vector<Cloud> clouds = read_all_clouds(o, m, out, verbose);
   TilePlan plan;
   if (!plan_tiles(*m.runner, m.widths, 0, &plan, &error)) fail(error);
   m.query.wanted = o.have_at;
@@ -415,7 +597,10 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
   ro.lidar_sigma_m = o.sigma;
   if (!m.runner->init(ro, &error)) fail(error);
 
-  if (o.poses.empty()) {
+  if (o.centred_map()) {
+    const bool path = !o.path.empty();
+    map_centred(o, m, path ? o.path[0] : o.at_x, path ? o.path[1] : o.at_y, out, verbose);
+  } else if (o.poses.empty()) {
     map_in_tiles(o, m, out, verbose);
   } else {
     map_along_poses(o, m, out, verbose);
@@ -437,10 +622,66 @@ std::vector<LayerCellRow> layer_rows(const MappedClouds& m, int layer, const std
   return rows;
 }
 
-int run_map(const Options& o, std::ostream& out) {
-  if (o.out_dir.empty()) fail("--out DIR is required", 2);
-  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
-  MappedClouds m = build_map(o, out, true);
+/// Writes a cost raster (width x height, row 0 at the lowest y) as a binary PGM and a grey PNG,
+/// north up.
+void write_costmap_images(const std::string& prefix, const std::vector<std::uint8_t>& cost, int width, int height) {
+  std::string error;
+  RgbImage image(width, height);
+  std::vector<unsigned char> rows;
+  rows.reserve(cost.size());
+  for (int row = 0; row < height; ++row) {
+    const int iy = height - 1 - row;  // north up
+    for (int ix = 0; ix < width; ++ix) {
+      const std::uint8_t v = cost[static_cast<std::size_t>(iy) * static_cast<std::size_t>(width) + static_cast<std::size_t>(ix)];
+      const std::uint8_t grey[3] = {v, v, v};
+      image.set(ix, row, grey);
+      rows.push_back(v);
+    }
+  }
+  if (!write_png(prefix + ".png", image, &error)) fail(error);
+  std::ofstream pgm(prefix + ".pgm", std::ios::binary);
+  pgm << "P5\n" << width << ' ' << height << "\n255\n";
+  pgm.write(reinterpret_cast<const char*>(rows.data()), static_cast<std::streamsize>(rows.size()));
+  if (!pgm) fail("cannot write " + prefix + ".pgm");
+}
+
+/// The cost raster of layer k's cells over `extent` (one pixel per cell): lethal for obstacle
+/// and steep cells, unknown for unknown or unobserved ones, else the library's cost function of
+/// the cell's inclination and normal variance against layer k's threshold; then the inflation.
+std::vector<std::uint8_t> layer_costmap(const MappedClouds& m, int k, const std::vector<LayerCellRow>& rows,
+                                        const LayerWindow& extent, double inflate_m) {
+  std::vector<std::uint8_t> cost(static_cast<std::size_t>(extent.nx) * static_cast<std::size_t>(extent.ny), kCostUnknown);
+  const float threshold = m.runner->layer_normal_variance_threshold(k);
+  const float max_inclination = m.runner->max_inclination();
+  for (const LayerCellRow& r : rows) {
+    const std::int64_t ix = r.ix - extent.ix_min, iy = r.iy - extent.iy_min;
+    if (ix < 0 || iy < 0 || ix >= extent.nx || iy >= extent.ny) continue;
+    std::uint8_t v = kCostUnknown;
+    if (r.cell_class == "obstacle" || r.cell_class == "steep") {
+      v = kCostLethal;
+    } else if (r.cell_class == "traversable") {
+      v = traversable_cost(static_cast<float>(std::hypot(r.slope_x, r.slope_y)), max_inclination,
+                           static_cast<float>(r.normal_var), threshold);
+    }
+    cost[static_cast<std::size_t>(iy) * static_cast<std::size_t>(extent.nx) + static_cast<std::size_t>(ix)] = v;
+  }
+  if (inflate_m > 0.0) {
+    const Status status = inflate_costmap(cost.data(), cost.size(), static_cast<std::uint32_t>(extent.nx),
+                                          static_cast<std::uint32_t>(extent.ny),
+                                          static_cast<float>(inflate_m / m.widths[static_cast<std::size_t>(k)]));
+    if (status != Status::kOk) {
+      fail("--inflate: " + fmt("%g", inflate_m) + " m is " + fmt("%g", inflate_m / m.widths[static_cast<std::size_t>(k)]) +
+               " cells of layer " + std::to_string(k) + " (" + to_string(status) + ": at most " +
+               std::to_string(kMaxInflationPixels) + ")",
+           2);
+    }
+  }
+  return cost;
+}
+
+/// The CSV files and pictures of every layer, in absolute coordinates, and a line per layer: the
+/// tiles' rows of a tiled map, else the runner's current state.
+void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
   std::error_code ec;
   std::filesystem::create_directories(o.out_dir, ec);
   if (ec || !std::filesystem::is_directory(o.out_dir)) {
@@ -471,8 +712,19 @@ int run_map(const Options& o, std::ostream& out) {
     if (extent.nx > kMaxImageCells || extent.ny > kMaxImageCells) {
       out << "note: layer " << k << " spans " << extent.nx << " x " << extent.ny << " cells, more than the "
           << kMaxImageCells << " a picture may have: no pictures for it (the CSV holds every cell)\n";
-    } else if (!write_layer_images(prefix, rows, window, &error)) {
-      fail(error);
+    } else {
+      if (!write_layer_images(prefix, rows, window, &error)) fail(error);
+      if (o.costmap) {
+        const std::vector<std::uint8_t> cost = layer_costmap(m, k, rows, extent, o.inflate);
+        const std::string cost_prefix = o.out_dir + "/costmap_" + std::to_string(k);
+        write_costmap_images(cost_prefix, cost, static_cast<int>(extent.nx), static_cast<int>(extent.ny));
+        std::size_t counts[4] = {0, 0, 0, 0};  // free/cost, inscribed, lethal, unknown
+        for (const std::uint8_t v : cost) ++counts[v <= kCostMaxTraversable ? 0 : v - kCostMaxTraversable];
+        out << "costmap " << k << " (" << extent.nx << " x " << extent.ny << " at "
+            << fmt("%g", m.widths[static_cast<std::size_t>(k)]) << " m): cost " << counts[0] << ", inscribed "
+            << counts[1] << ", lethal " << counts[2] << ", unknown " << counts[3] << " pixels -> " << cost_prefix
+            << ".{png,pgm}\n";
+      }
     }
     std::size_t counts[4] = {0, 0, 0, 0};
     for (const LayerCellRow& r : rows) {
@@ -490,14 +742,172 @@ int run_map(const Options& o, std::ostream& out) {
   }
   out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
       << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+}
+
+/// Options that belong to one command only.
+void refuse_foreign_options(const Options& o) {
+  if (o.command != "query" && o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  if (o.command != "map" && !o.save.empty()) fail("--save belongs to 'ccmap map'", 2);
+  if (o.command != "merge" && !o.inputs.empty()) fail("--in belongs to 'ccmap merge'", 2);
+  if (o.command != "merge" && o.have_offset) fail("--offset belongs to 'ccmap merge'", 2);
+  if (o.command == "merge" && (!o.clouds.empty() || !o.poses.empty() || o.res > 0.0 || o.wl > 0.0 || o.bounds.set)) {
+    fail("ccmap merge takes --preset, --in, --offset and --out (the maps bring their own parameters)", 2);
+  }
+}
+
+/// A tiled map has no single stack: the saved map is that of one stack at the origin, every cloud
+/// one frame (sensor at the origin, as in the tiles), holding the points its windows hold.
+void fold_one_window(const Options& o, MappedClouds& m, std::ostream& out) {
+  std::string error;
+  if (!m.runner->reset(&error) || !m.runner->move_to(0.0F, 0.0F, &error)) fail(error);
+  const float sensor[3] = {0.0F, 0.0F, 0.0F};
+  FrameStats totals;
+  std::vector<float> xyz, weights;
+  for (const std::string& path : o.clouds) {
+    const Cloud cloud = read_nonempty_cloud(path);
+    FrameStats kept_back;
+    local_frame_points(cloud, m.origin, o.bounds, &xyz, &weights, &kept_back);
+    FrameStats stats;
+    if (!m.runner->update_frame(xyz, weights, sensor, &stats, &error)) fail(path + ": " + error);
+    totals.add(stats);
+    totals.add(kept_back);
+  }
+  out << "saved map: one stack at the origin, " << totals.used << " points in its windows, " << totals.outside_map
+      << " outside them\n";
+}
+
+int run_map(const Options& o, std::ostream& out) {
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
+  if (o.have_footprint || !o.path.empty()) fail("--footprint and --path belong to 'ccmap query'", 2);
+  if (o.step > 0.0 || o.max_unknown_share != 0.1) fail("--step and --max-unknown-share belong to 'ccmap query'", 2);
+  if (o.inflate > 0.0 && !o.costmap) fail("--inflate needs --costmap", 2);
+  MappedClouds m = build_map(o, out, true);
+  write_outputs(m, o, out);
+  if (!o.save.empty()) {
+    if (m.tiled) fold_one_window(o, m, out);
+    std::string error;
+    SavedMap saved;
+    if (!m.runner->save_snapshot(&saved.snapshot, &error)) fail(error);
+    saved.has_origin = true;
+    saved.coarsest_width_m = m.origin.coarsest_width;
+    for (int a = 0; a < 3; ++a) saved.origin_cells[a] = m.origin.cells[a];
+    if (!write_saved_map(o.save, saved, &error)) fail(error);
+    out << "saved: " << o.save << " (" << saved.snapshot.size() + kOriginRecordBytes
+        << " bytes: snapshot and origin)\n";
+  }
+  return 0;
+}
+
+/// metres / width as an exact integer, or fail: the maps do not share the grid.
+std::int64_t whole_cells(double metres, double width, const std::string& what) {
+  const double cells = metres / width;
+  const double rounded = std::round(cells);
+  if (!(std::fabs(cells - rounded) <= 1e-6 * std::max(1.0, std::fabs(rounded))) || std::fabs(rounded) > 1e15) {
+    fail(what + ": " + fmt("%.6f", metres) + " m is not a whole number of " + fmt("%g", width) +
+         " m cells (misaligned)");
+  }
+  return static_cast<std::int64_t>(rounded);
+}
+
+int run_merge(const Options& o, std::ostream& out) {
+  if (o.preset.empty()) fail("--preset is required (cadre, ccm, kf or omg)", 2);
+  if (o.out_dir.empty()) fail("--out DIR is required", 2);
+  if (o.inputs.size() < 2) fail("ccmap merge needs two or more --in FILE", 2);
+  std::string error;
+  MappedClouds m;
+  m.runner = make_map_runner(o.preset, &error);
+  if (!m.runner) fail(error, 2);
+  const int layers = preset_layer_count(o.preset);
+  const std::int64_t coarse_factor = std::int64_t{1} << (layers - 1);  // finest cells per coarsest cell
+  std::vector<SavedMap> maps(o.inputs.size());
+  for (std::size_t i = 0; i < o.inputs.size(); ++i) {
+    if (!read_saved_map(o.inputs[i], m.runner->snapshot_size(), &maps[i], &error)) {
+      fail(error + " (is it a " + o.preset + " map?)");
+    }
+  }
+  if (!m.runner->load_snapshot(maps[0].snapshot, &error)) fail(o.inputs[0] + ": " + error);
+  // Widths: the saved origin's double width (what 'ccmap map' computed with), else the float
+  // width rounded to the decimal a user would type.
+  const SavedMap& first = maps[0];
+  const double coarsest = first.has_origin
+                              ? first.coarsest_width_m
+                              : std::round(static_cast<double>(m.runner->layer_cell_width(layers - 1)) * 1e6) / 1e6;
+  for (int k = 0; k < layers; ++k) m.widths.push_back(coarsest * std::ldexp(1.0, k - (layers - 1)));
+  m.origin.coarsest_width = coarsest;
+  for (int a = 0; a < 3; ++a) {
+    m.origin.cells[a] = first.origin_cells[a];
+    m.origin.xyz[a] = static_cast<double>(first.origin_cells[a]) * coarsest;
+  }
+  out << "ccmap merge: preset " << o.preset << ", " << o.inputs[0] << " (origin " << fmt("%.3f", m.origin.xyz[0])
+      << ' ' << fmt("%.3f", m.origin.xyz[1]) << ' ' << fmt("%.3f", m.origin.xyz[2])
+      << (first.has_origin ? "" : ", none saved") << ") holds the parameters and windows\n";
+  for (std::size_t i = 1; i < maps.size(); ++i) {
+    const SavedMap& other = maps[i];
+    if (other.has_origin && std::fabs(other.coarsest_width_m - coarsest) > 1e-12 * coarsest) {
+      fail(o.inputs[i] + ": made with " + fmt("%g", other.coarsest_width_m) + " m coarsest cells, the first with " +
+           fmt("%g", coarsest) + " m (misaligned)");
+    }
+    // The other map's origin minus the first's: in coarsest cells (x, y), metres (z).
+    std::int64_t dx = other.origin_cells[0] - first.origin_cells[0];
+    std::int64_t dy = other.origin_cells[1] - first.origin_cells[1];
+    if (o.have_offset) {
+      dx = whole_cells(o.offset_x, coarsest, "--offset x");
+      dy = whole_cells(o.offset_y, coarsest, "--offset y");
+    }
+    const double dz = static_cast<double>(other.origin_cells[2] - first.origin_cells[2]) * coarsest;
+    const std::int64_t fx = dx * coarse_factor, fy = dy * coarse_factor;
+    if (std::llabs(fx) > 0x3FFFFFFF || std::llabs(fy) > 0x3FFFFFFF || std::fabs(dz) > 1e5) {
+      fail(o.inputs[i] + ": its origin is too far from the first map's to merge");
+    }
+    std::uint64_t merged = 0, outside = 0;
+    if (!m.runner->merge_snapshot(other.snapshot, static_cast<std::int32_t>(fx), static_cast<std::int32_t>(fy),
+                                  static_cast<float>(dz), &merged, &outside, &error)) {
+      fail(o.inputs[i] + ": " + error);
+    }
+    out << "merged " << o.inputs[i] << ": offset " << fmt("%.3f", static_cast<double>(dx) * coarsest) << ' '
+        << fmt("%.3f", static_cast<double>(dy) * coarsest) << ' ' << fmt("%.3f", dz) << " m, " << merged
+        << " cells merged, " << outside << " outside the first map's windows (dropped)\n";
+  }
+  write_outputs(m, o, out);
+  return 0;
+}
+
+/// The path query: first_hazard_m / first_unknown_m lines.
+int run_path_query(const Options& o, const MappedClouds& m, std::ostream& out) {
+  if (!o.have_footprint) fail("--path needs --footprint LENGTH,WIDTH (the body swept along it)", 2);
+  if (o.footprint_has_yaw) fail("--footprint: YAW_DEG does not apply to --path (the body follows the path)", 2);
+  std::vector<float> xy;
+  for (std::size_t i = 0; i < o.path.size(); i += 2) {
+    xy.push_back(static_cast<float>(o.path[i] - m.origin.xyz[0]));
+    xy.push_back(static_cast<float>(o.path[i + 1] - m.origin.xyz[1]));
+  }
+  const double step = o.step > 0.0 ? o.step : m.widths.front();
+  const LocalPath p = m.runner->path(xy, static_cast<float>(o.footprint_length), static_cast<float>(o.footprint_width),
+                                     static_cast<float>(step), static_cast<float>(o.max_unknown_share));
+  if (p.status != "ok") fail("the map refused the path query (" + p.status + ")", 2);
+  out << "path_length_m: " << fmt("%.6f", p.length_m) << "\n";
+  out << "path_poses: " << p.poses << "\n";
+  out << "first_hazard_m: " << (p.hazard ? fmt("%.6f", p.first_hazard_m) : std::string("none")) << "\n";
+  if (p.hazard) {
+    out << "hazard_class: " << p.hazard_class << "\n";
+    out << "hazard_x: " << fmt("%.6f", static_cast<double>(p.hazard_x) + m.origin.xyz[0]) << "\n";
+    out << "hazard_y: " << fmt("%.6f", static_cast<double>(p.hazard_y) + m.origin.xyz[1]) << "\n";
+  }
+  out << "first_unknown_m: " << (p.unknown ? fmt("%.6f", p.first_unknown_m) : std::string("none")) << "\n";
   return 0;
 }
 
 int run_query(const Options& o, std::ostream& out) {
-  if (!o.have_at) fail("--at X,Y is required", 2);
+  if (!o.have_at && o.path.empty()) fail("--at X,Y or --path X1,Y1:X2,Y2[:...] is required", 2);
+  if (o.have_at && !o.path.empty()) fail("--at and --path are two queries: give one", 2);
   if (!o.out_dir.empty()) fail("--out belongs to 'ccmap map'", 2);
+  if (o.costmap || o.inflate > 0.0) fail("--costmap and --inflate belong to 'ccmap map'", 2);
+  if (o.step > 0.0 && o.path.empty()) fail("--step belongs to --path", 2);
+  if (!o.path.empty() && !o.have_footprint) fail("--path needs --footprint LENGTH,WIDTH (the body swept along it)", 2);
   std::ostringstream log;
   MappedClouds m = build_map(o, log, true);
+  if (!o.path.empty()) return run_path_query(o, m, out);
   LocalQuery q;
   q.status = "outside_map";  // a tiled map holds only the tiles that hold points
   if (!m.tiled) {
@@ -526,6 +936,20 @@ int run_query(const Options& o, std::ostream& out) {
   out << "elevation_variance_m2: " << fmt("%.6g", q.elevation_variance) << "\n";
   out << "weight: " << fmt("%.6g", q.weight) << "\n";
   out << "class: " << q.cell_class << "\n";
+  if (o.have_footprint) {
+    // The centred map (map_centred) or the map at the last pose: never tiles.
+    const double lx = o.at_x - m.origin.xyz[0], ly = o.at_y - m.origin.xyz[1];
+    const double yaw = o.footprint_yaw_deg * kPi / 180.0;
+    const LocalFootprint f = m.runner->footprint(
+        static_cast<float>(lx), static_cast<float>(ly), static_cast<float>(std::cos(yaw)), static_cast<float>(std::sin(yaw)),
+        static_cast<float>(o.footprint_length), static_cast<float>(o.footprint_width), static_cast<float>(o.max_unknown_share));
+    if (f.status != "ok" && f.status != "outside_map") fail("the map refused the footprint (" + f.status + ")", 2);
+    out << "footprint_class: " << f.verdict << "\n";
+    out << "footprint_unknown_share: " << fmt("%.6f", f.unknown_share) << "\n";
+    out << "footprint_max_step_m: " << fmt("%.6f", f.max_step) << "\n";
+    out << "footprint_max_inclination_deg: "
+        << fmt("%.3f", std::atan(static_cast<double>(f.max_inclination)) * 180.0 / kPi) << "\n";
+  }
   return 0;
 }
 
@@ -542,12 +966,16 @@ int run_cli(int argc, char** argv, std::ostream& out, std::ostream& err) {
       out << kMainHelp;
       return 0;
     }
-    if (command != "map" && command != "query") fail("unknown command '" + command + "' (expected map or query)", 2);
+    if (command != "map" && command != "query" && command != "merge") {
+      fail("unknown command '" + command + "' (expected map, query or merge)", 2);
+    }
     const Options o = parse_options(argc, argv);
     if (o.help) {
-      out << (command == "map" ? kMapHelp : kQueryHelp);
+      out << (command == "map" ? kMapHelp : (command == "query" ? kQueryHelp : kMergeHelp));
       return 0;
     }
+    refuse_foreign_options(o);
+    if (command == "merge") return run_merge(o, out);
     return command == "map" ? run_map(o, out) : run_query(o, out);
   } catch (const CliError& e) {
     err << "ccmap: error: " << e.message << "\n";

@@ -3,6 +3,10 @@
 #include <cmath>
 
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/footprint.hpp"
+#include "ccmap/map/path_query.hpp"
+#include "ccmap/map/exchange.hpp"
+#include "ccmap/map/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
@@ -142,9 +146,85 @@ class StackRunner final : public MapRunner {
     return out;
   }
 
+  LocalFootprint footprint(float x, float y, float hx, float hy, float length, float width,
+                           float max_unknown_share) const override {
+    const FootprintResult r = query_footprint(*stack_, Footprint{x, y, hx, hy, length, width});
+    LocalFootprint out;
+    out.status = to_string(r.status);
+    out.worst_class = to_string(r.worst_class);
+    out.verdict = to_string(footprint_class(r, max_unknown_share));
+    out.unknown_share = r.unknown_share;
+    out.max_step = r.max_step_m;
+    out.max_inclination = r.max_inclination;
+    out.min_height = r.min_height_m;
+    out.max_height = r.max_height_m;
+    out.cells_visited = r.cells_visited;
+    return out;
+  }
+
+  LocalPath path(const std::vector<float>& xy, float length, float width, float step,
+                 float max_unknown_share) const override {
+    std::vector<PathPoint> points(xy.size() / 2U);
+    for (std::size_t i = 0; i < points.size(); ++i) points[i] = PathPoint{xy[2 * i], xy[2 * i + 1]};
+    const PathResult r =
+        query_path(*stack_, points.data(), points.size(), PathSweep{length, width, step, max_unknown_share});
+    LocalPath out;
+    out.status = to_string(r.status);
+    out.hazard = r.hazard_found;
+    out.unknown = r.unknown_found;
+    out.first_hazard_m = r.first_hazard_m;
+    out.first_unknown_m = r.first_unknown_m;
+    out.hazard_x = r.hazard_pose.x;
+    out.hazard_y = r.hazard_pose.y;
+    out.unknown_x = r.unknown_pose.x;
+    out.unknown_y = r.unknown_pose.y;
+    out.hazard_class = to_string(r.hazard.worst_class);
+    out.length_m = r.path_length_m;
+    out.poses = r.samples;
+    return out;
+  }
+
+  float max_inclination() const override { return stack_->params().max_inclination; }
+
   FrameStats totals() const override { return to_stats(stack_->total_counters()); }
   float weight_limit() const override { return stack_->params().weight_limit; }
   float min_weight() const override { return stack_->params().min_weight; }
+
+  std::size_t snapshot_size() const override { return ccmap::snapshot_size<Config>(); }
+
+  bool save_snapshot(std::vector<std::uint8_t>* bytes, std::string* error) const override {
+    bytes->assign(ccmap::snapshot_size<Config>(), 0U);
+    std::size_t written = 0;
+    const Status status = ccmap::save_snapshot(*stack_, bytes->data(), bytes->size(), &written);
+    if (status != Status::kOk) {
+      *error = std::string("cannot save the map (") + to_string(status) + ")";
+      return false;
+    }
+    return true;
+  }
+
+  bool load_snapshot(const std::vector<std::uint8_t>& bytes, std::string* error) override {
+    const Status status = ccmap::load_snapshot(*stack_, bytes.data(), bytes.size());
+    if (status != Status::kOk) {
+      *error = std::string("the map does not load (") + to_string(status) + ")";
+      return false;
+    }
+    return true;
+  }
+
+  bool merge_snapshot(const std::vector<std::uint8_t>& bytes, std::int32_t offset_x_cells, std::int32_t offset_y_cells,
+                      float offset_z_m, std::uint64_t* merged, std::uint64_t* outside, std::string* error) override {
+    MergeReport report{};
+    const Status status = ccmap::merge_snapshot(*stack_, bytes.data(), bytes.size(),
+                                                CellIndex{offset_x_cells, offset_y_cells}, offset_z_m, &report);
+    if (status != Status::kOk) {
+      *error = std::string("the map does not merge (") + to_string(status) + ")";
+      return false;
+    }
+    *merged = report.cells_merged;
+    *outside = report.cells_outside;
+    return true;
+  }
 
  private:
   std::unique_ptr<StackType> stack_ = std::make_unique<StackType>();  // MBs: never on the stack

@@ -51,6 +51,25 @@ struct LocalQuery {
   const char* cell_class = "unknown";
 };
 
+/// A footprint query's answer (map/footprint.hpp) in the local frame.
+struct LocalFootprint {
+  std::string status;               ///< ok, outside_map, or the refusal
+  const char* worst_class = "unknown";
+  const char* verdict = "unknown";  ///< footprint_class() with the caller's unknown share
+  float unknown_share = 1, max_step = 0, max_inclination = 0, min_height = 0, max_height = 0;
+  std::uint32_t cells_visited = 0;
+};
+
+/// A path query's answer (map/path_query.hpp) in the local frame.
+struct LocalPath {
+  std::string status;
+  bool hazard = false, unknown = false;
+  float first_hazard_m = 0, first_unknown_m = 0, hazard_x = 0, hazard_y = 0, unknown_x = 0, unknown_y = 0;
+  const char* hazard_class = "unknown";
+  float length_m = 0;
+  std::uint32_t poses = 0;
+};
+
 class MapRunner {
  public:
   virtual ~MapRunner() = default;
@@ -75,9 +94,28 @@ class MapRunner {
   virtual void layer_window_min(int layer, std::int32_t* ix, std::int32_t* iy) const = 0;
   virtual bool export_layer(int layer, std::vector<LocalCell>* cells, std::string* error) const = 0;
   virtual LocalQuery query(float x, float y) const = 0;
+  /// The footprint query of the rectangle centred (x, y), length axis along (hx, hy).
+  virtual LocalFootprint footprint(float x, float y, float hx, float hy, float length, float width,
+                                   float max_unknown_share) const = 0;
+  /// The path query along the polyline xy (x0 y0 x1 y1 ...), the body every `step` m.
+  virtual LocalPath path(const std::vector<float>& xy, float length, float width, float step,
+                         float max_unknown_share) const = 0;
+  /// The stack's maximum inclination (dz/dxy): the steep limit the cost function scales by.
+  virtual float max_inclination() const = 0;
   virtual FrameStats totals() const = 0;
   virtual float weight_limit() const = 0;
   virtual float min_weight() const = 0;
+  /// Bytes of a snapshot of this preset.
+  virtual std::size_t snapshot_size() const = 0;
+  /// The library's snapshot of the map (save_snapshot).
+  virtual bool save_snapshot(std::vector<std::uint8_t>* bytes, std::string* error) const = 0;
+  /// Replaces the map by a snapshot (load_snapshot: parameters, windows, cells).
+  virtual bool load_snapshot(const std::vector<std::uint8_t>& bytes, std::string* error) = 0;
+  /// Folds a snapshot of another map into this one (merge_snapshot); offset: that map's origin
+  /// minus this one's, in finest cells (a multiple of the coarsest layer's) and metres (z).
+  virtual bool merge_snapshot(const std::vector<std::uint8_t>& bytes, std::int32_t offset_x_cells,
+                              std::int32_t offset_y_cells, float offset_z_m, std::uint64_t* merged,
+                              std::uint64_t* outside, std::string* error) = 0;
 };
 
 /// Preset names, in the order shown by --help.

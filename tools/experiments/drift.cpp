@@ -36,9 +36,11 @@ DriftResult drift_runs(const DriftConfig& cfg);
 
 }  // namespace
 
-const DriftRow* DriftResult::find(double w, double wl, double drift) const {
+const DriftRow* DriftResult::find(double w, double wl, double drift, bool uncertain) const {
   for (const DriftRow& r : rows)
-    if (near(r.cell_width_m, w) && near(r.weight_limit, wl) && near(r.drift_fraction, drift)) return &r;
+    if (near(r.cell_width_m, w) && near(r.weight_limit, wl) && near(r.drift_fraction, drift) &&
+        r.uncertain_moves == uncertain)
+      return &r;
   return nullptr;
 }
 
@@ -51,15 +53,19 @@ namespace {
 template <typename CcmConfig>
 DriftResult drift_runs(const DriftConfig& cfg) {
   DriftResult result;
-  for (double w : cfg.cell_widths_m)
-    for (double wl : cfg.weight_limits)
-      for (double d : cfg.drift_fractions) {
-        DriftRow r;
-        r.cell_width_m = w;
-        r.weight_limit = wl;
-        r.drift_fraction = d;
-        result.rows.push_back(r);
-      }
+  for (const bool uncertain : {false, true}) {
+    if (uncertain && !cfg.compare_uncertain_moves) continue;
+    for (double w : cfg.cell_widths_m)
+      for (double wl : cfg.weight_limits)
+        for (double d : cfg.drift_fractions) {
+          DriftRow r;
+          r.cell_width_m = w;
+          r.weight_limit = wl;
+          r.drift_fraction = d;
+          r.uncertain_moves = uncertain;
+          result.rows.push_back(r);
+        }
+  }
   if (result.rows.empty()) return result;
   const double k_wave = 2.0 * sim::kPi / cfg.wave_wavelength_m;
   result.max_slope_deg = std::atan(cfg.wave_amplitude_m * k_wave) * 180.0 / sim::kPi;
@@ -119,8 +125,14 @@ DriftResult drift_runs(const DriftConfig& cfg) {
         DriftRow& row = result.rows[m.row];
         if (drift_index(row.drift_fraction) != d) continue;
         Stack<CcmConfig>& s = *m.stack;
-        if (s.move_to(static_cast<float>(est.x), static_cast<float>(est.y)) != Status::kOk ||
-            s.update_frame(points.data(), points.size(), origin, nullptr) != Status::kOk) {
+        // The odometry's 1-sigma error of the move since the last frame (none before the first).
+        const double moved = f == 0 ? 0.0 : std::hypot(est.x - estimates[d][f - 1].x, est.y - estimates[d][f - 1].y);
+        const double fraction = cfg.odometry_sigma_fraction >= 0.0 ? cfg.odometry_sigma_fraction : row.drift_fraction;
+        const Status moved_status =
+            row.uncertain_moves
+                ? s.move_to(static_cast<float>(est.x), static_cast<float>(est.y), static_cast<float>(fraction * moved))
+                : s.move_to(static_cast<float>(est.x), static_cast<float>(est.y));
+        if (moved_status != Status::kOk || s.update_frame(points.data(), points.size(), origin, nullptr) != Status::kOk) {
           std::fprintf(stderr, "drift: map update refused\n");
           continue;
         }
@@ -159,10 +171,10 @@ DriftResult drift_runs(const DriftConfig& cfg) {
 
 }  // namespace
 
-double drift_crossing(const DriftResult& result, double w, double wl, double tolerance) {
+double drift_crossing(const DriftResult& result, double w, double wl, double tolerance, bool uncertain) {
   std::vector<const DriftRow*> rows;
   for (const DriftRow& r : result.rows)
-    if (near(r.cell_width_m, w) && near(r.weight_limit, wl)) rows.push_back(&r);
+    if (near(r.cell_width_m, w) && near(r.weight_limit, wl) && r.uncertain_moves == uncertain) rows.push_back(&r);
   std::sort(rows.begin(), rows.end(), [](const DriftRow* a, const DriftRow* b) { return a->drift_fraction < b->drift_fraction; });
   for (std::size_t i = 0; i < rows.size(); ++i) {
     if (rows[i]->share() > tolerance) {
@@ -180,29 +192,40 @@ std::string drift_table(const DriftConfig& cfg, const DriftResult& result) {
                          "%.0f points per frame (stride %d)\n\n",
                          cfg.wave_amplitude_m * 1000, cfg.wave_wavelength_m, result.max_slope_deg, cfg.path_length_m,
                          cfg.frame_spacing_m, result.points_per_frame, cfg.pixel_stride);
-  Table t({"cell", "W_l", "drift", "known cell-frames", "false obstacle", "share", "unknown cell-frames"});
+  Table t({"moves", "cell", "W_l", "drift", "known cell-frames", "false obstacle", "share", "unknown cell-frames"});
   for (const DriftRow& r : result.rows) {
-    t.add_row({format("%.0f cm", r.cell_width_m * 100), format("%.0f", r.weight_limit), format("%.0f%%", r.drift_fraction * 100),
+    t.add_row({r.uncertain_moves ? "uncertain" : "plain", format("%.0f cm", r.cell_width_m * 100), format("%.0f", r.weight_limit),
+               format("%.0f%%", r.drift_fraction * 100),
                format("%llu", static_cast<unsigned long long>(r.known)),
                format("%llu", static_cast<unsigned long long>(r.false_obstacle)), format("%.2f%%", 100.0 * r.share()),
                format("%llu", static_cast<unsigned long long>(r.unknown))});
   }
   o += t.str();
   o += format("\ndrift at which the false-obstacle share exceeds %.0f %%:\n\n", cfg.tolerance * 100);
-  Table c({"cell", "W_l", "withstands drift up to", "paper (chosen W_l)"});
+  std::vector<std::string> head{"cell", "W_l", "withstands drift up to"};
+  if (cfg.compare_uncertain_moves) head.push_back("with uncertain moves");
+  head.push_back("paper (chosen W_l)");
+  Table c(head);
+  auto crossing = [&](double w, double wl, bool uncertain) {
+    const double x = drift_crossing(result, w, wl, cfg.tolerance, uncertain);
+    return std::isfinite(x) ? format("%.1f %%", 100.0 * x)
+                            : format("> %.0f %% (never crossed)", 100.0 * cfg.drift_fractions.back());
+  };
   for (double w : cfg.cell_widths_m)
     for (double wl : cfg.weight_limits) {
-      const double x = drift_crossing(result, w, wl, cfg.tolerance);
       std::string paper;
       if (near(wl, cfg.chosen_weight_limit)) {
         if (near(w, 0.04)) paper = "8 %";
         if (near(w, 0.08)) paper = "16 %";
       }
-      c.add_row({format("%.0f cm", w * 100), format("%.0f", wl),
-                 std::isfinite(x) ? format("%.1f %%", 100.0 * x)
-                                  : format("> %.0f %% (never crossed)", 100.0 * cfg.drift_fractions.back()),
-                 paper});
+      std::vector<std::string> row{format("%.0f cm", w * 100), format("%.0f", wl), crossing(w, wl, false)};
+      if (cfg.compare_uncertain_moves) row.push_back(crossing(w, wl, true));
+      row.push_back(paper);
+      c.add_row(row);
     }
+  std::string sigma = cfg.odometry_sigma_fraction >= 0.0 ? format("%.0f %% of the distance moved", 100.0 * cfg.odometry_sigma_fraction)
+                                                          : std::string("the run's drift fraction x the distance moved");
+  if (cfg.compare_uncertain_moves) o += "uncertain moves: Stack::move_to(x, y, sigma), sigma = " + sigma + "\n\n";
   return o + c.str();
 }
 
@@ -219,17 +242,21 @@ bool write_drift_outputs(const DriftConfig& cfg, const DriftResult& result, cons
   int colour = 0;
   for (std::size_t k = 0; k < cfg.cell_widths_m.size(); ++k) {
     for (double wl : cfg.weight_limits) {
-      SvgSeries s;
-      s.name = format("%.0f cm, W_l %.0f", cfg.cell_widths_m[k] * 100, wl);
-      for (const DriftRow& r : result.rows)
-        if (near(r.cell_width_m, cfg.cell_widths_m[k]) && near(r.weight_limit, wl)) {
-          s.x.push_back(r.drift_fraction);
-          s.y.push_back(r.share());
-        }
-      s.color = palette_color(colour++);
-      s.dashed = !near(wl, cfg.chosen_weight_limit);
-      s.markers = true;
-      p.series.push_back(s);
+      const std::string colour_name = palette_color(colour++);
+      for (const bool uncertain : {false, true}) {
+        if (uncertain && (!cfg.compare_uncertain_moves || !near(wl, cfg.chosen_weight_limit))) continue;
+        SvgSeries s;
+        s.name = format("%.0f cm, W_l %.0f%s", cfg.cell_widths_m[k] * 100, wl, uncertain ? ", uncertain moves" : "");
+        for (const DriftRow& r : result.rows)
+          if (near(r.cell_width_m, cfg.cell_widths_m[k]) && near(r.weight_limit, wl) && r.uncertain_moves == uncertain) {
+            s.x.push_back(r.drift_fraction);
+            s.y.push_back(r.share());
+          }
+        s.color = colour_name;
+        s.dashed = !near(wl, cfg.chosen_weight_limit) || uncertain;
+        s.markers = true;
+        p.series.push_back(s);
+      }
     }
   }
   p.ref_lines.push_back(SvgRefLine{cfg.tolerance, false, format("tolerance %.0f %%", cfg.tolerance * 100)});
@@ -237,10 +264,10 @@ bool write_drift_outputs(const DriftConfig& cfg, const DriftResult& result, cons
   p.ref_lines.push_back(SvgRefLine{0.16, true, "paper 8 cm: 16 %"});
   if (!write_svg(out_dir + "/fig10.svg", p, error)) return false;
   std::ofstream csv(out_dir + "/fig10.csv");
-  csv << "cell_m,weight_limit,drift_fraction,known,false_obstacle,unknown,share\n";
+  csv << "cell_m,weight_limit,drift_fraction,uncertain_moves,known,false_obstacle,unknown,share\n";
   for (const DriftRow& r : result.rows)
-    csv << r.cell_width_m << ',' << r.weight_limit << ',' << r.drift_fraction << ',' << r.known << ',' << r.false_obstacle << ','
-        << r.unknown << ',' << r.share() << '\n';
+    csv << r.cell_width_m << ',' << r.weight_limit << ',' << r.drift_fraction << ',' << (r.uncertain_moves ? 1 : 0) << ','
+        << r.known << ',' << r.false_obstacle << ',' << r.unknown << ',' << r.share() << '\n';
   if (!csv) {
     if (error != nullptr) *error = "cannot write " + out_dir + "/fig10.csv";
     return false;

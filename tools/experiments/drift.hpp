@@ -27,6 +27,10 @@
 //    over frames (cell-frames). The truth is all traversable, so every such mark is false.
 //  - Crossing: the smallest drift at which the share exceeds `tolerance` (5 %: one false
 //    obstacle cell in twenty observed; linear interpolation between the drifts run).
+//  - Uncertain moves (compare_uncertain_moves): every map also runs a second time with
+//    Stack::move_to(x, y, sigma), sigma = odometry_sigma_fraction x the distance moved since the
+//    last frame (the odometry's 1-sigma position error; a negative fraction: the run's own drift
+//    fraction, an estimator that knows its drift rate). Same clouds, same poses.
 // Paper: the chosen W_l withstands 8 % drift at 4 cm and 16 % at 8 cm.
 #pragma once
 
@@ -52,6 +56,8 @@ struct DriftConfig {
   std::uint64_t seed = 1;
   bool paper_cell = false;  ///< CCM maps of the paper's 9-float cell (PaperCell<SingleCcmConfig>)
   bool progress = false;
+  bool compare_uncertain_moves = true;  ///< also run every map with uncertain moves
+  double odometry_sigma_fraction = -1.0;  ///< sigma per metre moved; < 0: the run's drift fraction
   static DriftConfig quick() {
     DriftConfig c;
     c.cell_widths_m = {0.04};
@@ -67,6 +73,7 @@ struct DriftRow {
   double cell_width_m = 0.0;
   double weight_limit = 0.0;
   double drift_fraction = 0.0;
+  bool uncertain_moves = false;     ///< mapped with move_to(x, y, sigma)
   std::uint64_t known = 0;          ///< observed, known cell-frames
   std::uint64_t false_obstacle = 0; ///< of which marked obstacle or steep
   std::uint64_t unknown = 0;        ///< observed cell-frames the map does not know
@@ -74,17 +81,19 @@ struct DriftRow {
 };
 
 struct DriftResult {
-  std::vector<DriftRow> rows;  ///< width-major, then W_l, then drift (ascending)
+  std::vector<DriftRow> rows;  ///< moves (plain, then uncertain), width, W_l, drift (ascending)
   double points_per_frame = 0.0;
   double max_slope_deg = 0.0;
-  const DriftRow* find(double cell_width_m, double weight_limit, double drift_fraction) const;
+  const DriftRow* find(double cell_width_m, double weight_limit, double drift_fraction,
+                       bool uncertain_moves = false) const;
 };
 
 DriftResult run_drift(const DriftConfig& config);
 
 /// Drift (fraction of distance) at which the share first exceeds the tolerance, linearly
 /// interpolated; NaN if it never does within the drifts run, 0 if it does at the first one.
-double drift_crossing(const DriftResult& result, double cell_width_m, double weight_limit, double tolerance);
+double drift_crossing(const DriftResult& result, double cell_width_m, double weight_limit, double tolerance,
+                      bool uncertain_moves = false);
 
 std::string drift_table(const DriftConfig& config, const DriftResult& result);
 

@@ -5,6 +5,8 @@
 #include <ctime>
 #include <memory>
 
+#include "ccmap/map/costmap.hpp"
+#include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "experiments/canvas.hpp"
 #include "experiments/common.hpp"
@@ -14,6 +16,7 @@
 #include "sim/path.hpp"
 #include "sim/stereo.hpp"
 #include "sim/terrain.hpp"
+#include "traverse/scene.hpp"
 
 namespace ccmap::traverse {
 
@@ -21,98 +24,8 @@ namespace {
 
 using experiments::format;
 using experiments::Rgb;
-// Map: Stack<CadreConfig> (full CCM cells) or Stack<PaperCell<CadreConfig>> (TraverseConfig::paper_cell).
 
-constexpr double kMaxSlopeDeg = 20.0;
-constexpr double kObstacleFraction = 0.75;
 constexpr double kFootprintStepM = 0.02;
-
-/// The terrain of the traverse: lunar-like ground (tools/sim lunar_terrain_params) over
-/// [0, 30] m^2, its rocks cleared from a 0.45 m corridor around the path (the rover does not
-/// drive over rocks; its camera height follows the ground), plus placed rocks and a box
-/// beside the path, some above the 5 m-range minimum size of 48 cm.
-std::unique_ptr<sim::ProceduralTerrain> make_terrain(std::uint64_t seed, const std::vector<sim::PathPose>& path) {
-  const sim::Rect area{0.0, 0.0, 30.0, 30.0};
-  const sim::TerrainParams params = sim::lunar_terrain_params(area, seed);
-  const sim::ProceduralTerrain generated(params);
-  sim::TerrainParams no_rocks = params;
-  no_rocks.rocks.density_per_m2 = 0.0;  // independent streams: waves and craters stay the same
-  auto terrain = std::make_unique<sim::ProceduralTerrain>(no_rocks);
-  auto path_distance = [&](double x, double y) {
-    double best = 1e300;
-    for (const sim::PathPose& p : path) best = std::min(best, std::hypot(p.pose.x - x, p.pose.y - y));
-    return best;
-  };
-  for (const sim::Rock& r : generated.rocks()) {
-    if (path_distance(r.x, r.y) - 0.5 * r.diameter_m > 0.45) terrain->add_rock(r);
-  }
-  // Placed obstacles (x, y, diameter, height): beside the first straight, in the turn and
-  // beside/after the last straight.
-  const sim::Rock placed[] = {
-      {9.5, 9.3, 1.0, 0.50},   {11.0, 6.3, 0.7, 0.35}, {16.0, 12.5, 1.1, 0.55}, {13.0, 16.6, 1.2, 0.60},
-      {8.0, 8.95, 0.25, 0.12}, {10.2, 7.2, 0.16, 0.08}, {15.0, 11.4, 0.3, 0.15}, {13.4, 13.2, 0.22, 0.10},
-      {12.2, 4.8, 1.0, 0.50},
-  };
-  for (const sim::Rock& r : placed) terrain->add_rock(r);
-  terrain->add_box(sim::Box{7.8, 6.6, 8.2, 7.0, 0.20});
-  return terrain;
-}
-
-/// Rotation sensor (optical) -> map of the camera at heading yaw: columns = the optical axes
-/// in the map frame.
-Pose camera_pose(const sim::StereoCamera& camera, const sim::Point3& position, double yaw) {
-  Pose pose{};
-  const sim::Point3 zero{0.0, 0.0, 0.0};
-  const sim::Point3 axes[3] = {camera.sensor_to_world(sim::Point3{1.0, 0.0, 0.0}, zero, yaw),
-                               camera.sensor_to_world(sim::Point3{0.0, 1.0, 0.0}, zero, yaw),
-                               camera.sensor_to_world(sim::Point3{0.0, 0.0, 1.0}, zero, yaw)};
-  for (int c = 0; c < 3; ++c) {
-    pose.rotation[0][c] = static_cast<float>(axes[c].x);
-    pose.rotation[1][c] = static_cast<float>(axes[c].y);
-    pose.rotation[2][c] = static_cast<float>(axes[c].z);
-  }
-  pose.translation = PointXYZ{static_cast<float>(position.x), static_cast<float>(position.y),
-                              static_cast<float>(position.z)};
-  return pose;
-}
-
-bool is_hazard(CellClass c) { return c == CellClass::kObstacle || c == CellClass::kSteep; }
-
-void count(DetectionAreas& a, bool truth_hazard, CellClass map_class, double area) {
-  if (map_class == CellClass::kUnknown) {
-    a.unknown += area;
-    return;
-  }
-  const bool map_hazard = is_hazard(map_class);
-  (truth_hazard ? a.truth_hazard_known : a.truth_free_known) += area;
-  if (map_hazard == truth_hazard) a.correct += area;
-  else if (truth_hazard) a.missed += area;
-  else a.false_obstacle += area;
-}
-
-struct LayerTruth {
-  sim::HazardGrid grid;
-  CellIndex min{0, 0};
-  int side = 0;
-  double width = 0.0;
-  const sim::CellHazard* at(double x, double y) const {
-    const int ix = static_cast<int>(std::floor((x - grid.origin_x) / width));
-    const int iy = static_cast<int>(std::floor((y - grid.origin_y) / width));
-    if (ix < 0 || iy < 0 || ix >= grid.nx || iy >= grid.ny) return nullptr;
-    return &grid.at(ix, iy);
-  }
-};
-
-/// The layer whose cell gave the class of a stack answer (query() takes the class of a
-/// constant-layer answer from the first CCM layer when that one knows the point).
-template <typename Map>
-int classifying_layer(const Map& map, const QueryResult& q, float x, float y) {
-  if (q.status == Status::kOk && !Map::layer_is_ccm(q.layer) && Map::kCcmLayerCount > 0 &&
-      map.query_layer(Map::kFineLayerCount, x, y).status == Status::kOk) {
-    return Map::kFineLayerCount;
-  }
-  return q.layer;
-}
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -270,13 +183,6 @@ bool write_layer_picture(const std::string& path, const Map& map, int layer, con
   return tools::write_png(path, img, error);
 }
 
-struct QueryRaster {
-  double x0 = 0.0, y0 = 0.0, step = 0.04;
-  int n = 0;
-  std::vector<CellClass> map_class;
-  std::vector<signed char> truth;  ///< -1 invalid, 0 free, 1 obstacle, 2 steep
-};
-
 Rgb truth_rgb(signed char t) {
   if (t == 1) return class_rgb(CellClass::kObstacle);
   if (t == 2) return class_rgb(CellClass::kSteep);
@@ -363,6 +269,102 @@ bool write_hazard_picture(const std::string& path, const QueryRaster& q, const M
   return tools::write_png(path, img, error);
 }
 
+/// The next `ahead` metres of the route from distance d, as a polyline: the rover's pose, the
+/// fine route's points after it, the point at d + ahead (interpolated).
+std::vector<PathPoint> route_ahead(const std::vector<sim::PathPose>& fine, double d, double ahead) {
+  std::vector<PathPoint> pts;
+  const double end = d + ahead;
+  for (std::size_t k = 0; k < fine.size(); ++k) {
+    const double t = fine[k].distance_m;
+    if (t < d - 1e-9) continue;
+    if (t <= end + 1e-9) {
+      pts.push_back(PathPoint{static_cast<float>(fine[k].pose.x), static_cast<float>(fine[k].pose.y)});
+      continue;
+    }
+    const sim::Pose2& a = fine[k - 1].pose;
+    const sim::Pose2& b = fine[k].pose;
+    const double f = (end - fine[k - 1].distance_m) / (t - fine[k - 1].distance_m);
+    pts.push_back(PathPoint{static_cast<float>(a.x + f * (b.x - a.x)), static_cast<float>(a.y + f * (b.y - a.y))});
+    break;
+  }
+  return pts;
+}
+
+/// Colours of the cost raster: cost white (0) .. dark grey (252), inscribed lilac, lethal red,
+/// unknown dark blue-grey.
+Rgb cost_rgb(std::uint8_t c) {
+  if (c == kCostLethal) return Rgb{215, 35, 35};
+  if (c == kCostInscribed) return Rgb{205, 165, 245};
+  if (c == kCostUnknown) return Rgb{45, 45, 70};
+  const auto v = static_cast<std::uint8_t>(255 - (170 * c) / 252);
+  return Rgb{v, v, v};
+}
+
+/// The cost raster around the final pose, the route, and where the look-ahead saw hazards.
+template <typename Map>
+bool write_costmap_picture(const std::string& path, const Map& map, const std::vector<sim::PathPose>& route,
+                           std::size_t driven, const TraverseResult& result, std::string* error) {
+  const std::vector<FrameRecord>& frames = result.frames;
+  const int stop_frame = result.stop_frame;
+  constexpr int kSide = 256;
+  constexpr float kRes = 0.04F;
+  constexpr float kInflation = 0.3F;
+  const sim::Pose2& rover = route[driven - 1].pose;
+  std::vector<std::uint8_t> cost(static_cast<std::size_t>(kSide) * kSide);
+  CostmapStats stats{};
+  const Status status = fill_costmap(map, CostmapSpec{static_cast<float>(rover.x), static_cast<float>(rover.y), kRes, kSide,
+                                                      kInflation},
+                                     cost.data(), cost.size(), &stats);
+  if (status != Status::kOk) {
+    *error = std::string("fill_costmap: ") + to_string(status);
+    return false;
+  }
+  const int scale = 2, pix = kSide * scale, gap = 24, top = 44, legend = 74;
+  tools::RgbImage img(pix + 2 * gap, top + pix + legend, 255);
+  PanelFrame f;
+  f.x0 = rover.x - 0.5 * kSide * kRes;
+  f.y0 = rover.y - 0.5 * kSide * kRes;
+  f.extent = kSide * kRes;
+  f.left = gap;
+  f.top = top;
+  f.pixels = pix;
+  for (int iy = 0; iy < kSide; ++iy) {
+    for (int ix = 0; ix < kSide; ++ix) {
+      const Rgb c = cost_rgb(cost[static_cast<std::size_t>(ix + kSide * iy)]);
+      experiments::fill_rect(img, f.left + ix * scale, f.top + (kSide - 1 - iy) * scale, scale, scale, c);
+    }
+  }
+  draw_path(img, f, route, driven);
+  // Every look-ahead hazard (the body's centre there), and the first one: where the rover stops.
+  for (const FrameRecord& r : frames) {
+    if (r.ahead_hazard) experiments::fill_disc(img, f.px(r.ahead_hazard_pose.x), f.py(r.ahead_hazard_pose.y), 3.0, Rgb{255, 150, 0});
+  }
+  if (stop_frame >= 0) {
+    const FrameRecord& r = frames[static_cast<std::size_t>(stop_frame)];
+    experiments::draw_rect(img, static_cast<int>(f.px(r.pose.x)) - 6, static_cast<int>(f.py(r.pose.y)) - 6, 13, 13,
+                           Rgb{255, 0, 255}, 2);
+  }
+  panel_decorations(img, f, format("%.2f M AROUND THE ROVER AT %.0f CM, %.1f M INFLATION", kSide * kRes, 100.0 * kRes,
+                                   kInflation));
+  experiments::draw_text(img, gap, 8, "CADRE TRAVERSE: THE PLANNER'S COST RASTER (COSTMAP_2D VALUES)", experiments::kBlack);
+  const int ly = top + pix + 14;
+  int x = gap;
+  x = experiments::legend_entry(img, x, ly, cost_rgb(0), "FREE");
+  x = experiments::legend_entry(img, x, ly, cost_rgb(200), "COST 200");
+  x = experiments::legend_entry(img, x, ly, cost_rgb(kCostInscribed), "INSCRIBED");
+  x = experiments::legend_entry(img, x, ly, cost_rgb(kCostLethal), "LETHAL");
+  experiments::legend_entry(img, x, ly, cost_rgb(kCostUnknown), "UNKNOWN");
+  experiments::draw_text(img, gap, ly + 18,
+                         format("LOOK-AHEAD: THE %.1f X %.1f M BODY ALONG THE NEXT %.1f M AFTER EACH FRAME", result.body_length_m,
+                                result.body_width_m, result.lookahead_m),
+                         experiments::kBlack);
+  experiments::draw_text(img, gap, ly + 32, "ORANGE: BODY WHERE IT SAW A HAZARD; MAGENTA: WHERE THE ROVER STOPS",
+                         experiments::kBlack);
+  return tools::write_png(path, img, error);
+}
+
+/// The traverse with map type Map: Stack<CadreConfig> (full CCM cells) or PaperMap
+/// (TraverseConfig::paper_cell, the paper's 9-float cell).
 template <typename Map>
 TraverseResult traverse_with(const TraverseConfig& cfg) {
   TraverseResult result;
@@ -371,8 +373,13 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
   const sim::Pose2 start{6.0, 8.0, 0.0};
   const std::vector<sim::PathSegment> segments{{6.0, 0.0}, {3.5, 0.5 * sim::kPi}, {4.0, 0.0}};
   const std::vector<sim::PathPose> route = sim::generate_path(start, segments, cfg.frame_spacing_m);
+  const std::vector<sim::PathPose> fine_route = sim::generate_path(start, segments, 0.05);  // the look-ahead's polylines
+  result.lookahead_m = cfg.lookahead_m;
+  result.lookahead_step_m = cfg.lookahead_step_m;
+  result.body_length_m = cfg.body_length_m;
+  result.body_width_m = cfg.body_width_m;
   result.path_length_m = route.back().distance_m;
-  const std::unique_ptr<sim::ProceduralTerrain> terrain = make_terrain(cfg.seed, route);
+  const std::unique_ptr<sim::ProceduralTerrain> terrain = make_terrain(cfg.seed, {route});
   result.rocks = terrain->rocks().size();
   result.boxes = terrain->boxes().size();
   const clock_t r0 = std::clock();
@@ -418,17 +425,51 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
         moved == Status::kOk ? map->update_frame_sensor(points.data(), points.size(), sensor, &rec.counters) : moved;
     rec.updated = updated == Status::kOk;
     rec.update_ms = static_cast<double>(map->last_update_ns()) * 1e-6;
+    // The planner's look-ahead: the body swept along the next lookahead_m of the route.
+    // At the end of the route nothing lies ahead (a single point is no path): no query.
+    const std::vector<PathPoint> ahead = route_ahead(fine_route, route[i].distance_m, cfg.lookahead_m);
+    rec.route_end = ahead.size() < 2;
+    const clock_t a0 = std::clock();
+    const PathResult look =
+        rec.route_end ? detail::refused_path(Status::kOk)
+                      : query_path(*map, ahead.data(), ahead.size(),
+                                   PathSweep{static_cast<float>(cfg.body_length_m), static_cast<float>(cfg.body_width_m),
+                                             static_cast<float>(cfg.lookahead_step_m), kDefaultMaxUnknownShare});
+    rec.ahead_ms = 1000.0 * static_cast<double>(std::clock() - a0) / CLOCKS_PER_SEC;
+    rec.ahead_ok = look.status == Status::kOk;
+    rec.ahead_hazard = look.hazard_found;
+    rec.ahead_hazard_m = look.first_hazard_m;
+    rec.ahead_hazard_pose = sim::Pose2{look.hazard_pose.x, look.hazard_pose.y, std::atan2(look.hazard_pose.heading_y, look.hazard_pose.heading_x)};
+    rec.ahead_hazard_class = to_string(look.hazard.worst_class);
+    rec.ahead_unknown = look.unknown_found;
+    rec.ahead_unknown_m = look.first_unknown_m;
+    rec.ahead_poses = look.samples;
     result.frames.push_back(rec);
     if (log != nullptr) {
+      const std::string hazard = rec.route_end      ? std::string("end of the route")
+                                 : !rec.ahead_ok    ? std::string("REFUSED")
+                                 : rec.ahead_hazard ? format("%s at %.2f m", rec.ahead_hazard_class, rec.ahead_hazard_m)
+                                                    : std::string("clear");
+      const std::string unknown = rec.ahead_unknown ? format("from %.2f m", rec.ahead_unknown_m) : std::string("none");
       std::fprintf(log,
                    "frame %2zu/%zu  x %5.2f y %5.2f yaw %4.0f deg  points %6zu  used %6u  too noisy %6u  outside %5u  "
-                   "update %6.2f ms%s  (capture %4.0f ms)\n",
+                   "update %6.2f ms%s  (capture %4.0f ms)  ahead %.1f m: %s, unknown %s\n",
                    i + 1, frames, pose.x, pose.y, pose.yaw * 180.0 / sim::kPi, rec.points, rec.counters.used,
                    rec.counters.too_noisy, rec.counters.outside_map, rec.update_ms, rec.updated ? "" : " REFUSED",
-                   rec.capture_ms);
+                   rec.capture_ms, cfg.lookahead_m, hazard.c_str(), unknown.c_str());
       std::fflush(log);
     }
   }
+  std::vector<double> ahead_ms;
+  for (std::size_t k = 0; k < result.frames.size(); ++k) {
+    const FrameRecord& f = result.frames[k];
+    if (!f.route_end) ahead_ms.push_back(f.ahead_ms);
+    result.frames_with_hazard_ahead += f.ahead_hazard ? 1 : 0;
+    result.frames_with_unknown_ahead += f.ahead_unknown ? 1 : 0;
+    if (f.ahead_hazard && result.stop_frame < 0) result.stop_frame = static_cast<int>(k);
+  }
+  result.ahead_ms_median = median(ahead_ms);
+  result.ahead_ms_max = ahead_ms.empty() ? 0.0 : *std::max_element(ahead_ms.begin(), ahead_ms.end());
   std::vector<double> ms;
   for (const FrameRecord& f : result.frames) {
     ms.push_back(f.update_ms);
@@ -439,22 +480,14 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
   for (double m : ms) result.update_ms_mean += m / static_cast<double>(ms.size());
 
   // ---- per-layer ground truth and evaluation ----
-  std::vector<LayerTruth> truths(Map::kLayerCount);
+  std::vector<LayerTruth> truths;
   for (int layer = 0; layer < Map::kLayerCount; ++layer) {
-    LayerTruth& t = truths[static_cast<std::size_t>(layer)];
-    t.width = map->layer_cell_width(layer);
-    t.side = Map::layer_side(layer);
-    const CellIndex c = map->layer_centre(layer);
-    t.min = CellIndex{c.x - t.side / 2, c.y - t.side / 2};
-    sim::HazardParams hp;
-    hp.min_obstacle_height_m = kObstacleFraction * t.width;
-    hp.max_slope_deg = kMaxSlopeDeg;
-    hp.sample_spacing_m = 0.01;
-    t.grid = sim::compute_hazard_grid(*terrain, t.min.x * t.width, t.min.y * t.width, t.width, t.side, t.side, hp);
+    truths.push_back(layer_truth(*map, *terrain, layer));
+    const LayerTruth& t = truths.back();
     LayerReport rep;
     rep.layer = layer;
     rep.cell_width_m = t.width;
-    rep.min_obstacle_m = hp.min_obstacle_height_m;
+    rep.min_obstacle_m = kObstacleFraction * t.width;
     rep.ccm = Map::layer_is_ccm(layer);
     for (int iy = 0; iy < t.side; ++iy) {
       for (int ix = 0; ix < t.side; ++ix) {
@@ -476,31 +509,7 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
   }
 
   // ---- stack query on a fine raster over the coarsest window ----
-  const LayerTruth& coarse = truths.back();
-  QueryRaster qr;
-  qr.step = cfg.query_step_m;
-  qr.x0 = coarse.min.x * coarse.width;
-  qr.y0 = coarse.min.y * coarse.width;
-  qr.n = static_cast<int>(std::lround(coarse.side * coarse.width / qr.step));
-  qr.map_class.assign(static_cast<std::size_t>(qr.n) * static_cast<std::size_t>(qr.n), CellClass::kUnknown);
-  qr.truth.assign(qr.map_class.size(), -1);
-  const double area = qr.step * qr.step;
-  for (int j = 0; j < qr.n; ++j) {
-    for (int i = 0; i < qr.n; ++i) {
-      const double x = qr.x0 + (i + 0.5) * qr.step, y = qr.y0 + (j + 0.5) * qr.step;
-      const float fx = static_cast<float>(x), fy = static_cast<float>(y);
-      const QueryResult q = map->query(fx, fy);
-      const int layer = classifying_layer(*map, q, fx, fy);
-      const std::size_t k = static_cast<std::size_t>(i) + static_cast<std::size_t>(qr.n) * static_cast<std::size_t>(j);
-      const CellClass cls = q.status == Status::kOk ? q.cell_class : CellClass::kUnknown;
-      qr.map_class[k] = cls;
-      if (layer < 0) continue;
-      const sim::CellHazard* h = truths[static_cast<std::size_t>(layer)].at(x, y);
-      if (h == nullptr || !h->valid) continue;
-      qr.truth[k] = static_cast<signed char>(h->obstacle ? 1 : (h->steep ? 2 : 0));
-      count(result.stack, h->hazard(), cls, area);
-    }
-  }
+  const QueryRaster qr = query_raster(*map, truths, cfg.query_step_m, &result.stack);
 
   // ---- objects ----
   const double bin_edges[] = {0.04, 0.12, 0.24, result.min_size_5m_m, 1e9};
@@ -571,6 +580,12 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
       return result;
     }
     result.pictures.push_back(file);
+    const std::string costmap = cfg.out_dir + "/costmap.png";
+    if (!write_costmap_picture(costmap, *map, route, frames, result, &error)) {
+      result.error = error;
+      return result;
+    }
+    result.pictures.push_back(costmap);
   }
   return result;
 }
@@ -578,7 +593,7 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
 }  // namespace
 
 TraverseResult run_traverse(const TraverseConfig& cfg) {
-  return cfg.paper_cell ? traverse_with<Stack<PaperCell<CadreConfig>>>(cfg) : traverse_with<Stack<CadreConfig>>(cfg);
+  return cfg.paper_cell ? traverse_with<PaperMap>(cfg) : traverse_with<Map>(cfg);
 }
 
 std::string traverse_report(const TraverseResult& r) {
@@ -595,7 +610,19 @@ std::string traverse_report(const TraverseResult& r) {
   out += format("update time per frame (Stack::last_update_ns): median %.2f ms, mean %.2f ms, max %.2f ms "
                 "(paper: 80 ms on a Snapdragon 820 for 850 x 650 stereo)\n",
                 r.update_ms_median, r.update_ms_mean, r.update_ms_max);
-  out += format("simulator ray casting: %.1f s CPU in total (not part of the map)\n\n", 1e-3 * r.capture_ms_total);
+  out += format("simulator ray casting: %.1f s CPU in total (not part of the map)\n", 1e-3 * r.capture_ms_total);
+  out += format("look-ahead (query_path, the body along the next %.1f m, a pose every %.0f cm): median %.2f ms, max %.2f ms "
+                "CPU; a hazard ahead after %d of %zu frames, an unknown footprint ahead after %d\n",
+                r.lookahead_m, 100.0 * r.lookahead_step_m, r.ahead_ms_median, r.ahead_ms_max, r.frames_with_hazard_ahead,
+                r.frames.size(), r.frames_with_unknown_ahead);
+  if (r.stop_frame >= 0) {
+    const FrameRecord& f = r.frames[static_cast<std::size_t>(r.stop_frame)];
+    out += format("the rover would have stopped after frame %d at (%.2f, %.2f): %s %.2f m ahead, body at (%.2f, %.2f)\n\n",
+                  f.index + 1, f.pose.x, f.pose.y, f.ahead_hazard_class, f.ahead_hazard_m, f.ahead_hazard_pose.x,
+                  f.ahead_hazard_pose.y);
+  } else {
+    out += "the rover would not have stopped: no hazard within the look-ahead after any frame\n\n";
+  }
   auto pct = [](double part, double whole) { return whole > 0.0 ? format("%.1f %%", 100.0 * part / whole) : std::string("-"); };
   Table t({"layer", "cell", "kind", "min obstacle", "correct", "missed obstacle", "false obstacle", "unknown",
            "hazard hit", "false share of free", "exported", "non-finite"});

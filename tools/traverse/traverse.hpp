@@ -22,6 +22,12 @@
 // Objects (rocks, boxes) are counted as detected when any stack query point on their
 // footprint (2 cm raster) is obstacle/steep, and as observed when any such point is known.
 //
+// Look-ahead (the planner's check, map/path_query.hpp): after each frame the rover sweeps its
+// body (body_length_m x body_width_m) along the next lookahead_m of its route, a pose every
+// lookahead_step_m, and notes the first hazardous footprint (obstacle or steep) and the first
+// with more than 10 % unknown area. Where the first hazard is seen is where the rover would have
+// stopped. The final pictures include the cost raster (map/costmap.hpp) around the rover.
+//
 // Deterministic by seed (terrain, noise); timings are measured, not simulated.
 #pragma once
 
@@ -42,6 +48,10 @@ struct TraverseConfig {
   int max_frames = 0;               ///< 0 = the whole path
   double raster_resolution_m = 0.01;///< terrain raster the camera ray-casts against
   double query_step_m = 0.04;       ///< raster of the stack query evaluation and picture
+  double lookahead_m = 1.5;         ///< route checked ahead of the rover after each frame
+  double lookahead_step_m = 0.05;   ///< between the body's poses along it
+  double body_length_m = 0.6;       ///< the rover body swept along it
+  double body_width_m = 0.4;
   std::string out_dir;              ///< pictures go here; empty = no pictures
   bool paper_cell = false;          ///< map with the paper's 9-float CCM cell (PaperCell<CadreConfig>)
   std::FILE* log = nullptr;         ///< progress lines (one per frame) and the report; nullptr = quiet
@@ -62,6 +72,17 @@ struct FrameRecord {
   double update_ms = 0.0;          ///< Stack::last_update_ns() of this frame
   double capture_ms = 0.0;         ///< simulator CPU time (ray casting), not part of the map
   bool updated = false;            ///< update_frame_sensor answered kOk
+  // The look-ahead after this frame (query_path along the next lookahead_m of the route).
+  bool route_end = false;          ///< nothing ahead: no look-ahead after the last frame
+  bool ahead_ok = false;           ///< the path query answered kOk (or there was none to ask)
+  bool ahead_hazard = false;       ///< a footprint ahead is obstacle or steep
+  double ahead_hazard_m = 0.0;     ///< its distance ahead of the rover
+  sim::Pose2 ahead_hazard_pose;    ///< the body's pose there
+  const char* ahead_hazard_class = "unknown";
+  bool ahead_unknown = false;      ///< a footprint ahead is more than 10 % unknown
+  double ahead_unknown_m = 0.0;
+  double ahead_ms = 0.0;           ///< CPU time of the path query
+  std::uint32_t ahead_poses = 0;
 };
 
 /// Areas in m^2 (see the header comment for the categories).
@@ -103,6 +124,10 @@ struct TraverseResult {
   ObjectBin design_size;
   double min_size_5m_m = 0.48;          ///< 0.75 x 64 cm: the 5 m-range minimum (paper Sec. VI)
   double update_ms_median = 0.0, update_ms_max = 0.0, update_ms_mean = 0.0;
+  double ahead_ms_median = 0.0, ahead_ms_max = 0.0;  ///< the look-ahead path queries
+  double lookahead_m = 0.0, lookahead_step_m = 0.0, body_length_m = 0.0, body_width_m = 0.0;  ///< as configured
+  int stop_frame = -1;                  ///< first frame whose look-ahead saw a hazard; -1: none
+  int frames_with_hazard_ahead = 0, frames_with_unknown_ahead = 0;
   double capture_ms_total = 0.0;
   double path_length_m = 0.0;
   std::size_t rocks = 0, boxes = 0;

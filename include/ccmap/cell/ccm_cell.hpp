@@ -138,21 +138,32 @@ inline constexpr float kMinWeightLimit = 1.0e-3F;
 // Weight limiter, eqs. (6)-(7)
 // ---------------------------------------------------------------------------------------------
 
+namespace detail {
+/// Scales every co-moment S by `scale` (the caller sets the new weight W = scale * W): the
+/// variances S / W and the mean stay, the weight of future measurements relative to the cell
+/// grows by 1 / scale. The weight limiter (eq. 7) and the motion fading (map/detail/motion.hpp)
+/// both go through here, so every co-moment of the cell (s_xy included in the full cell) is
+/// scaled by both.
+template <typename Cell, IfCcmCell<Cell> = 0>
+inline void ccm_scale_comoments(Cell& cell, float scale) noexcept {
+  cell.s_xx *= scale;
+  cell.s_yy *= scale;
+  cell.s_zz *= scale;
+  cell.s_xz *= scale;
+  cell.s_yz *= scale;
+  if constexpr (kHasLateralCovariance<Cell>) {
+    cell.s_xy *= scale;
+  }
+}
+}  // namespace detail
+
 /// If W > W_l: S *= W_l / W (eq. 7, every co-moment, s_xy included), W = W_l (eq. 6). The
 /// variances S/W and the mean are unchanged; only the relative weight of future measurements is
 /// held at w / W_l. Precondition: weight_limit > 0 (checked by the public update functions).
 template <typename Cell, detail::IfCcmCell<Cell> = 0>
 inline void ccm_apply_weight_limit(Cell& cell, float weight_limit) noexcept {
   if (cell.weight > weight_limit) {
-    const float scale = weight_limit / cell.weight;
-    cell.s_xx *= scale;
-    cell.s_yy *= scale;
-    cell.s_zz *= scale;
-    cell.s_xz *= scale;
-    cell.s_yz *= scale;
-    if constexpr (kHasLateralCovariance<Cell>) {
-      cell.s_xy *= scale;
-    }
+    detail::ccm_scale_comoments(cell, weight_limit / cell.weight);
     cell.weight = weight_limit;
   }
 }
@@ -229,6 +240,42 @@ template <typename Cell, detail::IfCcmCell<Cell> = 0>
 /// or non-finite weight (kBadWeight).
 [[nodiscard]] Status ccm_merge(CcmCell& cell, const CcmCell& other, float weight_limit) noexcept;
 [[nodiscard]] Status ccm_merge(CcmPaperCell& cell, const CcmPaperCell& other, float weight_limit) noexcept;
+
+namespace detail {
+/// The start every unmerge (ccm_, kalman_, omg_unmerge) shares: kInvalidArgument for rest ==
+/// nullptr, kBadWeight for a negative or non-finite weight; for an empty part *rest = total and
+/// *done = true (nothing to take out). Cell: any cell with a float `weight`.
+template <typename Cell>
+[[nodiscard]] Status unmerge_start(const Cell& total, const Cell& part, Cell* rest, bool* done) noexcept {
+  *done = false;
+  if (rest == nullptr) {
+    return Status::kInvalidArgument;
+  }
+  if (!std::isfinite(total.weight) || !std::isfinite(part.weight) || total.weight < 0.0F || part.weight < 0.0F) {
+    return Status::kBadWeight;
+  }
+  if (!(part.weight > 0.0F)) {
+    *rest = total;
+    *done = true;
+  }
+  return Status::kOk;
+}
+}  // namespace detail
+
+/// The inverse of ccm_merge without the limiter: given total = part (+) rest (Chan's merge in
+/// real arithmetic), writes rest:
+///   W_r = W_t - W_p,  mu_r = mu_t + (mu_t - mu_p) * W_p / W_r,
+///   S_r,ij = S_t,ij - S_p,ij - d_i * d_j * W_p * W_r / W_t,  d = mu_r - mu_p,
+/// the diagonal clamped at 0 (rounding). An empty `part` gives rest = total. Map exchange uses it
+/// to take what a cell gained since it was last sent (map/exchange.hpp).
+/// Precision: a cancellation. Relative to float rounding of `total`, the error of mu_r grows
+/// like W_t / W_r and that of S_r like (W_t / W_r) * S_t / S_r; it is exact only in real
+/// arithmetic, and meaningless once the limiter has scaled `total` (the caller must not ask).
+/// Refused (*rest untouched): rest == nullptr (kInvalidArgument); a negative or non-finite
+/// weight, or W_t <= W_p with a non-empty part: nothing is left (kBadWeight).
+/// The full cell's s_xy follows the off-diagonal rule (no clamp).
+[[nodiscard]] Status ccm_unmerge(const CcmCell& total, const CcmCell& part, CcmCell* rest) noexcept;
+[[nodiscard]] Status ccm_unmerge(const CcmPaperCell& total, const CcmPaperCell& part, CcmPaperCell* rest) noexcept;
 
 /// Folds n points (x[i], y[i] relative to the cell centre, z[i] map frame) into the cell in one
 /// step: a two-pass weighted mean/co-moment of the batch followed by ccm_merge. `weights` may

@@ -140,6 +140,118 @@ inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_varia
   return Status::kOk;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Merging two cells of the same ground (map exchange, map/exchange.hpp)
+// ---------------------------------------------------------------------------------------------
+
+/// Merges `other` into `cell` in information form: the Kalman update with `other`'s height as
+/// the measurement and its variance as the measurement variance,
+///   P = P_a P_b / (P_a + P_b),  h = h_a + (h_b - h_a) P_a / (P_a + P_b)
+/// (1/P = 1/P_a + 1/P_b, h/P = h_a/P_a + h_b/P_b), then the floor P >= min_variance; the
+/// weights (measurement counts) add. Two cells fed disjoint measurements merge to the cell fed
+/// all of them, in real arithmetic and while the floor does not engage: the sequential Kalman
+/// update is this information sum. An empty `other` leaves `cell` unchanged; an empty `cell`
+/// becomes `other` (floored). Refused (cell unchanged): a non-finite or negative weight, a
+/// non-finite height, or a non-positive or non-finite variance in a non-empty `other`, or a
+/// non-positive min_variance (kInvalidArgument).
+[[nodiscard]] inline Status kalman_merge(KalmanCell& cell, const KalmanCell& other, float min_variance) noexcept {
+  if (!(min_variance > 0.0F) || !std::isfinite(min_variance) || !std::isfinite(other.weight) || other.weight < 0.0F) {
+    return Status::kInvalidArgument;
+  }
+  if (!(other.weight > 0.0F)) {
+    return Status::kOk;
+  }
+  if (!std::isfinite(other.height) || !std::isfinite(other.variance) || !(other.variance > 0.0F)) {
+    return Status::kInvalidArgument;
+  }
+  if (!(cell.weight > 0.0F)) {
+    cell = other;
+    cell.variance = other.variance > min_variance ? other.variance : min_variance;
+    return Status::kOk;
+  }
+  const float sum = cell.variance + other.variance;
+  const float gain = cell.variance / sum;  // P_a / (P_a + P_b)
+  cell.height += gain * (other.height - cell.height);
+  const float variance = gain * other.variance;
+  cell.variance = variance > min_variance ? variance : min_variance;
+  cell.weight += other.weight;
+  return Status::kOk;
+}
+
+/// The inverse of kalman_merge without the floor: given total = part (+) rest, writes rest,
+///   P_r = P_p P_t / (P_p - P_t),  h_r = h_p + (h_t - h_p) P_p / (P_p - P_t),  n_r = n_t - n_p.
+/// An empty `part` gives rest = total. Exact in real arithmetic while the floor has not acted on
+/// `total`; the error grows like P_p / (P_p - P_t) (little new information: a cancellation).
+/// Refused (*rest untouched): rest == nullptr (kInvalidArgument); a negative or non-finite
+/// weight, n_t <= n_p or P_t >= P_p with a non-empty part: nothing is left (kBadWeight).
+[[nodiscard]] inline Status kalman_unmerge(const KalmanCell& total, const KalmanCell& part, KalmanCell* rest) noexcept {
+  bool done = false;
+  const Status start = detail::unmerge_start(total, part, rest, &done);
+  if (start != Status::kOk || done) {
+    return start;
+  }
+  const float gained = part.variance - total.variance;  // P_p - P_t > 0: total knows more
+  if (!(total.weight > part.weight) || !(gained > 0.0F) || !(total.variance > 0.0F)) {
+    return Status::kBadWeight;
+  }
+  const float share = part.variance / gained;  // P_p / (P_p - P_t)
+  *rest = KalmanCell{part.height + (total.height - part.height) * share, total.variance * share,
+                     total.weight - part.weight};
+  return Status::kOk;
+}
+
+/// Merges `other` into `cell` (Chan's pairwise merge in one dimension): W = W_a + W_b,
+/// h = h_a + (h_b - h_a) W_b / W, s = s_a + s_b + (h_b - h_a)^2 W_a W_b / W, then the limiter
+/// (s *= W_l / W, W = W_l). A single OMG measurement is the cell (w, z, w sigma_m^2), so cells
+/// fed disjoint measurements merge to the cell fed all of them (real arithmetic, no limiter).
+/// An empty `other` leaves `cell` unchanged. Refused (unchanged): a non-finite or negative
+/// weight or non-finite height or s in `other` (kBadWeight), a bad limit (kInvalidArgument).
+[[nodiscard]] inline Status omg_merge(OmgCell& cell, const OmgCell& other, float weight_limit) noexcept {
+  if (ccm_check_weight_limit(weight_limit) != Status::kOk) {
+    return Status::kInvalidArgument;
+  }
+  if (!std::isfinite(other.weight) || other.weight < 0.0F) {
+    return Status::kBadWeight;
+  }
+  if (!(other.weight > 0.0F)) {
+    return Status::kOk;
+  }
+  if (!std::isfinite(other.height) || !std::isfinite(other.s)) {
+    return Status::kBadWeight;
+  }
+  const float weight = cell.weight + other.weight;
+  const float share = other.weight / weight;
+  const float d = other.height - cell.height;
+  cell.height += d * share;
+  cell.s += other.s + cell.weight * share * d * d;
+  cell.weight = weight;
+  if (cell.weight > weight_limit) {
+    cell.s *= weight_limit / cell.weight;
+    cell.weight = weight_limit;
+  }
+  return Status::kOk;
+}
+
+/// The inverse of omg_merge without the limiter (as ccm_unmerge, one dimension); s clamped at 0.
+/// Refused (*rest untouched): rest == nullptr (kInvalidArgument); a negative or non-finite
+/// weight, or W_t <= W_p with a non-empty part (kBadWeight).
+[[nodiscard]] inline Status omg_unmerge(const OmgCell& total, const OmgCell& part, OmgCell* rest) noexcept {
+  bool done = false;
+  const Status start = detail::unmerge_start(total, part, rest, &done);
+  if (start != Status::kOk || done) {
+    return start;
+  }
+  const float weight = total.weight - part.weight;
+  if (!(weight > 0.0F)) {
+    return Status::kBadWeight;
+  }
+  const float height = total.height + (total.height - part.height) * (part.weight / weight);
+  const float d = height - part.height;
+  const float s = total.s - part.s - part.weight * (weight / total.weight) * d * d;
+  *rest = OmgCell{weight, height, s > 0.0F ? s : 0.0F};
+  return Status::kOk;
+}
+
 /// Mixture variance of an OMG cell (m^2); 0 for a never-observed cell.
 [[nodiscard]] inline float omg_variance(const OmgCell& cell) noexcept {
   return ccm_variance(cell.s, cell.weight);

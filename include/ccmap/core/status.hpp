@@ -20,6 +20,9 @@ enum class Status : std::uint8_t {
   kNotInitialised,     ///< object used before a successful init()
   kCorrupt,            ///< serialized data failed its integrity check
   kVersionMismatch,    ///< serialized data written by an incompatible version
+  kDuplicate,          ///< map exchange: data already merged (same sender and sequence), or this map's own
+  kMisaligned,         ///< map exchange: the grids disagree (cell width, or an origin offset that is not a
+                       ///< whole number of the coarsest layer's cells)
 };
 
 /// Short, stable, lower-case name of a status ("ok", "non_finite_input", ...). Never nullptr.

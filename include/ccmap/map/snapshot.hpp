@@ -10,7 +10,8 @@
 // life-time counters. Loading re-initialises the stack from the stored parameters and restores
 // windows and cells, so the loaded stack answers every query and export bitwise identically to
 // the saved one (routing table and thresholds are recomputed by init(), deterministically).
-// Not stored: RingGrid::cells_cleared_by_moves() (restarts at 0 on load).
+// Not stored: RingGrid::cells_cleared_by_moves() and Stack::accepted_frames() (restart at 0 on
+// load) and map exchange's bookkeeping (a load retires a bound MapExchange, map/exchange.hpp).
 //
 // Format (version 2). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
@@ -35,14 +36,14 @@
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
 //                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
 //                   s_xy for CcmCell (CcmPaperCell has none).
-//
-// Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
-// (CcmCell with s_xy). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
-// hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
 //   counters    28  total FrameCounters (7 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
+//
+// Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
+// (CcmCell with s_xy). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
+// hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
 //
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
 //   kInvalidArgument  data == nullptr
@@ -154,7 +155,15 @@ class SnapshotReader {
 
 // Non-template pieces of the format (src/map/snapshot.cpp).
 void snapshot_write_header(SnapshotWriter& w, std::size_t total_size, const SnapshotFingerprint& f) noexcept;
-/// Magic, version, size field and CRC of data[0..size). Reads nothing else.
+/// The fingerprint alone (kSnapshotFingerprintBytes): also the preset field of exchange deltas.
+void snapshot_write_fingerprint(SnapshotWriter& w, const SnapshotFingerprint& f) noexcept;
+/// The envelope shared by snapshots and exchange deltas: 4 magic bytes, a 16-bit format version,
+/// 16 reserved zero bits, a 32-bit total size, ..., a CRC-32 trailer. kInvalidArgument for null
+/// data; kCorrupt for fewer than min_size bytes, another magic, a non-zero reserved field, a size
+/// field other than size, a CRC mismatch; kVersionMismatch for another version. Reads nothing else.
+[[nodiscard]] Status check_envelope(const std::uint8_t* data, std::size_t size, const std::uint8_t (&magic)[4],
+                                    std::uint16_t version, std::size_t min_size) noexcept;
+/// check_envelope with the snapshot's magic "CCMS" and kSnapshotFormatVersion.
 [[nodiscard]] Status snapshot_check_envelope(const std::uint8_t* data, std::size_t size) noexcept;
 /// Reads the fingerprint (reader positioned after the header): kVersionMismatch if it differs
 /// from `expected`, kCorrupt for a non-zero reserved field.
@@ -252,8 +261,12 @@ struct SnapshotAccess {
     return Status::kOk;
   }
 
-  [[nodiscard]] static Status load(StackType& stack, const std::uint8_t* data, std::size_t data_size) noexcept {
-    if (data == nullptr) {
+  /// Pass 1 of load_snapshot (and of merging a snapshot, map/exchange.hpp): validates
+  /// data[0..data_size) completely, touching no stack. On kOk, *params holds the stored
+  /// parameters and *layers_begin the offset of the first layer record (for for_each_stored_cell).
+  [[nodiscard]] static Status validate(const std::uint8_t* data, std::size_t data_size, StackParams* params,
+                                       std::size_t* layers_begin) noexcept {
+    if (data == nullptr || params == nullptr || layers_begin == nullptr) {
       return Status::kInvalidArgument;
     }
     const Status envelope = snapshot_check_envelope(data, data_size);
@@ -269,13 +282,11 @@ struct SnapshotAccess {
     if (data_size != size()) {
       return Status::kCorrupt;
     }
-    // Pass 1: validate everything; the stack is not touched.
-    StackParams params{};
-    const Status params_status = snapshot_read_params(r, kLayers, StackType::kHasFine, &params);
+    const Status params_status = snapshot_read_params(r, kLayers, StackType::kHasFine, params);
     if (params_status != Status::kOk) {
       return params_status;
     }
-    const std::size_t layers_begin = r.position();
+    *layers_begin = r.position();
     bool valid = true;
     for (int layer = 0; layer < kLayers && valid; ++layer) {
       CellIndex centre{};
@@ -299,6 +310,48 @@ struct SnapshotAccess {
     if (!valid || !r.ok() || r.position() != data_size - kSnapshotTrailerBytes) {
       return Status::kCorrupt;
     }
+    return Status::kOk;
+  }
+
+  /// Calls fn(layer, CellIndex global_index, const Cell& cell) for every stored cell of a
+  /// snapshot that validate() accepted (Cell: CcmCellType for CCM layers, the fine cell type for the
+  /// finest layer), layer by layer, in window order.
+  template <typename Fn>
+  static void for_each_stored_cell(const std::uint8_t* data, std::size_t data_size, std::size_t layers_begin,
+                                   Fn&& fn) noexcept {
+    SnapshotReader r(data, data_size - kSnapshotTrailerBytes);
+    r.seek(layers_begin);
+    for (int layer = 0; layer < kLayers; ++layer) {
+      CellIndex centre{};
+      (void)snapshot_read_centre(r, &centre);
+      const std::int32_t side = StackType::layer_side(layer);
+      const CellIndex min{centre.x - side / 2, centre.y - side / 2};
+      for (std::int32_t row = 0; row < side; ++row) {
+        for (std::int32_t col = 0; col < side; ++col) {
+          const CellIndex index{min.x + col, min.y + row};
+          if (StackType::layer_is_ccm(layer)) {
+            CcmCellType cell{};
+            (void)snapshot_read_cell(r, &cell);
+            fn(layer, index, cell);
+          } else {
+            typename StackType::FineCell cell{};
+            (void)snapshot_read_cell(r, &cell);
+            fn(layer, index, cell);
+          }
+        }
+      }
+    }
+  }
+
+  [[nodiscard]] static Status load(StackType& stack, const std::uint8_t* data, std::size_t data_size) noexcept {
+    // Pass 1: validate everything; the stack is not touched.
+    StackParams params{};
+    std::size_t layers_begin = 0U;
+    const Status valid = validate(data, data_size, &params, &layers_begin);
+    if (valid != Status::kOk) {
+      return valid;
+    }
+    SnapshotReader r(data, data_size - kSnapshotTrailerBytes);
     // Pass 2: commit. init() accepts what snapshot_read_params accepted (same checks).
     const Status init_status = stack.init(params);
     if (init_status != Status::kOk) {

@@ -5,6 +5,7 @@
 // cells and pool finer layers on demand (Section IV-F). Every layer is a statically sized ring
 // buffer inside this object: after init() nothing allocates, and every call is bounded:
 //   update_frame(_sensor)   O(points)                  move_to   O(cells that leave)
+//   move_to with a position uncertainty: + one pass over every cell
 //   query                   O(4^layers) cells, independent of map size and point count
 //   export_layer            O(side^2 * 4^layers)
 //
@@ -14,6 +15,7 @@
 //   map/detail/update_path.hpp  the per-point back half and the Kalman frame batches
 //   map/detail/pooling.hpp      pooling at query time
 //   map/detail/answers.hpp      answers, classes, the roughness filter baseline
+//   map/detail/motion.hpp       what an uncertain move does to the cells
 //
 // Positions are map-frame metres relative to the stack origin (see map/types.hpp).
 //
@@ -37,6 +39,7 @@
 #include "ccmap/map/detail/answers.hpp"
 #include "ccmap/map/detail/front.hpp"
 #include "ccmap/map/detail/layers.hpp"
+#include "ccmap/map/detail/motion.hpp"
 #include "ccmap/map/detail/pooling.hpp"
 #include "ccmap/map/detail/update_path.hpp"
 #include "ccmap/map/types.hpp"
@@ -49,6 +52,10 @@ namespace detail {
 void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept;
 template <typename Config>
 struct SnapshotAccess;  // map/snapshot.hpp: save/load read and restore the raw state
+template <typename Config>
+struct PlannerAccess;   // map/detail/region_walk.hpp: the planner queries read the query view
+template <typename Config>
+struct ExchangeAccess;  // map/exchange.hpp: delta export and merge read and fold cells
 }  // namespace detail
 
 template <typename Config>
@@ -107,6 +114,8 @@ class Stack {
     rejected_moves_ = 0U;
     rejected_frames_ = 0U;
     last_update_ns_ = 0U;
+    accepted_frames_ = 0U;
+    ++generation_;
     initialised_ = true;
     return Status::kOk;
   }
@@ -138,6 +147,37 @@ class Stack {
       }
     }
     return Status::kOk;
+  }
+
+  /// The same move for a pose that is known only to `position_sigma_m` (m, 1-sigma, isotropic
+  /// in x and y): the odometry's uncertainty of the position change since the last move. After
+  /// the window move, every observed cell accounts for it (map/detail/motion.hpp): a CCM cell's
+  /// height-estimate variance at its mean grows by inclination^2 sigma^2 through a smaller
+  /// weight (its statistics scaled as the weight limiter scales them, never below min_weight:
+  /// new points then count more), a constant cell's height variance grows by gradient^2 sigma^2.
+  /// One pass over every cell (CADRE: 14,336); position_sigma_m = 0 is move_to(x, y) exactly.
+  /// Refused (counted, map unchanged): as move_to(x, y); a position_sigma_m that is not finite
+  /// (kNonFiniteInput), negative (kInvalidArgument) or above kMaxAbsCoordinateM (kOutOfRange).
+  [[nodiscard]] Status move_to(float x, float y, float position_sigma_m) noexcept {
+    if (!initialised_) {
+      return Status::kNotInitialised;
+    }
+    Status status = check_position(x, y);
+    if (status == Status::kOk) {
+      status = !std::isfinite(position_sigma_m) ? Status::kNonFiniteInput
+               : position_sigma_m < 0.0F        ? Status::kInvalidArgument
+               : position_sigma_m > kMaxAbsCoordinateM ? Status::kOutOfRange
+                                                       : Status::kOk;
+    }
+    if (status != Status::kOk) {
+      ++rejected_moves_;
+      return status;
+    }
+    status = move_to(x, y);
+    if (status == Status::kOk && position_sigma_m > 0.0F) {
+      detail::forget_for_motion(layers_, params_, position_sigma_m * position_sigma_m);
+    }
+    return status;
   }
 
   /// Folds one frame of points given in the map frame. `sensor_origin` is the sensor's
@@ -304,6 +344,9 @@ class Stack {
   [[nodiscard]] std::uint32_t rejected_frames() const noexcept { return rejected_frames_; }
   /// Duration of the last accepted frame update (platform monotonic clock, ns).
   [[nodiscard]] std::uint64_t last_update_ns() const noexcept { return last_update_ns_; }
+  /// Frame updates accepted since init (wraps at 2^32): the sequence number that map exchange
+  /// (map/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().
+  [[nodiscard]] std::uint32_t accepted_frames() const noexcept { return accepted_frames_; }
   /// Raw CCM layer `ccm_index` (0 = first CCM layer), read-only, for serialisation, pictures and
   /// tests. Contract: 0 <= ccm_index < kCcmLayerCount; a violation is reported to the assert
   /// hook and answered with an empty, uninitialised grid (every accessor safe, no cells).
@@ -315,8 +358,15 @@ class Stack {
   [[nodiscard]] const RingGrid<FineCell>& fine_layer() const noexcept { return layers_.fine; }
 
   // save_snapshot / load_snapshot read and restore the private state through this friend only;
-  // a new state member must be added to the snapshot format (map/snapshot.hpp) as well.
+  // a new map-state member must be added to the snapshot format (map/snapshot.hpp) as well.
+  // Bookkeeping (accepted_frames_, generation_, the layers' KeptWindows, the grids' move
+  // telemetry) is not map state.
   friend struct detail::SnapshotAccess<Config>;
+  // The planner queries (map/footprint.hpp, map/path_query.hpp, map/costmap.hpp) read the layers
+  // through the query view, and only that, through this friend.
+  friend struct detail::PlannerAccess<Config>;
+  // Map exchange reads and folds cells through this friend (map/exchange.hpp).
+  friend struct detail::ExchangeAccess<Config>;
 
  private:
   [[nodiscard]] detail::QueryView<Config> view() const noexcept {
@@ -352,6 +402,7 @@ class Stack {
 
   void finish_frame(const FrameCounters& frame, std::uint64_t start, FrameCounters* counters) noexcept {
     detail::accumulate(totals_, frame);
+    ++accepted_frames_;
     const std::uint64_t end = platform::monotonic_ns();
     last_update_ns_ = end >= start ? end - start : 0U;
     write_counters(frame, counters);
@@ -380,6 +431,10 @@ class Stack {
   std::uint32_t rejected_moves_ = 0U;
   std::uint32_t rejected_frames_ = 0U;
   std::uint64_t last_update_ns_ = 0U;
+  std::uint32_t accepted_frames_ = 0U;  ///< accepted frame updates since init (bookkeeping)
+  /// Changes on every init() and every binding of a MapExchange: an exchange bound to an older
+  /// generation refuses to run (its record of what was sent no longer describes these cells).
+  std::uint32_t generation_ = 0U;
   bool initialised_ = false;
   RingGrid<CcmCellType> no_grid_{};  ///< the safe answer of ccm_layer() to a bad index
   // ---- update-path scratch and derived constants (not map state: not in snapshots) ----

@@ -81,7 +81,7 @@ class QueryView {
     }
     if constexpr (Layers::kHasFine) {
       const FineCell& cell = layers_.fine.cell_unchecked(index);
-      const bool known = cell.weight >= params_.min_weight && cell.weight > 0.0F;
+      const bool known = fine_known(cell);
       if (require_known && !known) {
         return empty_result(Status::kUnknown, layer);
       }
@@ -94,7 +94,33 @@ class QueryView {
     return out;
   }
 
- private:
+  /// What a known answer of a CCM layer takes from its (pooled) cell, whatever the point: the
+  /// class (classify_ccm with the layer's threshold, as answer_at) and, only when the class is
+  /// known, the surface (eqs. 9, 11; zero otherwise).
+  struct CcmAnswer {
+    CcmSurface surface;
+    CellClass cell_class;
+  };
+  [[nodiscard]] CcmAnswer ccm_answer(int layer, const typename Layers::CcmCellType& cell) const noexcept {
+    const CcmSurface surface = ccm_surface(cell);
+    CcmAnswer a{CcmSurface{0.0F, 0.0F, 0.0F},
+                classify_ccm(cell, surface, layers_.widths[layer], params_, thresholds_[layer])};
+    if (a.cell_class != CellClass::kUnknown) {
+      a.surface = surface;
+    }
+    return a;
+  }
+
+  /// A piece-wise constant cell is known with at least min_weight (and some weight).
+  [[nodiscard]] bool fine_known(const FineCell& cell) const noexcept {
+    return cell.weight >= params_.min_weight && cell.weight > 0.0F;
+  }
+
+  [[nodiscard]] const Layers& layers() const noexcept { return layers_; }
+  [[nodiscard]] const StackParams& params() const noexcept { return params_; }
+  /// Normal-variance threshold of a layer (m^2). Precondition: 0 <= layer < kLayerCount.
+  [[nodiscard]] float threshold(int layer) const noexcept { return thresholds_[layer]; }
+
   /// Roughness filter of the piece-wise constant layer (the baseline of Section V-B): the
   /// cell is an obstacle if any known neighbour differs in height by more than the maximum
   /// inclination times their distance. It cannot tell slopes from steps.
@@ -121,6 +147,7 @@ class QueryView {
     }
   }
 
+ private:
   /// Replaces slope, normal variance and class of a constant-layer answer with those of the
   /// first CCM layer's pooled cell at (x, y), when that cell is known.
   void refine_with_ccm(float x, float y, QueryResult& answer) const noexcept {

@@ -41,6 +41,33 @@ constexpr bool all_valid_sides(const std::array<std::int32_t, N>& sides) noexcep
   return true;
 }
 
+/// The cells of a layer that no move has cleared since a mark: the intersection of every window
+/// of the layer since then, [min, end) on each axis (empty when min >= end; all zero: empty, so a
+/// static stack stays in .bss). A move clears exactly the cells of the old window outside the new
+/// one, so a cell is inside the intersection iff it was in the window at the mark and has never
+/// left since; a cell that left and re-entered is outside it (it holds only what arrived after
+/// its return). Four integers per layer, updated by each move: map exchange (map/exchange.hpp)
+/// uses it to know which cells still hold what was last sent, without a word per cell.
+struct KeptWindow {
+  CellIndex min{0, 0};
+  CellIndex end{0, 0};
+
+  /// From now on: the window [window_min, window_min + side) on each axis.
+  void mark(CellIndex window_min, std::int32_t side) noexcept {
+    min = window_min;
+    end = CellIndex{window_min.x + side, window_min.y + side};
+  }
+  /// A move to the window [window_min, window_min + side): keep the intersection.
+  void intersect(CellIndex window_min, std::int32_t side) noexcept {
+    const CellIndex window_end{window_min.x + side, window_min.y + side};
+    min = CellIndex{min.x > window_min.x ? min.x : window_min.x, min.y > window_min.y ? min.y : window_min.y};
+    end = CellIndex{end.x < window_end.x ? end.x : window_end.x, end.y < window_end.y ? end.y : window_end.y};
+  }
+  [[nodiscard]] bool contains(CellIndex index) const noexcept {
+    return index.x >= min.x && index.x < end.x && index.y >= min.y && index.y < end.y;
+  }
+};
+
 template <typename Config>
 struct LayerSet {
   static constexpr bool kHasFine = Config::kFineKind != FineKind::kNone;
@@ -101,6 +128,9 @@ struct LayerSet {
       }
       offset += static_cast<std::size_t>(s) * static_cast<std::size_t>(s);
     }
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      kept[layer].mark(window_min(layer), side(layer));
+    }
     return Status::kOk;
   }
 
@@ -144,17 +174,28 @@ struct LayerSet {
     return CellIndex{0, 0};
   }
 
-  /// Re-centres layer `layer` on the global index `centre`.
+  /// Lowest global index of a layer's window; {0, 0} for a bad layer.
+  [[nodiscard]] CellIndex window_min(int layer) const noexcept {
+    const CellIndex c = centre(layer);
+    return CellIndex{c.x - side(layer) / 2, c.y - side(layer) / 2};
+  }
+
+  /// Re-centres layer `layer` on the global index `centre` (and narrows its KeptWindow).
   [[nodiscard]] Status move_layer(int layer, CellIndex new_centre) noexcept {
+    Status status = Status::kOk;
     if (is_ccm(layer)) {
-      return ccm_grid(layer).move_to(new_centre);
-    }
-    if constexpr (kHasFine) {
-      return fine.move_to(new_centre);
+      status = ccm_grid(layer).move_to(new_centre);
     } else {
-      (void)new_centre;
-      return Status::kOk;
+      if constexpr (kHasFine) {
+        status = fine.move_to(new_centre);
+      } else {
+        (void)new_centre;
+      }
     }
+    if (status == Status::kOk && layer >= 0 && layer < kLayerCount) {
+      kept[layer].intersect(window_min(layer), side(layer));
+    }
+    return status;
   }
 
   // ---- state (zero-initialised: a static LayerSet lives in .bss) ----
@@ -163,6 +204,9 @@ struct LayerSet {
   RingGrid<FineCell> fine{};
   RingGrid<CcmCellType> ccm[kCcmSlots]{};
   float widths[kLayerSlots]{};
+  /// Per layer, the cells no move has cleared since the last mark (KeptWindow); marked by init
+  /// and by map exchange. Not map state: not in snapshots.
+  KeptWindow kept[kLayerSlots]{};
 };
 
 }  // namespace ccmap::detail

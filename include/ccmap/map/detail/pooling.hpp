@@ -7,6 +7,8 @@
 // CADRE layer), independent of map size and point count. Recursion depth <= the layer count.
 #pragma once
 
+#include <cstdint>
+
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/map/detail/layers.hpp"
@@ -21,15 +23,26 @@ template <typename FineCell>
 [[nodiscard]] inline float fine_variance(const KalmanCell& cell) noexcept { return cell.variance; }
 [[nodiscard]] inline float fine_variance(const OmgCell& cell) noexcept { return omg_variance(cell); }
 
+/// Counts cell reads for callers that report them (the planner queries' cells_visited); the
+/// point queries pass NoReadCount, which compiles to nothing.
+struct NoReadCount {
+  void add(std::uint32_t) noexcept {}
+};
+struct ReadCount {
+  std::uint32_t reads = 0U;
+  void add(std::uint32_t n) noexcept { reads += n; }
+};
+
 /// The statistics of CCM stack layer `layer`'s cell `index` as a query sees them.
 /// Preconditions: LayerSet<Config>::is_ccm(layer) and the layer's window contains `index`
-/// (so 2 * index fits int32: windows stay within +-2^30).
-template <typename Config>
+/// (so 2 * index fits int32: windows stay within +-2^30). `count` is told every cell read.
+template <typename Config, typename Count>
 [[nodiscard]] typename LayerSet<Config>::CcmCellType pooled(const LayerSet<Config>& layers, float weight_limit,
-                                                            int layer, CellIndex index) noexcept {
+                                                            int layer, CellIndex index, Count& count) noexcept {
   using Layers = LayerSet<Config>;
   using Cell = typename Layers::CcmCellType;
   const Cell* own = layers.ccm_grid(layer).cell(index);
+  count.add(1U);
   Cell result = own != nullptr ? *own : Cell{};
   if (layer == 0) {
     return result;
@@ -46,10 +59,11 @@ template <typename Config>
   for (int i = 0; i < 4; ++i) {
     const CellIndex child{first.x + (i & 1), first.y + (i >> 1)};
     if (Layers::is_ccm(child_layer)) {
-      children[i] = pooled(layers, weight_limit, child_layer, child);
+      children[i] = pooled(layers, weight_limit, child_layer, child, count);
     } else {
       if constexpr (Layers::kHasFine) {
         const typename Layers::FineCell& c = layers.fine.cell_unchecked(child);
+        count.add(1U);
         children[i] = ccm_from_constant<Cell>(fine_height(c), fine_variance(c), c.weight, layers.widths[child_layer]);
       }
     }
@@ -63,6 +77,14 @@ template <typename Config>
     (void)ccm_merge(merged, result, weight_limit);
   }
   return merged;
+}
+
+/// The same without counting (point queries, pooled_cell, export).
+template <typename Config>
+[[nodiscard]] typename LayerSet<Config>::CcmCellType pooled(const LayerSet<Config>& layers, float weight_limit,
+                                                            int layer, CellIndex index) noexcept {
+  NoReadCount none;
+  return pooled(layers, weight_limit, layer, index, none);
 }
 
 }  // namespace ccmap::detail
