@@ -23,6 +23,7 @@
 #include "map_runner.hpp"
 #include "origin.hpp"
 #include "png.hpp"
+#include "raster_io.hpp"
 #include "saved_map.hpp"
 #include "tiling.hpp"
 
@@ -56,6 +57,8 @@ constexpr const char* kMapHelp =
     "                  applied in order. A per-point weight (PLY property, 4th text column)\n"
     "                  replaces the sensor model's weight for CCM and OMG cells (Kalman cells\n"
     "                  weigh by range variance); weights <= 0 or non-finite are counted as bad.\n"
+    "  --dem FILE      one frame from a raster DEM (GeoTIFF, ESRI ASCII grid, anything GDAL reads):\n"
+    "                  one point per cell with data, at the cell centre; no-data cells skipped\n"
     "  --poses FILE    one line 'x y z yaw' per frame: the sensor position in the map frame; the\n"
     "                  map is re-centred on (x, y) before the frame and follows the poses like a\n"
     "                  rover's map: points beyond its windows count as outside map.\n"
@@ -74,6 +77,12 @@ constexpr const char* kMapHelp =
     "                  relief against the layer's limits), 253 inscribed, 254 lethal (obstacle or\n"
     "                  steep), 255 unknown or unobserved\n"
     "  --inflate M     with --costmap: cost pixels within M metres of a lethal one are inscribed\n"
+    "  --geotiff       also writes DIR/layer_<k>.tif per layer (GDAL): the pictures' area, one pixel\n"
+    "                  per cell in absolute coordinates; Float64 bands height, slope_x, slope_y,\n"
+    "                  normal_var, class (0 unknown, 1 traversable, 2 obstacle, 3 steep), NaN where\n"
+    "                  unobserved\n"
+    "  --epsg CODE     with --geotiff: the coordinate system written (default: the first --dem's, if\n"
+    "                  it has one, else none)\n"
     "  --save FILE     also writes a map for 'ccmap merge': the library's snapshot followed by the\n"
     "                  origin below (tools/cli/saved_map.hpp). With --poses, the final map; without,\n"
     "                  the map of one stack at the origin holding the points that fall in its\n"
@@ -212,7 +221,8 @@ struct Options {
   std::string preset;
   double res = 0.0;
   double wl = 0.0;
-  std::vector<std::string> clouds;
+  std::vector<std::string> clouds;  ///< the frames in order: cloud files and --dem rasters
+  std::vector<bool> dem;             ///< per frame: a raster DEM (--dem), else a cloud file
   std::string poses;
   std::string out_dir;
   std::string save;
@@ -233,6 +243,8 @@ struct Options {
   double max_unknown_share = 0.1;
   bool costmap = false;
   double inflate = 0.0;
+  bool geotiff = false;  ///< --geotiff: DIR/layer_<k>.tif too
+  int epsg = 0;          ///< --epsg CODE; 0: none given
   /// A planner query (--footprint or --path) without --poses: a map centred on it, not tiles.
   [[nodiscard]] bool centred_map() const { return (have_footprint || !path.empty()) && poses.empty(); }
 };
@@ -266,6 +278,10 @@ Options parse_options(int argc, char** argv) {
       o.costmap = true;
       continue;
     }
+    if (arg == "--geotiff") {
+      o.geotiff = true;
+      continue;
+    }
     if (arg.rfind("--", 0) != 0) fail("unexpected argument '" + arg + "' (options start with --)", 2);
     const std::size_t eq = arg.find('=');
     if (eq != std::string::npos) {
@@ -276,7 +292,7 @@ Options parse_options(int argc, char** argv) {
     static const char* kKnown[] = {"--preset", "--res",    "--wl",   "--cloud", "--poses",
                                    "--out",    "--at",     "--sensor", "--sigma", "--bounds",
                                    "--footprint", "--path", "--step", "--max-unknown-share", "--inflate",
-                                   "--save",   "--in",     "--offset"};
+                                   "--save",   "--in",     "--offset", "--dem", "--epsg"};
     if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
       fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
     }
@@ -293,6 +309,17 @@ Options parse_options(int argc, char** argv) {
     } else if (arg == "--cloud") {
       if (value.empty()) fail("--cloud needs a file name", 2);
       o.clouds.push_back(value);
+      o.dem.push_back(false);
+    } else if (arg == "--dem") {
+      if (value.empty()) fail("--dem needs a file name", 2);
+      o.clouds.push_back(value);
+      o.dem.push_back(true);
+    } else if (arg == "--epsg") {
+      const double code = parse_number(arg, value);
+      if (!(code >= 1.0 && code <= 999999.0) || code != std::floor(code)) {
+        fail("--epsg: " + value + " is not an EPSG code (expected a whole number 1 .. 999999)", 2);
+      }
+      o.epsg = static_cast<int>(code);
     } else if (arg == "--poses") {
       o.poses = value;
     } else if (arg == "--out") {
@@ -377,15 +404,21 @@ struct MappedClouds {
   bool tiled = false;                  ///< no --poses: the stack was swept over the clouds
   std::vector<std::vector<LayerCellRow>> rows;  ///< tiled: the rows of every layer
   TileQuery query;                     ///< tiled query: where the answer is
+  std::string srs_wkt;                 ///< coordinate system of the GeoTIFFs: --epsg, else the first DEM's
 };
 
 const char* sensor_name(const Options& o) {
   return o.sensor == SensorChoice::kLidar ? "lidar" : "stereo (CADRE model)";
 }
 
-Cloud read_nonempty_cloud(const std::string& path) {
-  Cloud cloud = read_cloud(path);
+/// Frame f of the options: a cloud file, or a raster DEM read as a cloud (one point per cell
+/// with data); the first DEM's coordinate system becomes the GeoTIFFs' when --epsg is not given.
+Cloud read_frame(const Options& o, std::size_t f, MappedClouds& m) {
+  const std::string& path = o.clouds[f];
+  std::string srs;
+  Cloud cloud = o.dem[f] ? read_dem(path, &srs) : read_cloud(path);
   if (!cloud.ok()) fail(cloud.error);
+  if (m.srs_wkt.empty() && o.epsg == 0) m.srs_wkt = srs;
   if (cloud.size() == 0) {
     fail(path + ": empty cloud (" + std::to_string(cloud.declared) + " points, " +
          std::to_string(cloud.skipped_non_finite) + " of them non-finite)");
@@ -480,7 +513,7 @@ void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool 
   }
   std::vector<float> xyz, weights;
   for (std::size_t f = 0; f < o.clouds.size(); ++f) {
-    const Cloud cloud = read_nonempty_cloud(o.clouds[f]);
+    const Cloud cloud = read_frame(o, f, m);
     m.read += cloud.declared;
     if (f == 0) {
       if (!robust_origin({&cloud}, o.bounds, m.widths.back(), &m.origin, &error)) fail(o.clouds[f] + ": " + error);
@@ -510,8 +543,8 @@ std::vector<Cloud> read_all_clouds(const Options& o, MappedClouds& m, std::ostre
   std::vector<Cloud> clouds;
   std::vector<const Cloud*> all;
   clouds.reserve(o.clouds.size());
-  for (const std::string& path : o.clouds) {
-    clouds.push_back(read_nonempty_cloud(path));
+  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
+    clouds.push_back(read_frame(o, f, m));
     m.read += clouds.back().declared;
   }
   for (const Cloud& c : clouds) all.push_back(&c);
@@ -574,7 +607,7 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
   MappedClouds m;
   m.runner = make_map_runner(o.preset, &error);
   if (!m.runner) fail(error, 2);
-  if (o.clouds.empty()) fail("at least one --cloud FILE is required", 2);
+  if (o.clouds.empty()) fail("at least one --cloud FILE (or --dem FILE) is required", 2);
 
   const int layers = preset_layer_count(o.preset);
   const double finest = o.res > 0.0 ? o.res : preset_default_cell_width(o.preset);
@@ -705,6 +738,10 @@ void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
           << kMaxImageCells << " a picture may have: no pictures for it (the CSV holds every cell)\n";
     } else {
       if (!write_layer_images(prefix, rows, window, &error)) fail(error);
+      if (o.geotiff && !write_layer_geotiff(prefix + ".tif", rows, extent, m.widths[static_cast<std::size_t>(k)],
+                                            m.srs_wkt, &error)) {
+        fail(error);
+      }
       if (o.costmap) {
         const std::vector<std::uint8_t> cost = layer_costmap(m, k, rows, extent, o.inflate);
         const std::string cost_prefix = o.out_dir + "/costmap_" + std::to_string(k);
@@ -733,6 +770,25 @@ void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
   }
   out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
       << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+  if (o.geotiff) {
+    out << "geotiff: " << o.out_dir << "/layer_<k>.tif, the pictures' area in absolute coordinates ("
+        << (o.epsg > 0 ? "EPSG:" + std::to_string(o.epsg) : (m.srs_wkt.empty() ? "no coordinate system" : "the DEM's coordinate system"))
+        << "); bands height, slope_x, slope_y, normal_var, class (0 unknown, 1 traversable, 2 obstacle, 3 steep), NaN unobserved\n";
+  }
+}
+
+/// --geotiff, --epsg and --dem: refused up front (exit 2) in a build without GDAL or with an
+/// unknown EPSG code, before any cloud is read. Returns the GeoTIFFs' coordinate system of --epsg
+/// (empty without it).
+std::string check_raster_options(const Options& o) {
+  const bool any_dem = std::find(o.dem.begin(), o.dem.end(), true) != o.dem.end();
+  if ((o.geotiff || any_dem) && !raster_io_available()) {
+    fail(std::string(o.geotiff ? "--geotiff" : "--dem") + ": " + raster_io_unavailable_reason(), 2);
+  }
+  if (o.epsg > 0 && !o.geotiff) fail("--epsg needs --geotiff", 2);
+  std::string wkt, error;
+  if (o.epsg > 0 && !srs_from_epsg(o.epsg, &wkt, &error)) fail("--epsg: " + error, 2);
+  return wkt;
 }
 
 /// Options that belong to one command only.
@@ -742,7 +798,7 @@ void refuse_foreign_options(const Options& o) {
   if (o.command != "merge" && !o.inputs.empty()) fail("--in belongs to 'ccmap merge'", 2);
   if (o.command != "merge" && o.have_offset) fail("--offset belongs to 'ccmap merge'", 2);
   if (o.command == "merge" && (!o.clouds.empty() || !o.poses.empty() || o.res > 0.0 || o.wl > 0.0 || o.bounds.set)) {
-    fail("ccmap merge takes --preset, --in, --offset and --out (the maps bring their own parameters)", 2);
+    fail("ccmap merge takes --preset, --in, --offset, --out, --geotiff and --epsg (the maps bring their own parameters)", 2);
   }
 }
 
@@ -754,8 +810,9 @@ void fold_one_window(const Options& o, MappedClouds& m, std::ostream& out) {
   const float sensor[3] = {0.0F, 0.0F, 0.0F};
   FrameStats totals;
   std::vector<float> xyz, weights;
-  for (const std::string& path : o.clouds) {
-    const Cloud cloud = read_nonempty_cloud(path);
+  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
+    const std::string& path = o.clouds[f];
+    const Cloud cloud = read_frame(o, f, m);
     FrameStats kept_back;
     local_frame_points(cloud, m.origin, o.bounds, &xyz, &weights, &kept_back);
     FrameStats stats;
@@ -773,7 +830,9 @@ int run_map(const Options& o, std::ostream& out) {
   if (o.have_footprint || !o.path.empty()) fail("--footprint and --path belong to 'ccmap query'", 2);
   if (o.step > 0.0 || o.max_unknown_share != 0.1) fail("--step and --max-unknown-share belong to 'ccmap query'", 2);
   if (o.inflate > 0.0 && !o.costmap) fail("--inflate needs --costmap", 2);
+  const std::string epsg_wkt = check_raster_options(o);
   MappedClouds m = build_map(o, out, true);
+  if (o.epsg > 0) m.srs_wkt = epsg_wkt;
   write_outputs(m, o, out);
   if (!o.save.empty()) {
     if (m.tiled) fold_one_window(o, m, out);
@@ -807,6 +866,7 @@ int run_merge(const Options& o, std::ostream& out) {
   if (o.inputs.size() < 2) fail("ccmap merge needs two or more --in FILE", 2);
   std::string error;
   MappedClouds m;
+  m.srs_wkt = check_raster_options(o);
   m.runner = make_map_runner(o.preset, &error);
   if (!m.runner) fail(error, 2);
   const int layers = preset_layer_count(o.preset);
@@ -894,6 +954,8 @@ int run_query(const Options& o, std::ostream& out) {
   if (o.have_at && !o.path.empty()) fail("--at and --path are two queries: give one", 2);
   if (!o.out_dir.empty()) fail("--out belongs to 'ccmap map'", 2);
   if (o.costmap || o.inflate > 0.0) fail("--costmap and --inflate belong to 'ccmap map'", 2);
+  if (o.geotiff || o.epsg > 0) fail("--geotiff and --epsg belong to 'ccmap map' and 'ccmap merge'", 2);
+  check_raster_options(o);
   if (o.step > 0.0 && o.path.empty()) fail("--step belongs to --path", 2);
   if (!o.path.empty() && !o.have_footprint) fail("--path needs --footprint LENGTH,WIDTH (the body swept along it)", 2);
   std::ostringstream log;
