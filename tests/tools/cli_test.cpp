@@ -635,7 +635,7 @@ TEST(CliErrors, PlannerOptionsAreCheckedWithOneLine) {
                         "--footprint", "negative width");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "30,30"}),
                         "refused the footprint", "beyond the footprint limit");
-  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0"}), "--path needs --footprint",
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0"}), "--path requires --footprint",
                         "path without a body");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0", "--footprint", "0.6,0.4,10"}),
                         "YAW_DEG", "yaw with a path");
@@ -648,15 +648,15 @@ TEST(CliErrors, PlannerOptionsAreCheckedWithOneLine) {
                         "refused the path query", "too many poses");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--path", "0,0:1,0",
                              "--footprint", "0.6,0.4"}),
-                        "give one", "both queries");
+                        "--at excludes --path", "both queries");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--max-unknown-share", "2"}),
                         "--max-unknown-share", "share above 1");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--costmap"}), "--costmap",
                         "costmap on a query");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--inflate", "0.1"}),
-                        "--inflate needs --costmap", "inflate alone");
+                        "--inflate requires --costmap", "inflate alone");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--footprint", "0.6,0.4"}),
-                        "belong to 'ccmap query'", "footprint on map");
+                        "--footprint belongs to 'ccmap query'", "footprint on map");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--costmap", "--inflate", "5"}),
                         "--inflate: 5 m is 62.5 cells of layer 0", "inflation beyond 32 pixels");
 }
@@ -704,9 +704,11 @@ TEST(CliErrors, BadInputGivesOneLineAndNonZeroExit) {
       {{"map", "--preset", "ccm", "--res", "nan", "--cloud", good, "--out", out}, "out of range"},
       {{"map", "--preset", "ccm", "--res", "0.08x", "--cloud", good, "--out", out}, "not a number"},
       {{"map", "--preset", "ccm", "--wl", "0", "--cloud", good, "--out", out}, "--wl"},
-      {{"map", "--preset", "ccm", "--res"}, "needs a value"},
-      {{"map", "--preset", "ccm", "--colour", "red"}, "unknown option '--colour'"},
-      {{"map", "--preset", "ccm", "stray"}, "unexpected argument 'stray'"},
+      {{"map", "--preset", "ccm", "--res"}, "--res: 1 required METRES missing"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "--colour", "red"}, "not expected: red --colour"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "stray"}, "not expected: stray"},
+      {{"map", "--preset", "ccm", "--preset", "kf", "--cloud", good, "--out", out}, "--preset: At Most 1"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "--at", "1,2"}, "--at belongs to 'ccmap query'"},
       {{"map", "--preset", "ccm", "--cloud", good, "--poses", (dir / "poses1.txt").string(), "--out", out},
        "2 poses for 1 clouds"},
       {{"map", "--preset", "ccm", "--cloud", good, "--poses", (dir / "nope.txt").string(), "--out", out}, "nope.txt"},
