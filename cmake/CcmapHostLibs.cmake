@@ -4,7 +4,7 @@
 #   ccmap_cli11   CLI11 (libcli11-dev, header only): the argument parsers of the CLI, the sim
 #                 demo, the self-timed benchmark, the experiments and the traverse. Required
 #                 wherever those are built, also for the cross-built benchmark (Debian's cross
-#                 g++ searches /usr/include, where the headers are).
+#                 g++ searches /usr/include, where the headers are), with tools/args/parse_args.hpp.
 #   GDAL          CCMAP_WITH_GDAL: the CLI's GeoTIFF output and --dem input (tools/io/raster_io.hpp)
 #     AUTO (default)  ON when this is a host build with the tools and GDAL is found, else OFF
 #                     (a status line says why; --geotiff and --dem are then refused, saying why)
@@ -18,6 +18,8 @@ if(CCMAP_BUILD_TOOLS OR CCMAP_BUILD_BENCH)
     message(FATAL_ERROR "CLI11 not found in ${CCMAP_CLI11_INCLUDE_DIR}: apt-get install libcli11-dev (or: tools/install-deps host)")
   endif()
   add_library(ccmap_cli11 INTERFACE)
+  # tools/args/parse_args.hpp: how every tool runs its parser (help, one-line refusals, exit 2).
+  target_include_directories(ccmap_cli11 INTERFACE ${PROJECT_SOURCE_DIR}/tools/args)
   # /usr/include is already searched (host and Debian cross g++); naming it again as -isystem
   # would reorder the system headers.
   if(NOT CCMAP_CLI11_INCLUDE_DIR STREQUAL "/usr/include")
