@@ -213,6 +213,33 @@ CLI::Option* add_value(CLI::App* app, const std::string& name, const std::string
   return app->add_option_function<std::string>(name, std::move(parse), help)->type_name(type);
 }
 
+/// An option naming a file or directory: an empty value is refused ("--out needs a directory").
+CLI::Option* add_name(CLI::App* app, const std::string& name, const std::string& type, const std::string& what,
+                      const std::string& help, std::string* target) {
+  return add_value(app, name, type, help, [name, what, target](const std::string& v) {
+    if (v.empty()) fail(name + " needs " + what, 2);
+    *target = v;
+  });
+}
+
+/// A repeatable option: `parse` runs for every occurrence as it is parsed, so that repeated
+/// options (and --cloud / --dem between them) keep their command-line order.
+CLI::Option* add_repeated(CLI::App* app, const std::string& name, const std::string& type, const std::string& help,
+                          std::function<void(const std::string&)> parse) {
+  return add_value(app, name, type, help, std::move(parse))
+      ->trigger_on_parse()
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+}
+
+/// --cloud FILE or --dem FILE: one more frame.
+void add_frame_option(CLI::App* app, Options& o, const std::string& name, bool dem, const std::string& help) {
+  add_repeated(app, name, "FILE", help, [&o, name, dem](const std::string& v) {
+    if (v.empty()) fail(name + " needs a file name", 2);
+    o.clouds.push_back(v);
+    o.dem.push_back(dem);
+  });
+}
+
 /// --preset, the frames and the mapping parameters: 'ccmap map' and 'ccmap query'.
 void add_mapping_options(CLI::App* app, Options& o) {
   add_value(app, "--preset", "NAME",
@@ -226,31 +253,16 @@ void add_mapping_options(CLI::App* app, Options& o) {
             [&o](const std::string& v) { o.res = parse_positive("--res", v, 100.0); });
   add_value(app, "--wl", "W_L", "weight limit W_l of CCM and OMG cells (default 1000)",
             [&o](const std::string& v) { o.wl = parse_positive("--wl", v, 1e30, /*allow_inf=*/true); });
-  // Frames keep their command-line order across --cloud and --dem: parsed as they come.
-  add_value(app, "--cloud", "FILE",
+  add_frame_option(app, o, "--cloud", false,
             "one frame, map-frame coordinates: .ply (ascii/binary), .las (1.0-1.4,\n"
             "uncompressed) or text 'x y z [w]' per line; repeat for more frames,\n"
             "applied in order. A per-point weight (PLY property, 4th text column)\n"
             "replaces the sensor model's weight for CCM and OMG cells (Kalman cells\n"
-            "weigh by range variance); weights <= 0 or non-finite are counted as bad.",
-            [&o](const std::string& v) {
-              if (v.empty()) fail("--cloud needs a file name", 2);
-              o.clouds.push_back(v);
-              o.dem.push_back(false);
-            })
-      ->trigger_on_parse()
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  add_value(app, "--dem", "FILE",
+            "weigh by range variance); weights <= 0 or non-finite are counted as bad.");
+  add_frame_option(app, o, "--dem", true,
             "one frame from a raster DEM (GeoTIFF, ESRI ASCII grid, anything GDAL reads):\n"
             "one point per cell with data, at the cell centre; no-data cells skipped.\n"
-            "Choose --res of a few DEM cells (a cell needs min-weight points to be known)",
-            [&o](const std::string& v) {
-              if (v.empty()) fail("--dem needs a file name", 2);
-              o.clouds.push_back(v);
-              o.dem.push_back(true);
-            })
-      ->trigger_on_parse()
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+            "Choose --res of a few DEM cells (a cell needs min-weight points to be known)");
   add_value(app, "--poses", "FILE",
             "one line 'x y z yaw' per frame: the sensor position in the map frame; the\n"
             "map is re-centred on (x, y) before the frame and follows the poses like a\n"
@@ -275,14 +287,11 @@ void add_mapping_options(CLI::App* app, Options& o) {
 
 /// --out, --geotiff, --epsg: the outputs of 'ccmap map' and 'ccmap merge'.
 void add_output_options(CLI::App* app, Options& o) {
-  add_value(app, "--out", "DIR",
-            "writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
-            "normal_var,class}.png; class colours: unknown grey, traversable green,\n"
-            "obstacle red, steep orange, unobserved black",
-            [&o](const std::string& v) {
-              if (v.empty()) fail("--out needs a directory", 2);
-              o.out_dir = v;
-            })
+  add_name(app, "--out", "DIR", "a directory",
+           "writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
+           "normal_var,class}.png; class colours: unknown grey, traversable green,\n"
+           "obstacle red, steep orange, unobserved black",
+           &o.out_dir)
       ->required();
   CLI::Option* geotiff = app->add_flag("--geotiff", o.geotiff,
                                        "also writes DIR/layer_<k>.tif per layer (GDAL): the pictures' area, one pixel\n"
@@ -318,15 +327,12 @@ void add_map_command(CLI::App& app, Options& o) {
               if (!(o.inflate >= 0.0) || !std::isfinite(o.inflate)) fail("--inflate: " + v + " is out of range (expected >= 0)", 2);
             })
       ->needs(costmap);
-  add_value(map, "--save", "FILE",
-            "also writes a map for 'ccmap merge': the library's snapshot followed by the\n"
-            "origin (tools/cli/saved_map.hpp). With --poses, the final map; without,\n"
-            "the map of one stack at the origin holding the points that fall in its\n"
-            "windows (what a rover there holds; the CSV files cover every tile)",
-            [&o](const std::string& v) {
-              if (v.empty()) fail("--save needs a file name", 2);
-              o.save = v;
-            });
+  add_name(map, "--save", "FILE", "a file name",
+           "also writes a map for 'ccmap merge': the library's snapshot followed by the\n"
+           "origin (tools/cli/saved_map.hpp). With --poses, the final map; without,\n"
+           "the map of one stack at the origin holding the points that fall in its\n"
+           "windows (what a rover there holds; the CSV files cover every tile)",
+           &o.save);
   map->footer(kMapFooter);
 }
 
@@ -381,15 +387,13 @@ void add_merge_command(CLI::App& app, Options& o) {
   CLI::App* merge = app.add_subcommand("merge", "merge maps saved by 'ccmap map --save' (or snapshots) and write the same output");
   add_value(merge, "--preset", "NAME", "the maps' preset (cadre, ccm, kf or omg)", [&o](const std::string& v) { o.preset = v; })
       ->required();
-  add_value(merge, "--in", "FILE",
+  add_repeated(merge, "--in", "FILE",
             "a saved map; give two or more. Merge only maps built independently: a map\n"
             "that already holds another's points counts them twice",
             [&o](const std::string& v) {
               if (v.empty()) fail("--in needs a file name", 2);
               o.inputs.push_back(v);
-            })
-      ->trigger_on_parse()
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+            });
   add_value(merge, "--offset", "DX,DY",
             "the map origin of every further --in relative to the first's (m): for\n"
             "snapshots without a saved origin; replaces the saved origins' difference.\n"
