@@ -4,10 +4,18 @@
 // the corridor footprint and the 2 m path (tests/support/flight_cycle.hpp). Ten cycles, one attempt.
 //
 // What is asserted: the median thread CPU time of the ten cycles (platform::thread_cpu_ns: time
-// the other core's load and preemption do not inflate) is below 80 ms; wall time is printed
-// beside it. Under QEMU user mode the time is the emulator's on this host, not the target's
-// (docs/performance.md); the deterministic budget is the instruction count of the same cycle
-// (tests/map/cycle_icount.cpp, label timing too).
+// the other core's load and preemption do not inflate), wall time printed beside it.
+//  - Native (host, or an aarch64 board): median CPU < 80 ms, the budget itself.
+//  - Under an emulator (ctest sets CCMAP_EMULATOR for the cross build, tests/map/CMakeLists.txt):
+//    the time is the emulator's on its x86-64 host, not the target's. The same binary, the same
+//    61 M instructions per cycle, took 67 ms on the development machine and 95 ms on the CI machine
+//    (QEMU 7.2: 1.1-1.55 ns per A64 instruction of this mix; float instructions are soft-float calls
+//    of ~4-6 ns). The Snapdragon 820 at 2.15 GHz and one instruction per cycle, the budget's own
+//    assumption, takes 0.47 ns: the emulator is 2.4-3.3x slower than the target. The assertion
+//    divides by 2, less than either: median emulator CPU / 2 < 80 ms, i.e. the cycle would fit the
+//    budget on a target only 2x faster than the emulator (docs/performance.md section 2).
+//  The deterministic form of the budget is the instruction count of the same cycle
+//  (tests/map/cycle_icount.cpp, label timing too): at most half of 80 ms x 2.15 GHz x 1 IPC.
 //
 // Label `timing`: tools/test runs it alone after every other test (RUN_SERIAL), once.
 #include <gtest/gtest.h>
@@ -15,6 +23,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <vector>
 
@@ -27,6 +36,8 @@ namespace {
 
 constexpr int kCycles = 10;
 constexpr double kBudgetMs = 80.0;
+/// Emulator time per target time assumed by the assertion under an emulator (see above).
+constexpr double kEmulatorSlowdown = 2.0;
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -34,6 +45,9 @@ double median(std::vector<double> v) {
 }
 
 TEST(Timing, FlightCycleMedianUnderTheEightyMillisecondBudget) {
+  const char* const emulator = std::getenv("CCMAP_EMULATOR");
+  const bool emulated = emulator != nullptr && emulator[0] != '\0';
+  const double slowdown = emulated ? kEmulatorSlowdown : 1.0;
   auto stack = std::make_unique<Stack<CadreConfig>>();
   ASSERT_EQ(stack->init(default_stack_params(0.04F)), Status::kOk);
   std::vector<double> cpu_ms;
@@ -56,11 +70,18 @@ TEST(Timing, FlightCycleMedianUnderTheEightyMillisecondBudget) {
   }
   const double cpu = median(cpu_ms);
   const double wall = median(wall_ms);
-  std::printf("[ timing ] flight cycle (move, sensor-frame update of 552,500 points, corridor footprint, 2 m path), %s: "
+  std::printf("[ timing ] flight cycle (move, sensor-frame update of 552,500 points, corridor footprint, 2 m path), %s%s%s: "
               "median CPU %.2f ms (max %.2f), median wall %.2f ms (max %.2f) over %d cycles (budget %.0f ms)\n",
-              platform::name(), cpu, *std::max_element(cpu_ms.begin(), cpu_ms.end()), wall,
-              *std::max_element(wall_ms.begin(), wall_ms.end()), kCycles, kBudgetMs);
-  EXPECT_LT(cpu, kBudgetMs) << "median flight cycle " << cpu << " ms of CPU exceeds the 80 ms budget";
+              platform::name(), emulated ? ", under " : "", emulated ? emulator : "", cpu,
+              *std::max_element(cpu_ms.begin(), cpu_ms.end()), wall, *std::max_element(wall_ms.begin(), wall_ms.end()),
+              kCycles, kBudgetMs);
+  if (emulated) {
+    std::printf("[ timing ] emulated: the assertion takes the target as %.0fx faster than the emulator: %.2f ms < %.0f ms\n",
+                slowdown, cpu / slowdown, kBudgetMs);
+  }
+  EXPECT_LT(cpu / slowdown, kBudgetMs) << "median flight cycle " << cpu << " ms of CPU"
+                                       << (emulated ? " (emulated, divided by the emulator allowance)" : "")
+                                       << " exceeds the 80 ms budget";
 }
 
 }  // namespace

@@ -635,7 +635,7 @@ TEST(CliErrors, PlannerOptionsAreCheckedWithOneLine) {
                         "--footprint", "negative width");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "30,30"}),
                         "refused the footprint", "beyond the footprint limit");
-  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0"}), "--path needs --footprint",
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0"}), "--path requires --footprint",
                         "path without a body");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0", "--footprint", "0.6,0.4,10"}),
                         "YAW_DEG", "yaw with a path");
@@ -648,15 +648,15 @@ TEST(CliErrors, PlannerOptionsAreCheckedWithOneLine) {
                         "refused the path query", "too many poses");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--path", "0,0:1,0",
                              "--footprint", "0.6,0.4"}),
-                        "give one", "both queries");
+                        "--at excludes --path", "both queries");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--max-unknown-share", "2"}),
                         "--max-unknown-share", "share above 1");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--costmap"}), "--costmap",
                         "costmap on a query");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--inflate", "0.1"}),
-                        "--inflate needs --costmap", "inflate alone");
+                        "--inflate requires --costmap", "inflate alone");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--footprint", "0.6,0.4"}),
-                        "belong to 'ccmap query'", "footprint on map");
+                        "--footprint belongs to 'ccmap query'", "footprint on map");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--costmap", "--inflate", "5"}),
                         "--inflate: 5 m is 62.5 cells of layer 0", "inflation beyond 32 pixels");
 }
@@ -708,6 +708,24 @@ TEST(CliMap, DiagonalHalfCellsOnATwelveDegreePlaneWithBothCells) {
     }
     EXPECT_EQ(inner, 64) << "test premise: the inner 8 x 8 cells of the 10 x 10 square";
   }
+  // Saved paper-cell maps merge with --paper-cell, and give the same paper-cell answer: slope_x -b/2.
+  for (const char* half : {"h1", "h2"}) {
+    ASSERT_EQ(run({"map", "--preset", "ccm", "--res", "0.16", "--paper-cell", "--cloud", (dir / "diagonal.xyz").string(),
+                   "--out", (dir / half).string(), "--save", (dir / (std::string(half) + ".map")).string()})
+                  .code,
+              0);
+  }
+  const CliRun merged = run({"merge", "--preset", "ccm", "--paper-cell", "--in", (dir / "h1.map").string(), "--in",
+                             (dir / "h2.map").string(), "--out", (dir / "merged").string()});
+  ASSERT_EQ(merged.code, 0) << merged.err;
+  int merged_inner = 0;
+  for (const LayerCellRow& c : read_rows(dir / "merged" / "layer_0.csv")) {
+    const double lx = c.cx - x0, ly = c.cy - y0;
+    if (lx < w || ly < w || lx > 1.6 - w || ly > 1.6 - w) continue;
+    ++merged_inner;
+    EXPECT_NEAR(c.slope_x, -0.5 * b, 0.01) << "merged paper cells: slope_x on a diagonal half";
+  }
+  EXPECT_EQ(merged_inner, 64);
   const CliRun kf = run({"map", "--preset", "kf", "--paper-cell", "--cloud", (dir / "diagonal.xyz").string(), "--out",
                          (dir / "kf").string()});
   expect_one_line_error(kf, "--paper-cell", "--paper-cell with a preset without CCM layers");
@@ -756,9 +774,11 @@ TEST(CliErrors, BadInputGivesOneLineAndNonZeroExit) {
       {{"map", "--preset", "ccm", "--res", "nan", "--cloud", good, "--out", out}, "out of range"},
       {{"map", "--preset", "ccm", "--res", "0.08x", "--cloud", good, "--out", out}, "not a number"},
       {{"map", "--preset", "ccm", "--wl", "0", "--cloud", good, "--out", out}, "--wl"},
-      {{"map", "--preset", "ccm", "--res"}, "needs a value"},
-      {{"map", "--preset", "ccm", "--colour", "red"}, "unknown option '--colour'"},
-      {{"map", "--preset", "ccm", "stray"}, "unexpected argument 'stray'"},
+      {{"map", "--preset", "ccm", "--res"}, "--res: 1 required METRES missing"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "--colour", "red"}, "not expected: red --colour"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "stray"}, "not expected: stray"},
+      {{"map", "--preset", "ccm", "--preset", "kf", "--cloud", good, "--out", out}, "--preset: At Most 1"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "--at", "1,2"}, "--at belongs to 'ccmap query'"},
       {{"map", "--preset", "ccm", "--cloud", good, "--poses", (dir / "poses1.txt").string(), "--out", out},
        "2 poses for 1 clouds"},
       {{"map", "--preset", "ccm", "--cloud", good, "--poses", (dir / "nope.txt").string(), "--out", out}, "nope.txt"},
@@ -991,6 +1011,9 @@ TEST(CliMerge, RefusalsSayWhy) {
   expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--out", out}), "two or more --in", "one input");
   expect_one_line_error(run({"merge", "--preset", "cadre", "--in", a, "--in", a, "--out", out}), "is it a cadre map",
                         "another preset");
+  // The CCM cell kind is part of a map's shape: a full-cell map is not read as paper cells.
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--paper-cell", "--in", a, "--in", a, "--out", out}),
+                        "saved with --paper-cell", "full-cell maps merged as paper cells");
   expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", (dir / "coarse.map").string(), "--out", out}),
                         "misaligned", "another cell width");
   expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", a, "--offset", "0.05,0", "--out", out}),

@@ -4,7 +4,7 @@
 //   <case> <median> <unit>  (min <min>, max <max>, <reps> reps)
 // Frames are the synthetic CADRE frames of tests/support/cadre_frames.hpp.
 //
-//   ccmap_bench_selftimed [reps]     (default 10 repetitions per case)
+//   ccmap_bench_selftimed [reps]     (default 10 repetitions per case; --help; a bad count: exit 2)
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -17,6 +17,7 @@
 #include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/platform/platform.hpp"
+#include "parse_args.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/flight_cycle.hpp"
 
@@ -121,11 +122,10 @@ void flight_cycle(const char* name, int reps) {
 
 int main(int argc, char** argv) {
   using namespace ccmap;
-  const int reps = argc > 1 ? std::atoi(argv[1]) : 10;
-  if (reps < 1) {
-    std::fprintf(stderr, "usage: ccmap_bench_selftimed [reps >= 1]\n");
-    return 2;
-  }
+  int reps = 10;
+  CLI::App app("The benchmark cases of docs/performance.md timed with the platform clock.", "ccmap_bench_selftimed");
+  app.add_option("reps", reps, "repetitions per case")->check(CLI::Range(1, 1000000))->capture_default_str();
+  if (const int code = tools::parse_args(app, argc, argv); code >= 0) return code;
   std::printf("# ccmap_bench_selftimed: platform %s, %d reps, synthetic CADRE frames\n", platform::name(), reps);
 
   // Static memory of each preset (the whole map is one object).
