@@ -1,6 +1,6 @@
 // Raster I/O of the host tools through GDAL (Debian libgdal-dev): map layers written as
 // georeferenced GeoTIFFs, and raster DEMs (GeoTIFF, ESRI ASCII grid, anything GDAL reads) read
-// as point clouds. GDAL is optional at configure time (CCMAP_WITH_GDAL, cmake/CcmapGdal.cmake):
+// as point clouds. GDAL is optional at configure time (CCMAP_WITH_GDAL, cmake/CcmapHostLibs.cmake):
 // without it raster_io.cpp is replaced by raster_io_unavailable.cpp, whose functions refuse with
 // raster_io_unavailable_reason() and touch no file.
 //
