@@ -3,7 +3,7 @@
  * The map lives in storage the caller owns (static, or a memory pool handed over at set-up):
  * nothing allocates, nothing throws, every call answers with a status. Two-phase life:
  *
- *   static ccmap_cadre_storage storage;                      // ~430 KB, aligned for the map
+ *   static ccmap_cadre_storage storage;                      // 600 KiB, aligned for the map
  *   ccmap_map* map = NULL;
  *   ccmap_params params;
  *   if (ccmap_place(&storage, sizeof storage, CCMAP_PRESET_CADRE, &map) != CCMAP_OK) ...
@@ -71,9 +71,9 @@ typedef enum ccmap_preset {
  * the exact figure. The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
 #define CCMAP_CADRE_STORAGE_SIZE 720896u          /* 704 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2621440u    /* 2560 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3407872u /* 3328 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1015808u    /* 992 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2818048u    /* 2752 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3342336u /* 3264 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 983040u     /* 960 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \
@@ -95,8 +95,8 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 418060u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2359532u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 459020u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621676u
 #define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786668u
 #define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786668u
 
@@ -225,10 +225,10 @@ typedef struct ccmap_query_result {
   int32_t layer;              /* layer that answered (0 = finest), -1 if none holds the point */
   float cell_width_m;
   float height_m;             /* sub-cell height at the point (eq. 10) */
-  float slope_x;              /* dz/dx (eq. 9) */
+  float slope_x;              /* dz/dx of the cell's least-squares plane (ccm_surface) */
   float slope_y;
   float inclination;          /* sqrt(slope_x^2 + slope_y^2) */
-  float normal_variance;      /* sigma_s^2 (eq. 11), m^2 */
+  float normal_variance;      /* sigma_s^2 (eq. 11; the plane's residual), m^2 */
   float elevation_variance;   /* m^2 */
   float weight;
   int32_t cell_class;         /* ccmap_cell_class */
@@ -413,8 +413,8 @@ ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t siz
 /* An exchange holds one copy of its map's cells (what it last sent) and a table of 8 peers; it
  * lives in caller storage like the map. Sizes: upper bounds with headroom, exact figures from
  * ccmap_exchange_storage_size(). */
-#define CCMAP_CADRE_EXCHANGE_STORAGE_SIZE 434176u          /* 424 KiB */
-#define CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE 2375680u    /* 2320 KiB */
+#define CCMAP_CADRE_EXCHANGE_STORAGE_SIZE 475136u          /* 464 KiB */
+#define CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE 2686976u    /* 2624 KiB */
 #define CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE 802816u  /* 784 KiB */
 #define CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE 802816u     /* 784 KiB */
 CCMAP_DEFINE_STORAGE_(ccmap_cadre_exchange_storage, CCMAP_CADRE_EXCHANGE_STORAGE_SIZE);
@@ -423,7 +423,7 @@ CCMAP_DEFINE_STORAGE_(ccmap_single_kalman_exchange_storage, CCMAP_SINGLE_KALMAN_
 CCMAP_DEFINE_STORAGE_(ccmap_single_omg_exchange_storage, CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE);
 
 /* Largest delta of a preset (every cell) and the smallest (no cell); 0 for a bad preset. */
-#define CCMAP_CADRE_DELTA_MAX_SIZE 432280u
+#define CCMAP_CADRE_DELTA_MAX_SIZE 473240u
 size_t ccmap_delta_max_size(ccmap_preset preset);
 size_t ccmap_delta_min_size(ccmap_preset preset);
 

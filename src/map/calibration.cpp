@@ -62,7 +62,11 @@ float step_normal_variance(float cell_width_m, float obstacle_height_m, float co
   const float half = 0.5F * cell_width_m;
   const float column = cell_width_m / static_cast<float>(n);  // n >= 2
   const float edge_x = half - coverage * cell_width_m;         // the step occupies x > edge_x
-  CcmCell cell{};
+  // The paper cell, for both cell kinds: every column holds the same symmetric rows, so x and y
+  // are uncorrelated (s_xy = 0 in exact arithmetic) and the full cell's normal variance equals
+  // eq. (11); the paper cell evaluates it without the rounding noise of a computed s_xy, so a
+  // paper-cell stack keeps its published thresholds bit for bit (docs/design.md, "Thresholds").
+  CcmPaperCell cell{};
   for (int i = 0; i < n; ++i) {
     const float x_lo = -half + static_cast<float>(i) * column;
     const float x_hi = (i + 1 == n) ? half : x_lo + column;

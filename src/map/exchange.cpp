@@ -60,25 +60,52 @@ GainKind limited_gain(const Cell& cell, const Cell& sent, float weight_limit, fl
 
 }  // namespace
 
-// ---- CCM cells ----
+// ---- CCM cells (both kinds: one template each, s_xy compiled in for CcmCell) ----
+namespace {
+template <typename Cell>
+bool ccm_cell_valid(const Cell& c, float cell_width_m) noexcept {
+  bool valid = finite_all({c.weight, c.mean_x, c.mean_y, c.mean_z, c.s_xx, c.s_yy, c.s_zz, c.s_xz, c.s_yz}) &&
+               c.weight > 0.0F && c.s_xx >= 0.0F && c.s_yy >= 0.0F && c.s_zz >= 0.0F &&
+               std::fabs(c.mean_x) <= cell_width_m && std::fabs(c.mean_y) <= cell_width_m && height_in_range(c.mean_z);
+  if constexpr (kHasLateralCovariance<Cell>) {
+    valid = valid && std::isfinite(c.s_xy);  // an off-diagonal co-moment, as s_xz and s_yz
+  }
+  return valid;
+}
+
+template <typename Cell>
+bool ccm_exchange_merge(Cell& cell, const Cell& received, float dz_m, const StackParams& params,
+                        float cell_width_m) noexcept {
+  Cell shifted = received;
+  shifted.mean_z += dz_m;  // same cell centre (aligned grids): only heights change frame
+  return ccm_merge(cell, shifted, params.weight_limit) == Status::kOk && exchange_cell_valid(cell, cell_width_m);
+}
+}  // namespace
+
 GainKind exchange_gain(const CcmCell& cell, const CcmCell& sent, const StackParams& params, float cell_width_m,
                        CcmCell* gain) noexcept {
-  return limited_gain(cell, sent, params.weight_limit, cell_width_m, gain, &ccm_unmerge);
+  return limited_gain<CcmCell>(cell, sent, params.weight_limit, cell_width_m, gain, &ccm_unmerge);
+}
+GainKind exchange_gain(const CcmPaperCell& cell, const CcmPaperCell& sent, const StackParams& params,
+                       float cell_width_m, CcmPaperCell* gain) noexcept {
+  return limited_gain<CcmPaperCell>(cell, sent, params.weight_limit, cell_width_m, gain, &ccm_unmerge);
 }
 
 float exchange_weight(const CcmCell& c) noexcept { return c.weight; }
+float exchange_weight(const CcmPaperCell& c) noexcept { return c.weight; }
 
-bool exchange_cell_valid(const CcmCell& c, float cell_width_m) noexcept {
-  return finite_all({c.weight, c.mean_x, c.mean_y, c.mean_z, c.s_xx, c.s_yy, c.s_zz, c.s_xz, c.s_yz}) &&
-         c.weight > 0.0F && c.s_xx >= 0.0F && c.s_yy >= 0.0F && c.s_zz >= 0.0F && std::fabs(c.mean_x) <= cell_width_m &&
-         std::fabs(c.mean_y) <= cell_width_m && height_in_range(c.mean_z);
+bool exchange_cell_valid(const CcmCell& c, float cell_width_m) noexcept { return ccm_cell_valid(c, cell_width_m); }
+bool exchange_cell_valid(const CcmPaperCell& c, float cell_width_m) noexcept {
+  return ccm_cell_valid(c, cell_width_m);
 }
 
 bool exchange_merge(CcmCell& cell, const CcmCell& received, float dz_m, const StackParams& params,
                     float cell_width_m) noexcept {
-  CcmCell shifted = received;
-  shifted.mean_z += dz_m;  // same cell centre (aligned grids): only heights change frame
-  return ccm_merge(cell, shifted, params.weight_limit) == Status::kOk && exchange_cell_valid(cell, cell_width_m);
+  return ccm_exchange_merge(cell, received, dz_m, params, cell_width_m);
+}
+bool exchange_merge(CcmPaperCell& cell, const CcmPaperCell& received, float dz_m, const StackParams& params,
+                    float cell_width_m) noexcept {
+  return ccm_exchange_merge(cell, received, dz_m, params, cell_width_m);
 }
 
 // ---- Kalman cells ----

@@ -5,7 +5,9 @@
 
 namespace ccmap::detail {
 
-void ccm_forget_for_motion(CcmCell& cell, float sigma_sq, float min_weight) noexcept {
+namespace {
+template <typename Cell>
+void forget_ccm(Cell& cell, float sigma_sq, float min_weight) noexcept {
   const CcmSurface surface = ccm_surface(cell);
   const float inclination_sq = surface.slope_x * surface.slope_x + surface.slope_y * surface.slope_y;
   if (!(inclination_sq > 0.0F)) {
@@ -28,6 +30,14 @@ void ccm_forget_for_motion(CcmCell& cell, float sigma_sq, float min_weight) noex
   }
   ccm_scale_comoments(cell, weight / cell.weight);  // as the limiter, eq. (7): variances unchanged
   cell.weight = weight;
+}
+}  // namespace
+
+void ccm_forget_for_motion(CcmCell& cell, float sigma_sq, float min_weight) noexcept {
+  forget_ccm(cell, sigma_sq, min_weight);
+}
+void ccm_forget_for_motion(CcmPaperCell& cell, float sigma_sq, float min_weight) noexcept {
+  forget_ccm(cell, sigma_sq, min_weight);
 }
 
 float grown_variance(float variance, float gx, float gy, float sigma_sq) noexcept {

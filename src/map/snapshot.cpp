@@ -341,6 +341,12 @@ bool snapshot_read_centre(SnapshotReader& r, CellIndex* out) noexcept {
 }
 
 void snapshot_write_cell(SnapshotWriter& w, const CcmCell& c) noexcept {
+  const float fields[] = {c.weight, c.mean_x, c.mean_y, c.mean_z, c.s_xx, c.s_yy, c.s_zz, c.s_xz, c.s_yz, c.s_xy};
+  for (const float v : fields) {
+    w.f32(v);
+  }
+}
+void snapshot_write_cell(SnapshotWriter& w, const CcmPaperCell& c) noexcept {
   const float fields[] = {c.weight, c.mean_x, c.mean_y, c.mean_z, c.s_xx, c.s_yy, c.s_zz, c.s_xz, c.s_yz};
   for (const float v : fields) {
     w.f32(v);
@@ -368,11 +374,19 @@ bool all_finite(const float* values, std::size_t n) noexcept {
 }  // namespace
 
 bool snapshot_read_cell(SnapshotReader& r, CcmCell* out) noexcept {
+  float f[10];
+  for (float& v : f) {
+    v = r.f32();
+  }
+  *out = CcmCell{f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8], f[9]};
+  return r.ok() && all_finite(f, 10U) && f[0] >= 0.0F;
+}
+bool snapshot_read_cell(SnapshotReader& r, CcmPaperCell* out) noexcept {
   float f[9];
   for (float& v : f) {
     v = r.f32();
   }
-  *out = CcmCell{f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8]};
+  *out = CcmPaperCell{f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8]};
   return r.ok() && all_finite(f, 9U) && f[0] >= 0.0F;
 }
 bool snapshot_read_cell(SnapshotReader& r, KalmanCell* out) noexcept {

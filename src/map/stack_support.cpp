@@ -134,14 +134,16 @@ float layer_threshold(const StackParams& params, int layer, float width) noexcep
   return h * h * 0.0625F;
 }
 
-CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& params, float threshold) noexcept {
+namespace {
+template <typename Cell>
+CellClass classify(const Cell& cell, const CcmSurface& surface, float width, const StackParams& params,
+                   float threshold) noexcept {
   if (!(cell.weight >= params.min_weight) || !(cell.weight > 0.0F)) {
     return CellClass::kUnknown;
   }
   // Obstacle evidence before coverage: an obstacle's own shadow leaves its border cells partly
   // covered, and eq. (12) would call them unknown although the points that were seen already
   // spread beyond the threshold around their plane (docs/design.md, "Queries and classes").
-  const CcmSurface surface = ccm_surface(cell);
   if (surface.normal_variance > threshold) {
     return CellClass::kObstacle;
   }
@@ -152,6 +154,22 @@ CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& para
     return CellClass::kSteep;
   }
   return CellClass::kTraversable;
+}
+}  // namespace
+
+CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& params, float threshold) noexcept {
+  return classify(cell, ccm_surface(cell), width, params, threshold);
+}
+CellClass classify_ccm(const CcmPaperCell& cell, float width, const StackParams& params, float threshold) noexcept {
+  return classify(cell, ccm_surface(cell), width, params, threshold);
+}
+CellClass classify_ccm(const CcmCell& cell, const CcmSurface& surface, float width, const StackParams& params,
+                       float threshold) noexcept {
+  return classify(cell, surface, width, params, threshold);
+}
+CellClass classify_ccm(const CcmPaperCell& cell, const CcmSurface& surface, float width, const StackParams& params,
+                       float threshold) noexcept {
+  return classify(cell, surface, width, params, threshold);
 }
 
 }  // namespace ccmap

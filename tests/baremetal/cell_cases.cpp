@@ -1,7 +1,8 @@
 // Cell math on the target against double-precision references computed on the host
 // (cell_reference.inc, written by make_cell_reference.cpp from the same inputs): the CCM update
-// (eqs. 1-5), its queries (eqs. 8-11), pooling (eqs. 13-15), the weight limiter (eqs. 6-7), and
-// the Kalman and OMG cells. Also analytic values: a noise-free 20 deg plane.
+// of the full cell (eqs. 1-5 and s_xy), its queries (the least-squares plane, eq. 10), pooling
+// (eqs. 13-15), the weight limiter (eqs. 6-7), and the Kalman and OMG cells. Also analytic
+// values: a noise-free 20 deg plane.
 //
 // Tolerances are bounds on float rounding, not on the statistics. Each quantity gets a
 // relative share of its own scale (1e-6 for means and weights, 1e-5 for second moments, 1e-4
@@ -61,12 +62,13 @@ void compare(const ccmap::CcmCell& cell, const CcmReference& ref, float z_scale)
   const float cov_bound = 1e-5F * lateral_var + z_rounding * length;
   BM_CHECK_NEAR(ccmap::ccm_variance(cell.s_xz, w), value(ref.cov_xz), cov_bound, "cov_xz (eq. 5) off");
   BM_CHECK_NEAR(ccmap::ccm_variance(cell.s_yz, w), value(ref.cov_yz), cov_bound, "cov_yz (eq. 5) off");
+  BM_CHECK_NEAR(ccmap::ccm_variance(cell.s_xy, w), value(ref.cov_xy), 1e-5F * lateral_var, "cov_xy off");
   const ccmap::CcmSurface surface = ccmap::ccm_surface(cell);
-  BM_CHECK_NEAR(surface.slope_x, value(ref.slope_x), 1e-4F, "slope_x (eq. 9) off");
-  BM_CHECK_NEAR(surface.slope_y, value(ref.slope_y), 1e-4F, "slope_y (eq. 9) off");
+  BM_CHECK_NEAR(surface.slope_x, value(ref.slope_x), 1e-4F, "slope_x off the least-squares plane");
+  BM_CHECK_NEAR(surface.slope_y, value(ref.slope_y), 1e-4F, "slope_y off the least-squares plane");
   // sigma_s^2 is a difference of near-equal terms: absolute bound against var_zz.
   BM_CHECK_NEAR(surface.normal_variance, value(ref.normal_variance), 1e-4F * var_zz_ref + z_rounding * z_spread,
-                "normal_variance (eq. 11) off");
+                "normal_variance off the plane's residual");
   BM_CHECK_NEAR(ccmap::ccm_inclination(surface), value(ref.inclination), 1e-4F, "inclination off");
   BM_CHECK_NEAR(ccmap::ccm_height_at(cell, surface, kQueryX, kQueryY), value(ref.height_at_query),
                 1e-6F * z_scale + 1e-6F, "sub-cell height (eq. 10) off");

@@ -94,8 +94,10 @@ inline constexpr std::uint32_t kLimiterSettle = 1000U;
 inline constexpr std::uint32_t kLimiterSteps = 50U;
 
 /// Double-precision references rounded to float, as IEEE-754 bits (cell_reference.inc).
+/// References of the full CCM cell (CcmCell): moments, and the least-squares plane's slopes,
+/// residual, inclination and height.
 struct CcmReference {
-  std::uint32_t weight, mean_x, mean_y, mean_z, var_xx, var_yy, var_zz, cov_xz, cov_yz;
+  std::uint32_t weight, mean_x, mean_y, mean_z, var_xx, var_yy, var_zz, cov_xz, cov_yz, cov_xy;
   std::uint32_t slope_x, slope_y, normal_variance, inclination, height_at_query;
 };
 struct LimiterReference {

@@ -1,7 +1,9 @@
 // Writes cell_reference.inc: the double-precision references of the cell-math cases
 // (cell_cases.cpp), computed on the host from the inputs of cell_inputs.hpp with batch
 // formulas that share nothing with the library (tests/support/reference.hpp: two-pass weighted
-// moments; the information form of the Kalman fusion; the closed form of the weight limiter).
+// moments; the weighted least-squares plane from its 3 x 3 normal equations, which the full CCM
+// cell's slopes and residual must equal; the information form of the Kalman fusion; the closed
+// form of the weight limiter).
 //
 //   ccmap_make_cell_reference > tests/baremetal/cell_reference.inc
 //
@@ -10,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -39,7 +42,12 @@ void ccm_case(int c) {
     points.push_back(Point{p.x, p.y, p.z, p.w});
   }
   const ccmap::test::RefMoments m = ccmap::test::reference_moments(points);
-  const double a = m.slope_x(), b = m.slope_y();
+  ccmap::test::RefPlane plane;
+  if (!ccmap::test::reference_plane(points, &plane)) {
+    std::fprintf(stderr, "case %d: singular least-squares plane\n", c);
+    std::exit(1);
+  }
+  const double a = plane.a, b = plane.b;
   std::printf("    {  // case %d, %zu points\n", c, points.size());
   emit("weight", m.weight);
   emit("mean_x", m.mean_x);
@@ -50,11 +58,12 @@ void ccm_case(int c) {
   emit("var_zz", m.var_zz);
   emit("cov_xz", m.cov_xz);
   emit("cov_yz", m.cov_yz);
-  emit("slope_x (eq. 9)", a);
-  emit("slope_y (eq. 9)", b);
-  emit("normal_variance (eq. 11)", m.normal_variance());
+  emit("cov_xy", m.cov_xy);
+  emit("slope_x (least squares)", a);
+  emit("slope_y (least squares)", b);
+  emit("normal_variance (plane residual)", plane.residual_variance);
   emit("inclination", std::sqrt(a * a + b * b));
-  emit("height_at_query (eq. 10)", m.mean_z + a * (kQueryX - m.mean_x) + b * (kQueryY - m.mean_y), true);
+  emit("height_at_query (eq. 10)", plane.c + a * kQueryX + b * kQueryY, true);
   std::printf("    },\n");
 }
 

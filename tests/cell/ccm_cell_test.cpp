@@ -1,5 +1,7 @@
 // CCM cell: incremental update, limiter, batch merge, queries and degenerate input, each
-// checked against a double-precision batch reference computed here from the same points.
+// checked against a double-precision batch reference computed here from the same points, for
+// both cell kinds (CcmCell, CcmPaperCell) where the rule is the same. The lateral covariance and
+// the least-squares solve of the full cell: tests/cell/ccm_lateral_test.cpp.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,6 +10,7 @@
 #include <vector>
 
 #include "ccmap/cell/ccm_cell.hpp"
+#include "support/ccm_kinds.hpp"
 #include "support/reference.hpp"
 
 namespace ccmap {
@@ -19,8 +22,13 @@ using test::Rng;
 
 constexpr float kNoLimit = kNoWeightLimit;
 
-CcmCell fold_sequential(const std::vector<Point>& pts, float weight_limit = kNoLimit) {
-  CcmCell cell{};
+template <typename Cell>
+class CcmCellBothKinds : public ::testing::Test {};
+TYPED_TEST_SUITE(CcmCellBothKinds, test::CcmCellKinds, test::CcmKindNames);
+
+template <typename Cell = CcmCell>
+Cell fold_sequential(const std::vector<Point>& pts, float weight_limit = kNoLimit) {
+  Cell cell{};
   for (const Point& p : pts) {
     const Status s = ccm_update(cell, static_cast<float>(p.x), static_cast<float>(p.y),
                                 static_cast<float>(p.z), static_cast<float>(p.w), weight_limit);
@@ -29,7 +37,8 @@ CcmCell fold_sequential(const std::vector<Point>& pts, float weight_limit = kNoL
   return cell;
 }
 
-void expect_matches_reference(const CcmCell& cell, const RefMoments& ref, double tol_mean,
+template <typename Cell>
+void expect_matches_reference(const Cell& cell, const RefMoments& ref, double tol_mean,
                               double tol_var, const char* what) {
   SCOPED_TRACE(what);
   EXPECT_NEAR(cell.weight, ref.weight, 1e-5 * ref.weight) << "weight";
@@ -42,6 +51,9 @@ void expect_matches_reference(const CcmCell& cell, const RefMoments& ref, double
   EXPECT_NEAR(cell.s_zz / w, ref.var_zz, tol_var) << "sigma_zz^2";
   EXPECT_NEAR(cell.s_xz / w, ref.cov_xz, tol_var) << "sigma_xz^2";
   EXPECT_NEAR(cell.s_yz / w, ref.cov_yz, tol_var) << "sigma_yz^2";
+  if constexpr (kHasLateralCovariance<Cell>) {
+    EXPECT_NEAR(cell.s_xy / w, ref.cov_xy, tol_var) << "sigma_xy^2";
+  }
 }
 
 std::vector<Point> uniform_cloud(Rng& rng, int n, double width, double z0, double a, double b,
@@ -63,19 +75,19 @@ std::vector<Point> uniform_cloud(Rng& rng, int n, double width, double z0, doubl
 // Update against the double batch reference
 // ---------------------------------------------------------------------------------------------
 
-TEST(CcmCell, RandomCloudMatchesDoubleBatchReference) {
+TYPED_TEST(CcmCellBothKinds, RandomCloudMatchesDoubleBatchReference) {
   Rng rng(1);
   for (int trial = 0; trial < 20; ++trial) {
     const auto pts = uniform_cloud(rng, 2000, 0.32, rng.uniform(-3, 3), rng.uniform(-1, 1),
                                    rng.uniform(-1, 1), rng.uniform(0.001, 0.05), trial % 2 == 1);
     const RefMoments ref = test::reference_moments(pts);
-    const CcmCell cell = fold_sequential(pts);
+    const TypeParam cell = fold_sequential<TypeParam>(pts);
     // Float: means to 1e-5 m, variances to 1e-6 m^2 (relative ~1e-4 of w^2/12 = 8.5e-3 m^2).
     expect_matches_reference(cell, ref, 1e-5, 1e-6, "random cloud");
   }
 }
 
-TEST(CcmCell, InclinedPlaneGivesKnownSlopeAndZeroNormalVariance) {
+TYPED_TEST(CcmCellBothKinds, InclinedPlaneGivesKnownSlopeAndZeroNormalVariance) {
   // A regular 20 x 20 grid of samples over a 32 cm cell: x and y are uncorrelated, so the
   // paper's per-axis slopes equal the least-squares plane exactly.
   const double width = 0.32;
@@ -94,7 +106,7 @@ TEST(CcmCell, InclinedPlaneGivesKnownSlopeAndZeroNormalVariance) {
     }
     test::RefPlane plane;
     ASSERT_TRUE(test::reference_plane(pts, &plane));
-    const CcmCell cell = fold_sequential(pts);
+    const TypeParam cell = fold_sequential<TypeParam>(pts);
     const CcmSurface s = ccm_surface(cell);
     EXPECT_NEAR(s.slope_x, plane.a, 2e-4) << "slope_x off on a " << deg_x << " deg plane";
     EXPECT_NEAR(s.slope_y, plane.b, 2e-4) << "slope_y off on a " << deg_x << " deg plane";
@@ -111,25 +123,37 @@ TEST(CcmCell, InclinedPlaneGivesKnownSlopeAndZeroNormalVariance) {
   }
 }
 
-TEST(CcmCell, NoisyPlaneSlopeAndResidualMatchLeastSquares) {
+TEST(CcmPaperCell, NoisyPlaneSlopesFollowEq9AndMissTheLeastSquaresPlaneByTheSampleCorrelation) {
   Rng rng(7);
   const auto pts = uniform_cloud(rng, 5000, 0.16, 0.4, 0.3, -0.2, 0.01);
   const RefMoments ref = test::reference_moments(pts);
   test::RefPlane plane;
   ASSERT_TRUE(test::reference_plane(pts, &plane));
-  const CcmSurface s = ccm_surface(fold_sequential(pts));
+  const CcmSurface s = ccm_surface(fold_sequential<CcmPaperCell>(pts));
   // Per-axis slopes (eq. 9) equal the double evaluation of eq. 9 to float precision ...
   EXPECT_NEAR(s.slope_x, ref.slope_x(), 1e-3);
   EXPECT_NEAR(s.slope_y, ref.slope_y(), 1e-3);
   EXPECT_NEAR(s.normal_variance, ref.normal_variance(), 2e-6);
-  // ... and the least-squares plane within the small xy correlation of a random cloud.
+  // ... and the least-squares plane only within the small xy correlation of a random cloud.
   EXPECT_NEAR(s.slope_x, plane.a, 0.02);
   EXPECT_NEAR(s.slope_y, plane.b, 0.02);
   EXPECT_NEAR(s.normal_variance, plane.residual_variance, 1e-5);
   EXPECT_NEAR(s.normal_variance, 1e-4, 1.5e-5) << "residual should be the 1 cm noise squared";
 }
 
-TEST(CcmCell, StepNormalVarianceFollowsReferenceAndAnalyticCurve) {
+TEST(CcmFullCell, NoisyPlaneSlopesAndResidualAreTheLeastSquaresPlane) {
+  Rng rng(7);
+  const auto pts = uniform_cloud(rng, 5000, 0.16, 0.4, 0.3, -0.2, 0.01);
+  test::RefPlane plane;
+  ASSERT_TRUE(test::reference_plane(pts, &plane));
+  const CcmSurface s = ccm_surface(fold_sequential<CcmCell>(pts));
+  EXPECT_NEAR(s.slope_x, plane.a, 2e-4) << "slope_x off the least-squares plane";
+  EXPECT_NEAR(s.slope_y, plane.b, 2e-4) << "slope_y off the least-squares plane";
+  EXPECT_NEAR(s.normal_variance, plane.residual_variance, 2e-7) << "normal variance is not the plane's residual";
+  EXPECT_NEAR(s.normal_variance, 1e-4, 1.5e-5) << "residual should be the 1 cm noise squared";
+}
+
+TYPED_TEST(CcmCellBothKinds, StepNormalVarianceFollowsReferenceAndAnalyticCurve) {
   // A 24 cm step covering a share c of a 32 cm cell (the Fig. 4 setting). Analytic residual of
   // the per-axis plane fit for a step of height h: h^2 u (1 - 3u) with u = c (1 - c); it peaks
   // at c ~ 21% and 79% and has a local minimum at 50% (docs/design.md, "Thresholds").
@@ -145,7 +169,7 @@ TEST(CcmCell, StepNormalVarianceFollowsReferenceAndAnalyticCurve) {
       pts.push_back(p);
     }
     const RefMoments ref = test::reference_moments(pts);
-    const CcmSurface s = ccm_surface(fold_sequential(pts));
+    const CcmSurface s = ccm_surface(fold_sequential<TypeParam>(pts));
     EXPECT_NEAR(s.normal_variance, ref.normal_variance(), 1e-5)
         << "normal variance off the double reference at coverage " << coverage;
     const double u = coverage * (1.0 - coverage);
@@ -213,9 +237,9 @@ TEST(CcmCell, StableCovarianceEqualsEq5InDoubleAndBeatsItInFloat) {
 // Weight limiter, eqs. (6)-(7)
 // ---------------------------------------------------------------------------------------------
 
-TEST(CcmCell, LimiterHoldsRelativeWeightOfNewPoints) {
+TYPED_TEST(CcmCellBothKinds, LimiterHoldsRelativeWeightOfNewPoints) {
   const float limit = 50.0F;
-  CcmCell cell{};
+  TypeParam cell{};
   Rng rng(5);
   for (int i = 0; i < 500; ++i) {
     ASSERT_EQ(ccm_update(cell, static_cast<float>(rng.uniform(-0.1, 0.1)),
@@ -234,20 +258,24 @@ TEST(CcmCell, LimiterHoldsRelativeWeightOfNewPoints) {
   }
 }
 
-TEST(CcmCell, LimiterKeepsVariancesUnchanged) {
-  CcmCell cell{};
+TYPED_TEST(CcmCellBothKinds, LimiterKeepsVariancesUnchanged) {
+  TypeParam cell{};
   Rng rng(9);
   const auto pts = uniform_cloud(rng, 100, 0.2, 0.0, 0.2, 0.1, 0.01);
   for (const Point& p : pts) {
     ASSERT_EQ(ccm_update(cell, static_cast<float>(p.x), static_cast<float>(p.y),
                          static_cast<float>(p.z), 1.0F, kNoLimit), Status::kOk);
   }
-  const CcmCell before = cell;
+  const TypeParam before = cell;
   ccm_apply_weight_limit(cell, 10.0F);
   EXPECT_FLOAT_EQ(cell.weight, 10.0F);
   EXPECT_NEAR(cell.s_xx / cell.weight, before.s_xx / before.weight, 1e-7);
   EXPECT_NEAR(cell.s_zz / cell.weight, before.s_zz / before.weight, 1e-9);
   EXPECT_NEAR(cell.s_xz / cell.weight, before.s_xz / before.weight, 1e-8);
+  if constexpr (kHasLateralCovariance<TypeParam>) {
+    EXPECT_NE(before.s_xy, 0.0F) << "test premise: a sample correlation to scale";
+    EXPECT_NEAR(cell.s_xy / cell.weight, before.s_xy / before.weight, 1e-9) << "the limiter must scale s_xy too";
+  }
   EXPECT_EQ(cell.mean_z, before.mean_z);
 }
 
@@ -285,13 +313,13 @@ TEST(CcmCell, HundredMillionUpdatesStayFiniteAndBounded) {
 // Batch merge
 // ---------------------------------------------------------------------------------------------
 
-TEST(CcmCell, BatchUpdateEqualsSequential) {
+TYPED_TEST(CcmCellBothKinds, BatchUpdateEqualsSequential) {
   Rng rng(21);
   for (int trial = 0; trial < 10; ++trial) {
     const auto first = uniform_cloud(rng, 300, 0.64, 1.0, 0.1, 0.2, 0.02, true);
     const auto second = uniform_cloud(rng, 700, 0.64, 1.1, 0.1, 0.2, 0.05, true);
-    CcmCell sequential = fold_sequential(first);
-    CcmCell batched = sequential;
+    TypeParam sequential = fold_sequential<TypeParam>(first);
+    TypeParam batched = sequential;
     for (const Point& p : second) {
       ASSERT_EQ(ccm_update(sequential, static_cast<float>(p.x), static_cast<float>(p.y),
                            static_cast<float>(p.z), static_cast<float>(p.w), kNoLimit),
@@ -315,26 +343,26 @@ TEST(CcmCell, BatchUpdateEqualsSequential) {
   }
 }
 
-TEST(CcmCell, MergeOfTwoCellsEqualsCellOfUnion) {
+TYPED_TEST(CcmCellBothKinds, MergeOfTwoCellsEqualsCellOfUnion) {
   Rng rng(33);
   const auto a = uniform_cloud(rng, 400, 0.3, -2.0, 0.4, 0.0, 0.01, true);
   const auto b = uniform_cloud(rng, 100, 0.3, -1.8, 0.0, 0.4, 0.03, true);
-  CcmCell cell_a = fold_sequential(a);
-  const CcmCell cell_b = fold_sequential(b);
+  TypeParam cell_a = fold_sequential<TypeParam>(a);
+  const TypeParam cell_b = fold_sequential<TypeParam>(b);
   ASSERT_EQ(ccm_merge(cell_a, cell_b, kNoLimit), Status::kOk);
   std::vector<Point> all = a;
   all.insert(all.end(), b.begin(), b.end());
   expect_matches_reference(cell_a, test::reference_moments(all), 1e-5, 2e-6, "merged");
 }
 
-TEST(CcmCell, BatchSkipsAndCountsInvalidPoints) {
+TYPED_TEST(CcmCellBothKinds, BatchSkipsAndCountsInvalidPoints) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
   const float x[] = {0.0F, nan, 0.01F, 0.02F, 2.0e5F, -0.01F};
   const float y[] = {0.0F, 0.0F, inf, 0.01F, 0.0F, 0.01F};
   const float z[] = {1.0F, 1.0F, 1.0F, 1.2F, 1.0F, 1.1F};
   const float w[] = {1.0F, 1.0F, 1.0F, -1.0F, 1.0F, 2.0F};
-  CcmCell cell{};
+  TypeParam cell{};
   const CcmBatchCounts counts = ccm_update_batch(cell, x, y, z, w, 1.0F, 6U, kNoLimit);
   EXPECT_EQ(counts.accepted, 2U);
   EXPECT_EQ(counts.rejected_non_finite, 2U);
@@ -348,11 +376,11 @@ TEST(CcmCell, BatchSkipsAndCountsInvalidPoints) {
 // Coverage, eq. (12)
 // ---------------------------------------------------------------------------------------------
 
-TEST(CcmCell, CoverageSeparatesFullAndPartialCells) {
+TYPED_TEST(CcmCellBothKinds, CoverageSeparatesFullAndPartialCells) {
   Rng rng(4);
   const float width = 0.32F;
-  CcmCell full{};
-  CcmCell half{};
+  TypeParam full{};
+  TypeParam half{};
   for (int i = 0; i < 3000; ++i) {
     const float x = static_cast<float>(rng.uniform(-0.16, 0.16));
     const float y = static_cast<float>(rng.uniform(-0.16, 0.16));
@@ -363,15 +391,18 @@ TEST(CcmCell, CoverageSeparatesFullAndPartialCells) {
   EXPECT_TRUE(ccm_is_covered(full, width, 0.8F, 3.0F));
   EXPECT_FALSE(ccm_is_covered(half, width, 0.8F, 3.0F)) << "a half-shadowed cell must be unknown";
   EXPECT_FALSE(ccm_is_covered(full, width, 0.8F, 5000.0F)) << "minimum weight not enforced";
-  EXPECT_FALSE(ccm_is_covered(CcmCell{}, width, 0.8F, 0.0F)) << "an empty cell is never covered";
+  EXPECT_FALSE(ccm_is_covered(TypeParam{}, width, 0.8F, 0.0F)) << "an empty cell is never covered";
 }
 
 // ---------------------------------------------------------------------------------------------
 // Degenerate and hostile input
 // ---------------------------------------------------------------------------------------------
 
-void expect_all_finite(const CcmCell& c) {
-  const float v[] = {c.weight, c.mean_x, c.mean_y, c.mean_z, c.s_xx, c.s_yy, c.s_zz, c.s_xz, c.s_yz};
+template <typename Cell>
+void expect_all_finite(const Cell& c) {
+  static_assert(sizeof(Cell) % sizeof(float) == 0U, "CCM cells are packed floats");
+  float v[sizeof(Cell) / sizeof(float)];
+  std::memcpy(v, &c, sizeof v);
   for (const float f : v) EXPECT_TRUE(std::isfinite(f));
   const CcmSurface s = ccm_surface(c);
   EXPECT_TRUE(std::isfinite(s.slope_x));
@@ -382,10 +413,10 @@ void expect_all_finite(const CcmCell& c) {
   EXPECT_TRUE(std::isfinite(ccm_elevation_variance(c, s, 0.1F, -0.1F)));
 }
 
-TEST(CcmCellDegenerate, SinglePointHasNoSlopeNoVarianceAndIsNotCovered) {
-  CcmCell cell{};
+TYPED_TEST(CcmCellBothKinds, SinglePointHasNoSlopeNoVarianceAndIsNotCovered) {
+  TypeParam cell{};
   ASSERT_EQ(ccm_update(cell, 0.01F, -0.02F, 3.0F, 1.0F, kNoLimit), Status::kOk);
-  expect_all_finite(cell);
+  expect_all_finite<TypeParam>(cell);
   const CcmSurface s = ccm_surface(cell);
   EXPECT_EQ(s.slope_x, 0.0F);
   EXPECT_EQ(s.slope_y, 0.0F);
@@ -394,16 +425,16 @@ TEST(CcmCellDegenerate, SinglePointHasNoSlopeNoVarianceAndIsNotCovered) {
   EXPECT_FALSE(ccm_is_covered(cell, 0.1F, 0.8F, 1.0F));
 }
 
-TEST(CcmCellDegenerate, PointsOnALineGiveZeroSlopeAlongTheDegenerateAxis) {
-  CcmCell on_x_line{};  // all at x = 0.02: sigma_xx = 0
-  CcmCell on_y_line{};  // all at y = -0.03: sigma_yy = 0
+TYPED_TEST(CcmCellBothKinds, PointsOnALineGiveZeroSlopeAlongTheDegenerateAxis) {
+  TypeParam on_x_line{};  // all at x = 0.02: sigma_xx = 0
+  TypeParam on_y_line{};  // all at y = -0.03: sigma_yy = 0
   for (int i = 0; i < 50; ++i) {
     const float t = -0.05F + 0.002F * static_cast<float>(i);
     ASSERT_EQ(ccm_update(on_x_line, 0.02F, t, 1.0F + 0.3F * t, 1.0F, kNoLimit), Status::kOk);
     ASSERT_EQ(ccm_update(on_y_line, t, -0.03F, 1.0F - 0.2F * t, 1.0F, kNoLimit), Status::kOk);
   }
-  expect_all_finite(on_x_line);
-  expect_all_finite(on_y_line);
+  expect_all_finite<TypeParam>(on_x_line);
+  expect_all_finite<TypeParam>(on_y_line);
   EXPECT_EQ(ccm_surface(on_x_line).slope_x, 0.0F);
   EXPECT_NEAR(ccm_surface(on_x_line).slope_y, 0.3F, 1e-4);
   EXPECT_EQ(ccm_surface(on_y_line).slope_y, 0.0F);
@@ -412,15 +443,15 @@ TEST(CcmCellDegenerate, PointsOnALineGiveZeroSlopeAlongTheDegenerateAxis) {
   EXPECT_FALSE(ccm_is_covered(on_y_line, 0.1F, 0.8F, 1.0F));
 }
 
-TEST(CcmCellDegenerate, RejectedInputLeavesCellBitwiseUnchanged) {
+TYPED_TEST(CcmCellBothKinds, RejectedInputLeavesCellBitwiseUnchanged) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
   const float denorm = std::numeric_limits<float>::denorm_min();
-  CcmCell cell{};
+  TypeParam cell{};
   for (int i = 0; i < 10; ++i) {
     ASSERT_EQ(ccm_update(cell, 0.01F * static_cast<float>(i), 0.0F, 1.0F, 1.0F, 100.0F), Status::kOk);
   }
-  const CcmCell before = cell;
+  const TypeParam before = cell;
   struct Case {
     float x, y, z, w, limit;
     Status expected;
@@ -440,7 +471,7 @@ TEST(CcmCellDegenerate, RejectedInputLeavesCellBitwiseUnchanged) {
         << "input (" << c.x << "," << c.y << "," << c.z << ") w=" << c.w << " limit=" << c.limit;
     EXPECT_EQ(std::memcmp(&cell, &before, sizeof cell), 0) << "refused input changed the cell";
   }
-  CcmCell bad_other{};
+  TypeParam bad_other{};
   bad_other.weight = -1.0F;
   EXPECT_EQ(ccm_merge(cell, bad_other, 100.0F), Status::kBadWeight);
   bad_other.weight = nan;
@@ -449,40 +480,40 @@ TEST(CcmCellDegenerate, RejectedInputLeavesCellBitwiseUnchanged) {
   EXPECT_EQ(std::memcmp(&cell, &before, sizeof cell), 0);
 }
 
-TEST(CcmCellDegenerate, DenormalCoordinatesAndTinyWeightsStayFinite) {
+TYPED_TEST(CcmCellBothKinds, DenormalCoordinatesAndTinyWeightsStayFinite) {
   const float denorm = std::numeric_limits<float>::denorm_min();
-  CcmCell cell{};
+  TypeParam cell{};
   ASSERT_EQ(ccm_update(cell, denorm, -denorm, denorm, 1.0F, kNoLimit), Status::kOk);
   ASSERT_EQ(ccm_update(cell, 0.0F, 0.0F, 0.0F, 1e-30F, kNoLimit), Status::kOk);
   ASSERT_EQ(ccm_update(cell, 0.01F, 0.01F, 0.01F, kMaxMeasurementWeight, kNoLimit), Status::kOk);
-  expect_all_finite(cell);
+  expect_all_finite<TypeParam>(cell);
 }
 
-TEST(CcmCellDegenerate, SubnormalWeightLimitIsRefusedAndTinyWeightsStayFinite) {
+TYPED_TEST(CcmCellBothKinds, SubnormalWeightLimitIsRefusedAndTinyWeightsStayFinite) {
   // Found by the stack fuzzer: W limited to 5.5e-41 made S / W overflow (normal variance Inf)
   // and leverage / W overflow (elevation variance 0 * Inf = NaN). Such limits are refused; tiny
   // measurement weights stay legal and the queries stay finite.
-  CcmCell cell{};
-  const CcmCell before = cell;
+  TypeParam cell{};
+  const TypeParam before = cell;
   EXPECT_EQ(ccm_update(cell, 0.0F, 0.0F, 0.5F, 1.0F, 5.52447907e-41F), Status::kInvalidArgument);
   EXPECT_EQ(ccm_update(cell, 0.0F, 0.0F, 0.5F, 1.0F, 0.5F * kMinWeightLimit), Status::kInvalidArgument);
   EXPECT_EQ(std::memcmp(&cell, &before, sizeof cell), 0);
-  CcmCell flat{};
-  CcmCell rough{};
+  TypeParam flat{};
+  TypeParam rough{};
   for (int i = 0; i < 10; ++i) {
     const float x = 0.001F * static_cast<float>(i);
     ASSERT_EQ(ccm_update(flat, x, -x, 0.5F, 1e-40F, kMinWeightLimit), Status::kOk);
     ASSERT_EQ(ccm_update(rough, x, -x, 0.5F + 0.01F * static_cast<float>(i % 2), 1e-40F, kNoLimit), Status::kOk);
   }
-  expect_all_finite(flat);
-  expect_all_finite(rough);
+  expect_all_finite<TypeParam>(flat);
+  expect_all_finite<TypeParam>(rough);
   // The elevation variance saturates rather than overflowing when W is tiny.
   EXPECT_LE(ccm_elevation_variance(rough, ccm_surface(rough), 0.01F, 0.01F), std::numeric_limits<float>::max());
 }
 
-TEST(CcmCellDegenerate, EmptyCellQueriesAreZeroAndFinite) {
-  const CcmCell empty{};
-  expect_all_finite(empty);
+TYPED_TEST(CcmCellBothKinds, EmptyCellQueriesAreZeroAndFinite) {
+  const TypeParam empty{};
+  expect_all_finite<TypeParam>(empty);
   EXPECT_EQ(ccm_variance(empty.s_zz, empty.weight), 0.0F);
 }
 

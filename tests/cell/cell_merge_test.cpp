@@ -10,6 +10,7 @@
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
+#include "support/ccm_kinds.hpp"
 #include "support/reference.hpp"
 
 namespace ccmap {
@@ -151,7 +152,7 @@ std::vector<Point> cell_points(Rng& rng, int n) {
 
 /// Weighted mean and co-moments of points [begin, end) in double, two passes.
 struct Moments {
-  double w = 0, mx = 0, my = 0, mz = 0, sxx = 0, syy = 0, szz = 0, sxz = 0, syz = 0;
+  double w = 0, mx = 0, my = 0, mz = 0, sxx = 0, syy = 0, szz = 0, sxz = 0, syz = 0, sxy = 0;
 };
 Moments moments(const std::vector<Point>& p, std::size_t begin, std::size_t end) {
   Moments m;
@@ -171,28 +172,36 @@ Moments moments(const std::vector<Point>& p, std::size_t begin, std::size_t end)
     m.szz += p[i].w * dz * dz;
     m.sxz += p[i].w * dx * dz;
     m.syz += p[i].w * dy * dz;
+    m.sxy += p[i].w * dx * dy;
   }
   return m;
 }
 
-CcmCell ccm_of(const std::vector<Point>& p, std::size_t begin, std::size_t end) {
-  CcmCell c{};
+template <typename Cell>
+Cell ccm_of(const std::vector<Point>& p, std::size_t begin, std::size_t end) {
+  Cell c{};
   for (std::size_t i = begin; i < end; ++i) {
     EXPECT_EQ(ccm_update(c, p[i].x, p[i].y, p[i].z, p[i].w, kNoWeightLimit), Status::kOk);
   }
   return c;
 }
 
-TEST(CcmUnmerge, TakingAPartOutLeavesTheMomentsOfTheRest) {
+/// Both CCM cells (the full cell's s_xy checked too).
+template <typename Cell>
+class CcmUnmerge : public ::testing::Test {};
+TYPED_TEST_SUITE(CcmUnmerge, test::CcmCellKinds, test::CcmKindNames);
+
+TYPED_TEST(CcmUnmerge, TakingAPartOutLeavesTheMomentsOfTheRest) {
+  using Cell = TypeParam;
   Rng rng(13);
   double worst_mean = 0.0, worst_moment = 0.0;
   for (int trial = 0; trial < 200; ++trial) {
     const int n = 4 + static_cast<int>(rng.uniform(0.0, 400.0));
     const auto pts = cell_points(rng, n);
     const auto split = static_cast<std::size_t>(rng.uniform(1.0, 0.8 * n));
-    const CcmCell total = ccm_of(pts, 0, pts.size());
-    const CcmCell part = ccm_of(pts, 0, split);
-    CcmCell rest{};
+    const Cell total = ccm_of<Cell>(pts, 0, pts.size());
+    const Cell part = ccm_of<Cell>(pts, 0, split);
+    Cell rest{};
     ASSERT_EQ(ccm_unmerge(total, part, &rest), Status::kOk);
     const Moments m = moments(pts, split, pts.size());
     EXPECT_NEAR(rest.weight, m.w, 1e-5 * m.w);
@@ -204,28 +213,37 @@ TEST(CcmUnmerge, TakingAPartOutLeavesTheMomentsOfTheRest) {
                              std::fabs(rest.s_yy - m.syy) / m.w / lateral, std::fabs(rest.s_zz - m.szz) / m.w / vertical,
                              std::fabs(rest.s_xz - m.sxz) / m.w / std::sqrt(lateral * vertical),
                              std::fabs(rest.s_yz - m.syz) / m.w / std::sqrt(lateral * vertical)});
+    if constexpr (kHasLateralCovariance<Cell>) {
+      worst_moment = std::max(worst_moment, std::fabs(rest.s_xy - m.sxy) / m.w / lateral);
+    }
   }
   EXPECT_LE(worst_mean, 1e-5) << "m (z around 2 m, rest >= 20 % of the weight; measured 4.3e-6)";
   EXPECT_LE(worst_moment, 5e-3) << "relative to the cell's spread (measured 9e-4)";
 }
 
-TEST(CcmUnmerge, MergeThenUnmergeGivesThePartBackAndRefusalsLeaveTheOutputAlone) {
+TYPED_TEST(CcmUnmerge, MergeThenUnmergeGivesThePartBackAndRefusalsLeaveTheOutputAlone) {
+  using Cell = TypeParam;
   Rng rng(14);
   const auto pts = cell_points(rng, 50);
-  const CcmCell a = ccm_of(pts, 0, 20);
-  const CcmCell b = ccm_of(pts, 20, 50);
-  CcmCell total = a;
+  const Cell a = ccm_of<Cell>(pts, 0, 20);
+  const Cell b = ccm_of<Cell>(pts, 20, 50);
+  Cell total = a;
   ASSERT_EQ(ccm_merge(total, b, kNoWeightLimit), Status::kOk);
-  CcmCell back{};
+  Cell back{};
   ASSERT_EQ(ccm_unmerge(total, a, &back), Status::kOk);
   EXPECT_NEAR(back.weight, b.weight, 1e-5F);
   EXPECT_NEAR(back.mean_z, b.mean_z, 1e-6F);
   EXPECT_NEAR(back.s_zz, b.s_zz, 1e-4F * b.s_zz + 1e-9F);
-  CcmCell untouched{1.0F, 2.0F, 3.0F, 4.0F, 5.0F, 6.0F, 7.0F, 8.0F, 9.0F};
-  const CcmCell copy = untouched;
+  if constexpr (kHasLateralCovariance<Cell>) {
+    EXPECT_NEAR(back.s_xy, b.s_xy, 1e-4F * b.s_xx + 1e-9F);
+  }
+  const float fields[10] = {1.0F, 2.0F, 3.0F, 4.0F, 5.0F, 6.0F, 7.0F, 8.0F, 9.0F, 10.0F};
+  Cell untouched{};
+  std::memcpy(&untouched, fields, sizeof(Cell));  // packed floats (static_asserts in ccm_cell.hpp)
+  const Cell copy = untouched;
   EXPECT_EQ(ccm_unmerge(a, a, &untouched), Status::kBadWeight) << "nothing left";
   EXPECT_EQ(ccm_unmerge(a, total, &untouched), Status::kBadWeight) << "the part outweighs the total";
-  CcmCell nan_weight = a;
+  Cell nan_weight = a;
   nan_weight.weight = NAN;
   EXPECT_EQ(ccm_unmerge(total, nan_weight, &untouched), Status::kBadWeight);
   EXPECT_EQ(std::memcmp(&untouched, &copy, sizeof copy), 0);

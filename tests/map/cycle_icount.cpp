@@ -7,9 +7,11 @@
 //   region 3: the update_frame calls of the same points in the map frame (the 1.25x ratio)
 // On other targets the markers are empty and the program only checks the cycles.
 //
-//   ccmap_cycle_icount [cycles]     default 3 (full 850 x 650 frames)
+//   ccmap_cycle_icount [cycles [full|paper]]   default 3 (full 850 x 650 frames), full CCM cells;
+//   `paper` counts the same cycles with Stack<PaperCell<CadreConfig>> (the paper's 9-float cell)
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
@@ -26,18 +28,12 @@ auto counted(Fn&& fn) {
   return result;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  const int cycles = argc > 1 ? std::atoi(argv[1]) : 3;
-  if (cycles < 1 || cycles > 100) {
-    std::fprintf(stderr, "usage: ccmap_cycle_icount [cycles 1..100]\n");
-    return 2;
-  }
+template <typename Config>
+int run(int cycles) {
   // Heap, as the timing test: a count is of a binary, and the stack's placement changes code.
-  const auto stack = std::make_unique<ccmap::Stack<ccmap::CadreConfig>>();
-  const auto sensor_only = std::make_unique<ccmap::Stack<ccmap::CadreConfig>>();
-  const auto map_only = std::make_unique<ccmap::Stack<ccmap::CadreConfig>>();
+  const auto stack = std::make_unique<ccmap::Stack<Config>>();
+  const auto sensor_only = std::make_unique<ccmap::Stack<Config>>();
+  const auto map_only = std::make_unique<ccmap::Stack<Config>>();
   for (auto* s : {stack.get(), sensor_only.get(), map_only.get()}) {
     if (s->init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) {
       std::fprintf(stderr, "ccmap_cycle_icount: init failed\n");
@@ -68,7 +64,20 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  std::printf("ccmap_cycle_icount: %d cycles of %d x %d points\n", cycles, ccmap::test::kCycleWidthPx,
-              ccmap::test::kCycleHeightPx);
+  std::printf("ccmap_cycle_icount: %d cycles of %d x %d points, %s CCM cells\n", cycles, ccmap::test::kCycleWidthPx,
+              ccmap::test::kCycleHeightPx,
+              ccmap::Stack<Config>::kCcmCellKind == ccmap::CcmCellKind::kFull ? "full" : "paper");
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int cycles = argc > 1 ? std::atoi(argv[1]) : 3;
+  const bool paper = argc > 2 && std::strcmp(argv[2], "paper") == 0;
+  if (cycles < 1 || cycles > 100 || argc > 3 || (argc == 3 && !paper && std::strcmp(argv[2], "full") != 0)) {
+    std::fprintf(stderr, "usage: ccmap_cycle_icount [cycles 1..100 [full|paper]]\n");
+    return 2;
+  }
+  return paper ? run<ccmap::PaperCell<ccmap::CadreConfig>>(cycles) : run<ccmap::CadreConfig>(cycles);
 }

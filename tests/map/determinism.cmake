@@ -9,6 +9,10 @@ target_link_libraries(ccmap_determinism_dump PRIVATE ccmap::core ccmap_host_flag
 target_include_directories(ccmap_determinism_dump PRIVATE ${PROJECT_SOURCE_DIR}/tests)
 add_test(NAME ccmap_determinism_golden_hash
          COMMAND ccmap_determinism_dump --check ${PROJECT_SOURCE_DIR}/tests/golden/determinism.txt cadre_traverse)
+# The same traverse with the paper's 9-float CCM cell (Stack<PaperCell<CadreConfig>>).
+add_test(NAME ccmap_determinism_golden_hash_paper_cell
+         COMMAND ccmap_determinism_dump --check ${PROJECT_SOURCE_DIR}/tests/golden/determinism.txt
+                 cadre_traverse_paper_cell)
 add_test(NAME ccmap_board_scenario_golden_hash
          COMMAND ccmap_determinism_dump --check ${PROJECT_SOURCE_DIR}/tests/golden/determinism.txt board_scenario)
 # No libm transcendental on the update path: the dump program (generation + init + update +
@@ -17,6 +21,7 @@ add_test(NAME ccmap_update_path_has_no_transcendentals
          COMMAND ${CMAKE_COMMAND} -DNM=${CMAKE_NM}
                  "-DFILES=$<TARGET_FILE:ccmap_determinism_dump>;$<TARGET_FILE:ccmap_core>"
                  -P ${CMAKE_CURRENT_LIST_DIR}/check_no_transcendentals.cmake)
-set_tests_properties(ccmap_determinism_golden_hash ccmap_board_scenario_golden_hash
+set_tests_properties(ccmap_determinism_golden_hash ccmap_determinism_golden_hash_paper_cell
+                     ccmap_board_scenario_golden_hash
                      ccmap_update_path_has_no_transcendentals
                      PROPERTIES LABELS library TIMEOUT 300)

@@ -4,6 +4,8 @@
 // x86-64, on aarch64 and on the bare-metal Cortex-M7 (all built with -ffp-contract=off, see
 // cmake/CcmapFlags.cmake).
 //   cadre_traverse   400 frames of 600 points along a rounded path (this file), host and aarch64
+//   cadre_traverse_paper_cell  the same with the paper's 9-float CCM cell
+//                    (Stack<PaperCell<CadreConfig>>), host and aarch64
 //   board_scenario   24 frames of 10,000 points, sized for a 1 MiB controller
 //                    (board_scenario.hpp), host, aarch64 and the board
 //                    (tests/baremetal/scenario_cases.cpp)
@@ -44,6 +46,7 @@
 namespace {
 
 using S = ccmap::Stack<ccmap::CadreConfig>;
+using PaperS = ccmap::Stack<ccmap::PaperCell<ccmap::CadreConfig>>;
 using ccmap::test::hash_unit;
 namespace scenario = ccmap::test::scenario;
 
@@ -60,8 +63,9 @@ void print_gate_counters(const char* name, const ccmap::FrameCounters& c) {
                c.reseeded_cells, c.merged_cells);
 }
 
-Result run_traverse() {
-  auto stack = std::make_unique<S>();
+template <typename StackT>
+Result run_traverse(const char* name) {
+  auto stack = std::make_unique<StackT>();
   ccmap::StackParams params = ccmap::default_stack_params(0.04F);
   if (stack->init(params) != ccmap::Status::kOk) {
     std::fprintf(stderr, "init failed\n");
@@ -98,11 +102,11 @@ Result run_traverse() {
   const ccmap::FrameCounters c = stack->total_counters();
   ccmap::test::Fnv1a64 h;
   h.byte(0);  // format version of this dump
-  std::vector<ccmap::CellRecord> records(S::layer_capacity(0));
+  std::vector<ccmap::CellRecord> records(StackT::layer_capacity(0));
   if (!scenario::hash_stack(*stack, records.data(), records.size(), h)) std::exit(5);
-  std::fprintf(stderr, "cadre_traverse: received %u used %u non-finite %u out-of-range %u outside %u too-noisy %u\n",
+  std::fprintf(stderr, "%s: received %u used %u non-finite %u out-of-range %u outside %u too-noisy %u\n", name,
                c.received, c.used, c.rejected_non_finite, c.rejected_out_of_range, c.outside_map, c.too_noisy);
-  print_gate_counters("cadre_traverse", c);
+  print_gate_counters(name, c);
   return Result{h.hash, ccmap::test::raw_map_state(*stack)};
 }
 
@@ -151,9 +155,12 @@ std::string golden_of(const std::vector<std::string>& lines, const std::string& 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Result traverse = run_traverse();
-  const std::vector<std::pair<std::string, std::string>> hashes = {{"cadre_traverse", hex(traverse.hash)},
-                                                                   {"board_scenario", hex(run_board())}};
+  const Result traverse = run_traverse<S>("cadre_traverse");
+  const Result paper_traverse = run_traverse<PaperS>("cadre_traverse_paper_cell");
+  const std::vector<std::pair<std::string, std::string>> hashes = {
+      {"cadre_traverse", hex(traverse.hash)},
+      {"cadre_traverse_paper_cell", hex(paper_traverse.hash)},
+      {"board_scenario", hex(run_board())}};
   for (const auto& [name, value] : hashes) std::printf("%s %s\n", name.c_str(), value.c_str());
   if (argc == 3 && std::strcmp(argv[1], "--raw") == 0) {
     std::FILE* f = std::fopen(argv[2], "wb");

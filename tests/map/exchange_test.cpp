@@ -539,7 +539,10 @@ TEST(MapExchange, ForgedButCrcValidDeltasAreRefusedWithTheirReason) {
     EXPECT_EQ(test::raw_map_state(*pair.receiver), before) << what;
   };
   Bytes b = pair.delta;
-  b[kVersionAt] = 2;
+  b[kVersionAt] = 1;
+  refuse(b, Status::kVersionMismatch, "format version 1 (before the cell kinds)");
+  b = pair.delta;
+  b[kVersionAt] = 3;
   refuse(b, Status::kVersionMismatch, "another format version");
   b = pair.delta;
   put_u32(b, kSidesAt, 8U);
@@ -587,6 +590,9 @@ TEST(MapExchange, ForgedButCrcValidDeltasAreRefusedWithTheirReason) {
   b = pair.delta;
   put_f32(b, cell + 24, std::numeric_limits<float>::infinity());  // s_zz
   refuse(b, Status::kCorrupt, "an infinite second moment");
+  b = pair.delta;
+  put_f32(b, cell + 36, std::numeric_limits<float>::quiet_NaN());  // s_xy, the full cell's tenth float
+  refuse(b, Status::kCorrupt, "a NaN lateral covariance");
   b = pair.delta;
   put_f32(b, kOriginZAt, 1.0e5F);  // heights pushed beyond kMaxAbsCoordinateM
   refuse(b, Status::kOutOfRange, "an origin height that moves cells out of range");
@@ -704,7 +710,7 @@ TEST(MapExchange, LayersFinerThanTheChosenOneWaitForALaterDelta) {
   std::uint32_t counts[3] = {};
   for (int k = 0; k < 3; ++k) {
     counts[k] = get_u32(coarse, at + 8);
-    at += 12U + counts[k] * (1U + (k < 2 ? 36U : 12U));
+    at += 12U + counts[k] * (1U + (k < 2 ? 40U : 12U));
   }
   EXPECT_GT(counts[0] + counts[1], 0U);
   EXPECT_EQ(counts[2], 0U) << "a Kalman cell was sent with finest_layer 1";
@@ -795,7 +801,8 @@ TEST(MapExchange, ReinitialisingTheStackOrBindingAnotherExchangeRetiresIt) {
 TEST(MapExchange, DeltaSizesAreTheDocumentedOnes) {
   // 88-byte header, 12 per layer, 4 trailer; per cell a varint and the codec's bytes.
   EXPECT_EQ(CadreExchange::min_delta_size(), 88U + 5U * 12U + 4U);
-  EXPECT_EQ(CadreExchange::max_delta_size(), 152U + 4096U * 13U + (4096U + 4096U + 1024U + 1024U) * 37U);
+  // CCM cells of the full cell: 10 floats, 40 bytes, and the 1-byte varint.
+  EXPECT_EQ(CadreExchange::max_delta_size(), 152U + 4096U * 13U + (4096U + 4096U + 1024U + 1024U) * 41U);
   TinyPair pair;
   DeltaInfo info{};
   ASSERT_EQ(TinyExchange::peek_delta(pair.delta.data(), pair.delta.size(), &info), Status::kOk);
@@ -808,7 +815,7 @@ TEST(MapExchange, DeltaSizesAreTheDocumentedOnes) {
   // 4 x 4 window are below 128, so every varint is one byte.
   std::size_t at = kFirstLayerAt;
   std::uint32_t cells = 0;
-  for (const std::size_t cell_bytes : {36U, 36U, 12U}) {
+  for (const std::size_t cell_bytes : {40U, 40U, 12U}) {
     const std::uint32_t count = get_u32(pair.delta, at + 8);
     cells += count;
     at += 12U + count * (1U + cell_bytes);

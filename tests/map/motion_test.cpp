@@ -2,8 +2,8 @@
 // independent references:
 //  - the brute-force double model (tests/support/model_stack.hpp), which implements the
 //    documented rule from docs/design.md, over frames and uncertain moves on noisy sloped
-//    ground, for the CADRE (Kalman + CCM) and OMG presets: every cell's weight, statistics and
-//    variance;
+//    ground, for the CADRE (Kalman + CCM, both CCM cells) and OMG presets: every cell's weight,
+//    statistics and variance;
 //  - the analytic statement of the rule: a CCM cell's elevation variance at its mean grows by
 //    exactly inclination^2 sigma^2 (above the weight floor), a flat cell is untouched, and
 //    sigma = 0 is the plain move bitwise;
@@ -78,6 +78,13 @@ TEST(Motion, UncertainMovesMatchTheDocumentedRuleInDoubleCadre) {
   StackParams p = default_stack_params(0.04F);
   p.weight_limit = 300.0F;  // the limiter engages too
   matches_the_model_over_uncertain_moves<CadreConfig>(p);
+}
+
+TEST(Motion, UncertainMovesMatchTheDocumentedRuleInDoubleCadrePaperCell) {
+  // The paper's cell: slopes by eq. (9) per axis in the rule (the model's CcmCellDouble::slopes).
+  StackParams p = default_stack_params(0.04F);
+  p.weight_limit = 300.0F;
+  matches_the_model_over_uncertain_moves<PaperCell<CadreConfig>>(p);
 }
 
 TEST(Motion, UncertainMovesMatchTheDocumentedRuleInDoubleOmg) {

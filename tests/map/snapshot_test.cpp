@@ -18,7 +18,7 @@ namespace {
 using test::Rng;
 using Bytes = std::vector<std::uint8_t>;
 
-// A small stack (4 x 4 Kalman, two 4 x 4 CCM layers: 1,552-byte snapshots) so that every bit
+// A small stack (4 x 4 Kalman, two 4 x 4 CCM layers: 1,680-byte snapshots) so that every bit
 // flip and every truncation can be tried exhaustively.
 struct TinyConfig {
   static constexpr FineKind kFineKind = FineKind::kKalman;
@@ -257,6 +257,39 @@ TEST(Snapshot, RoundTripOfEveryPresetAndNoiseModel) {
   StackParams cadre_lidar = default_stack_params(0.04F);
   cadre_lidar.noise = precise_lidar();
   round_trip_with<CadreConfig>(cadre_lidar, 1.0F);
+  round_trip_with<PaperCell<CadreConfig>>(default_stack_params(0.04F), 1.0F);
+  round_trip_with<PaperCell<SingleCcmConfig>>(default_stack_params(0.08F), 1.0F);
+}
+
+TEST(SnapshotFormat, CellKindsAreTwoShapesAndVersionOneIsRefused) {
+  // The same preset with the other CCM cell kind is another shape (36 vs 40 bytes per CCM
+  // cell): intact, but refused with kVersionMismatch either way, the target left untouched.
+  StackParams params = default_stack_params(0.5F);
+  params.noise = precise_lidar();
+  auto full = make_stack<TinyConfig>(params);
+  auto paper = make_stack<PaperCell<TinyConfig>>(params);
+  traverse(*full, 3, 2, 2000);
+  traverse(*paper, 3, 2, 2000);
+  const Bytes full_bytes = save(*full);
+  const Bytes paper_bytes = save(*paper);
+  ASSERT_EQ(full_bytes.size(), paper_bytes.size() + 32U * 4U) << "one more float per CCM cell";
+  auto fresh_full = std::make_unique<Stack<TinyConfig>>();
+  auto fresh_paper = std::make_unique<Stack<PaperCell<TinyConfig>>>();
+  EXPECT_EQ(load_snapshot(*fresh_full, paper_bytes.data(), paper_bytes.size()), Status::kVersionMismatch);
+  EXPECT_EQ(load_snapshot(*fresh_paper, full_bytes.data(), full_bytes.size()), Status::kVersionMismatch);
+  EXPECT_FALSE(fresh_full->initialised());
+  EXPECT_FALSE(fresh_paper->initialised());
+  // A version-1 snapshot had exactly the paper cell's layout: one is made from a version-2
+  // paper-cell snapshot by its version field (and CRC). It is refused with kVersionMismatch, by
+  // the paper-cell stack too: version 1 predates the cell kinds.
+  Bytes v1 = paper_bytes;
+  v1[kVersionAt] = 1U;
+  v1[kVersionAt + 1] = 0U;
+  reseal(v1);
+  const Bytes paper_before = save(*paper);
+  EXPECT_EQ(load_snapshot(*paper, v1.data(), v1.size()), Status::kVersionMismatch) << "a version-1 snapshot loaded";
+  EXPECT_EQ(load_snapshot(*fresh_full, v1.data(), v1.size()), Status::kVersionMismatch);
+  EXPECT_TRUE(save(*paper) == paper_before) << "a refused version-1 load changed the stack";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -268,9 +301,11 @@ TEST(SnapshotFormat, SizesHeaderAndCrcAreAsDocumented) {
       << "not the IEEE 802.3 / zlib CRC-32";
   const auto* abc = reinterpret_cast<const std::uint8_t*>("123456789");
   EXPECT_EQ(crc32_update(crc32_update(0U, abc, 4U), abc + 4, 5U), 0xCBF43926U) << "CRC does not continue";
-  EXPECT_EQ(snapshot_size<CadreConfig>(), 418060U);  // docs/integration.md quotes this figure
-  EXPECT_EQ(snapshot_size<TinyConfig>(), 228U + 3U * 8U + 16U * 12U + 32U * 36U);
-  static_assert(snapshot_size<SingleCcmConfig>() == 228U + 8U + 65536U * 36U, "single CCM size");
+  EXPECT_EQ(snapshot_size<CadreConfig>(), 459020U);  // docs/integration.md quotes this figure
+  EXPECT_EQ(snapshot_size<PaperCell<CadreConfig>>(), 418060U);
+  EXPECT_EQ(snapshot_size<TinyConfig>(), 228U + 3U * 8U + 16U * 12U + 32U * 40U);
+  static_assert(snapshot_size<SingleCcmConfig>() == 228U + 8U + 65536U * 40U, "single CCM size");
+  static_assert(snapshot_size<PaperCell<SingleCcmConfig>>() == 228U + 8U + 65536U * 36U, "single paper CCM size");
 
   auto stack = make_stack<TinyConfig>(default_stack_params(0.5F));
   ASSERT_EQ(stack->move_to(3.0F, -2.0F), Status::kOk);
@@ -423,6 +458,7 @@ TEST_F(SnapshotTiny, ForgedContentWithAValidCrcIsRejected) {
       {"negative Kalman weight", first_cell + 8, -1.0F},
       {"negative CCM weight", first_ccm_cell, -2.0F},
       {"NaN CCM s_yz", first_ccm_cell + 32, nan},
+      {"inf CCM s_xy", first_ccm_cell + 36, inf},
   };
   for (const Forgery& f : floats) {
     Bytes b = snapshot_;

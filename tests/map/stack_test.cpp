@@ -2,6 +2,7 @@
 // against pooling by hand, queries and classes on synthetic terrain, export, bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/ccm_kinds.hpp"
 #include "support/poses.hpp"
 #include "support/reference.hpp"
 
@@ -231,6 +233,44 @@ TEST(StackPooling, EveryLayerSeesThePlaneSlope) {
     EXPECT_NEAR(q.slope_y, -0.1, 0.002) << "layer " << k;
     EXPECT_NEAR(q.height_m, 0.2 * 0.3 - 0.1 * 0.3, 0.001) << "layer " << k;
     EXPECT_EQ(q.cell_class, CellClass::kTraversable) << "layer " << k;
+  }
+}
+
+template <typename Config>
+class StackPoolingKinds : public ::testing::Test {};
+using CadreKinds = ::testing::Types<CadreConfig, PaperCell<CadreConfig>>;
+TYPED_TEST_SUITE(StackPoolingKinds, CadreKinds, test::CcmKindNames);
+
+TYPED_TEST(StackPoolingKinds, ThreeObservedChildrenPoolToThePlaneSlope) {
+  // Issue 9, item 4, through the stack's query pooling: a 15 deg plane along y seen in three of
+  // the four 8 cm children (layer 1) of the 16 cm cell (10, 0) of layer 2 (x in [1.60, 1.76) m,
+  // outside the 4 cm layer's +-1.28 m window, so the points land in layer 1). The 9-float
+  // pooling without the cross term gave slope_x = -0.364 tan 15 deg = -0.098 here. Coverage:
+  // the full cell's smaller eigenvalue fails for an L; the paper cell's per-axis test passes it.
+  StackParams params = default_stack_params(0.04F);
+  params.noise = precise_lidar();
+  auto stack = make_stack<TypeParam>(params);
+  using S = Stack<TypeParam>;
+  const float slope = std::tan(15.0F * 3.14159265F / 180.0F);  // below the 20 deg steep limit
+  auto pts = grid_cloud(1.60F, 1.76F, 0.0F, 0.16F, 0.004F, [&](float, float y) { return 0.1F + slope * y; });
+  pts.erase(std::remove_if(pts.begin(), pts.end(), [](const PointXYZ& p) { return p.x >= 1.68F && p.y >= 0.08F; }),
+            pts.end());
+  FrameCounters counters{};
+  ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{1.0F, 0.0F, 0.3F}, &counters), Status::kOk);
+  ASSERT_EQ(counters.used, pts.size());
+  ASSERT_EQ(stack->ccm_layer(0).cell(CellIndex{21, 1})->weight, 0.0F) << "test premise: the +x +y child is unseen";
+  ASSERT_GT(stack->ccm_layer(0).cell(CellIndex{20, 0})->weight, 0.0F) << "test premise: points in layer 1";
+  const typename S::CcmCellType parent = stack->pooled_cell(2, CellIndex{10, 0});
+  const CcmSurface s = ccm_surface(parent);
+  EXPECT_NEAR(s.slope_x, 0.0, 1e-3) << "slope_x of a 16 cm parent pooled from three 8 cm children";
+  EXPECT_NEAR(s.slope_y, slope, 1e-3) << "slope_y of a 16 cm parent pooled from three 8 cm children";
+  const QueryResult q = stack->query_layer(2, 1.65F, 0.05F);
+  if constexpr (S::kCcmCellKind == CcmCellKind::kFull) {
+    EXPECT_EQ(q.status, Status::kUnknown) << "an L-shaped parent is not covered (smaller eigenvalue)";
+  } else {
+    ASSERT_EQ(q.status, Status::kOk) << "the paper cell's per-axis coverage passes an L";
+    EXPECT_NEAR(q.slope_x, 0.0, 1e-3);
+    EXPECT_EQ(q.cell_class, CellClass::kTraversable);
   }
 }
 

@@ -270,6 +270,11 @@ TEST(UpdatePath, SingleOmgMatchesTheModel) {
   map_frame_matches_the_model<SingleOmgConfig>(default_stack_params(0.08F), true);
   sensor_frame_matches_the_model<SingleOmgConfig>(default_stack_params(0.08F));
 }
+TEST(UpdatePath, PaperCellCadreAndSingleCcmMatchTheModel) {
+  map_frame_matches_the_model<PaperCell<CadreConfig>>(default_stack_params(0.04F), true);
+  sensor_frame_matches_the_model<PaperCell<CadreConfig>>(default_stack_params(0.04F));
+  map_frame_matches_the_model<PaperCell<SingleCcmConfig>>(default_stack_params(0.08F), false);
+}
 TEST(UpdatePath, LidarCadreMatchesTheModel) {
   map_frame_matches_the_model<CadreConfig>(lidar_params(0.04F), false);
   sensor_frame_matches_the_model<CadreConfig>(lidar_params(0.04F));

@@ -56,8 +56,10 @@ inline PointXYZ terrain_point(const Pose& pose, float rx, float ry, float ahead,
 
 /// FNV-1a 64 of the whole stack: every stored float and window (map_hash), the life-time
 /// counters, and an export of every layer through the pooling path. `records` must hold the
-/// largest layer (CadreStack::layer_capacity(0)). Returns false if an export fails.
-inline bool hash_stack(const CadreStack& stack, CellRecord* records, std::size_t capacity, Fnv1a64& h) {
+/// largest layer (StackT::layer_capacity(0)). Returns false if an export fails. StackT: a
+/// Stack of the CADRE shape, either CCM cell (CadreStack or Stack<PaperCell<CadreConfig>>).
+template <typename StackT>
+inline bool hash_stack(const StackT& stack, CellRecord* records, std::size_t capacity, Fnv1a64& h) {
   const std::uint64_t cells = map_hash(stack);
   h.u32(static_cast<std::uint32_t>(cells >> 32));
   h.u32(static_cast<std::uint32_t>(cells));
@@ -67,7 +69,7 @@ inline bool hash_stack(const CadreStack& stack, CellRecord* records, std::size_t
                                 c.gated_pool_full, c.gated_admitted, c.gated_dropped, c.reseeded_cells, c.merged_cells}) {
     h.u32(v);
   }
-  for (int k = 0; k < CadreStack::kLayerCount; ++k) {
+  for (int k = 0; k < StackT::kLayerCount; ++k) {
     std::size_t written = 0;
     if (stack.export_layer(k, records, capacity, &written) != Status::kOk) {
       return false;
@@ -87,7 +89,7 @@ inline bool hash_stack(const CadreStack& stack, CellRecord* records, std::size_t
 }
 
 // ---- the board-sized scenario ----------------------------------------------------------------
-// Sized for a controller with 1 MiB of SRAM: the CADRE map (585 KB) + one frame of 10,000
+// Sized for a controller with 1 MiB of SRAM: the CADRE map (582 KB) + one frame of 10,000
 // points (120 KB) + their weights (40 KB) + an export buffer for the largest layer (180 KB).
 // 24 frames along a curved path, cycling through the three update calls (map frame, sensor
 // frame, map frame with per-point weights), with hostile points, then queries on a grid.

@@ -27,7 +27,7 @@ std::vector<unsigned char> raw_map_state(const Stack<Config>& stack) {
     append(stack.fine_layer().storage(), stack.fine_layer().cell_count() * sizeof(typename S::FineCell));
   }
   for (int c = 0; c < S::kCcmLayerCount; ++c) {
-    append(stack.ccm_layer(c).storage(), stack.ccm_layer(c).cell_count() * sizeof(CcmCell));
+    append(stack.ccm_layer(c).storage(), stack.ccm_layer(c).cell_count() * sizeof(typename S::CcmCellType));
   }
   for (int k = 0; k < S::kLayerCount; ++k) {
     const CellIndex centre = stack.layer_centre(k);
@@ -42,7 +42,7 @@ std::size_t layer_byte_offset(const Stack<Config>& stack, int layer) {
   using S = Stack<Config>;
   std::size_t offset = 0;
   for (int k = 0; k < layer; ++k) {
-    offset += S::layer_capacity(k) * (S::layer_is_ccm(k) ? sizeof(CcmCell) : sizeof(typename S::FineCell));
+    offset += S::layer_capacity(k) * (S::layer_is_ccm(k) ? sizeof(typename S::CcmCellType) : sizeof(typename S::FineCell));
   }
   (void)stack;
   return offset;
@@ -66,7 +66,7 @@ void for_each_stored_float(const Stack<Config>& stack, Fn&& fn) {
     visit(stack.fine_layer().storage(), stack.fine_layer().cell_count() * sizeof(typename S::FineCell));
   }
   for (int c = 0; c < S::kCcmLayerCount; ++c) {
-    visit(stack.ccm_layer(c).storage(), stack.ccm_layer(c).cell_count() * sizeof(CcmCell));
+    visit(stack.ccm_layer(c).storage(), stack.ccm_layer(c).cell_count() * sizeof(typename S::CcmCellType));
   }
 }
 

@@ -7,7 +7,8 @@
 //    in double, routing by the stack's IV-G table (first layer whose squared bound holds the
 //    range; the sensor itself is too noisy), the cell floor(x / w) in double, the walk to the
 //    first coarser layer whose window holds the point;
-//  - cells in double: CCM by the Welford update with the limiter (support/ccm_double.hpp);
+//  - cells in double: CCM by the Welford update with the limiter (support/ccm_double.hpp), the
+//    lateral covariance s_xy compared for full cells (CcmCell), not kept by paper cells;
 //    Kalman by the documented frame batch (n points of a cell fused once per frame with their
 //    mean height and the variance at their mean squared range over n); OMG per point.
 //  - the outlier gate and the change rule (docs/design.md, "Outlier gate and change"): the gate
@@ -136,8 +137,9 @@ class ModelStack {
 
   /// The documented uncertain move (docs/design.md, "Uncertainty with motion"), in double: the
   /// window move, then for every observed CCM cell W' = W s2 / (s2 + W i^2 sigma^2) from its own
-  /// slope and normal variance (eqs. 9, 11), at least min(W, max(min_weight, 1e-3)), co-moments
-  /// scaled by W' / W; for every observed constant cell the height variance grows by
+  /// slope and normal variance (eqs. 9, 11 for the paper cell; the least-squares plane of the full
+  /// cell, CcmCellDouble::slopes), at least min(W, max(min_weight, 1e-3)), every co-moment (s_xy
+  /// too) scaled by W' / W; for every observed constant cell the height variance grows by
   /// (gx^2 + gy^2) sigma^2 (gradient from the observed 4-neighbours' heights: central,
   /// one-sided, or 0), at most 1e4 m^2.
   void move_to(float x, float y, double sigma) {
@@ -152,8 +154,8 @@ class ModelStack {
         for (auto& [key, cell] : l.cells) {
           CcmCellDouble& c = cell.ccm;
           if (!(c.weight > 0.0)) continue;
-          const double a = c.var_xx() > 1e-12 ? c.cov_xz() / c.var_xx() : 0.0;
-          const double b = c.var_yy() > 1e-12 ? c.cov_yz() / c.var_yy() : 0.0;
+          double a = 0.0, b = 0.0;
+          c.slopes(kHasLateralCovariance<typename S::CcmCellType>, &a, &b);
           const double i2 = a * a + b * b;
           if (!(i2 > 0.0)) continue;
           const double residual = std::max(0.0, c.var_zz() - c.cov_xz() * a - c.cov_yz() * b);
@@ -167,6 +169,7 @@ class ModelStack {
           c.s_zz *= scale;
           c.s_xz *= scale;
           c.s_yz *= scale;
+          c.s_xy *= scale;
           c.weight = w;
         }
       } else {
@@ -326,7 +329,7 @@ class ModelStack {
       };
       if (S::layer_is_ccm(k)) {
         const auto& grid = stack_.ccm_layer(k - S::kFineLayerCount);
-        grid.for_each([&](CellIndex i, const CcmCell& a) {
+        grid.for_each([&](CellIndex i, const typename S::CcmCellType& a) {
           const auto it = l.cells.find(cell_key(i));
           if (it == l.cells.end() || !(it->second.ccm.weight > 0.0)) {  // never took a point
             check(a.weight == 0.0F, i, "presence");
@@ -345,6 +348,10 @@ class ModelStack {
                     near_value(a.s_zz / w, e.var_zz(), var_tol, 1e-3) &&
                     near_value(a.s_xz / w, e.cov_xz(), var_tol, 1e-3) && near_value(a.s_yz / w, e.cov_yz(), var_tol, 1e-3),
                 i, "co-moments");
+          if constexpr (kHasLateralCovariance<typename S::CcmCellType>) {
+            // The lateral covariance of the full cell (issue 11): the same Welford rule, in double.
+            check(near_value(a.s_xy / w, e.cov_xy(), var_tol, 1e-3), i, "lateral covariance s_xy");
+          }
         });
       } else {
         stack_.fine_layer().for_each([&](CellIndex i, const typename S::FineCell& a) {
@@ -735,6 +742,7 @@ class ModelStack {
     a.s_zz += b.s_zz + dz * dz * f;
     a.s_xz += b.s_xz + dx * dz * f;
     a.s_yz += b.s_yz + dy * dz * f;
+    a.s_xy += b.s_xy + dx * dy * f;  // the lateral co-moment (compared for full cells only)
     a.mean_x += dx * b.weight / total;
     a.mean_y += dy * b.weight / total;
     a.mean_z += dz * b.weight / total;
@@ -746,6 +754,7 @@ class ModelStack {
       a.s_zz *= scale;
       a.s_xz *= scale;
       a.s_yz *= scale;
+      a.s_xy *= scale;
       a.weight = limit;
     }
   }

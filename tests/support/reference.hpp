@@ -24,6 +24,12 @@ struct RefMoments {
 
   double slope_x() const { return var_xx > 0.0 ? cov_xz / var_xx : 0.0; }
   double slope_y() const { return var_yy > 0.0 ? cov_yz / var_yy : 0.0; }
+  /// Smaller eigenvalue of the lateral covariance [var_xx cov_xy; cov_xy var_yy] (closed form).
+  double lateral_min_variance() const {
+    const double mid = 0.5 * (var_xx + var_yy);
+    const double half_gap = 0.5 * (var_xx - var_yy);
+    return mid - std::sqrt(half_gap * half_gap + cov_xy * cov_xy);
+  }
   /// Paper eq. (11) evaluated in double.
   double normal_variance() const {
     double r = var_zz;

@@ -635,7 +635,7 @@ TEST(CliErrors, PlannerOptionsAreCheckedWithOneLine) {
                         "--footprint", "negative width");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--footprint", "30,30"}),
                         "refused the footprint", "beyond the footprint limit");
-  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0"}), "--path needs --footprint",
+  expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0"}), "--path requires --footprint",
                         "path without a body");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--path", "0,0:1,0", "--footprint", "0.6,0.4,10"}),
                         "YAW_DEG", "yaw with a path");
@@ -648,17 +648,87 @@ TEST(CliErrors, PlannerOptionsAreCheckedWithOneLine) {
                         "refused the path query", "too many poses");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--path", "0,0:1,0",
                              "--footprint", "0.6,0.4"}),
-                        "give one", "both queries");
+                        "--at excludes --path", "both queries");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--max-unknown-share", "2"}),
                         "--max-unknown-share", "share above 1");
   expect_one_line_error(run({"query", "--preset", "ccm", "--cloud", cloud, "--at", "0,0", "--costmap"}), "--costmap",
                         "costmap on a query");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--inflate", "0.1"}),
-                        "--inflate needs --costmap", "inflate alone");
+                        "--inflate requires --costmap", "inflate alone");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--footprint", "0.6,0.4"}),
-                        "belong to 'ccmap query'", "footprint on map");
+                        "--footprint belongs to 'ccmap query'", "footprint on map");
   expect_one_line_error(run({"map", "--preset", "ccm", "--cloud", cloud, "--out", out, "--costmap", "--inflate", "5"}),
                         "--inflate: 5 m is 62.5 cells of layer 0", "inflation beyond 32 pixels");
+}
+
+// =============================================================================================
+// The CCM cell: full (lateral covariance) by default, the paper's 9 floats with --paper-cell
+// =============================================================================================
+
+TEST(CliMap, DiagonalHalfCellsOnATwelveDegreePlaneWithBothCells) {
+  // Issue 11's measurement: every 16 cm cell of a 12 deg plane along y seen on one diagonal half
+  // (x + y < 0 relative to the cell centre), points on a 5 mm grid. The paper's cell reports
+  // slope_x = -b/2 (sigma_xy = -sigma_xx / 2 on that triangle) and calls the cell covered; the
+  // full cell gives slope_x = 0 and calls it unknown (its smaller lateral eigenvalue is w^2/36).
+  const TempDir dir(kTempPrefix);
+  const double b = std::tan(12.0 * M_PI / 180.0), w = 0.16, x0 = 0.16 * 4000.0, y0 = 0.16 * 9000.0;
+  {
+    std::ofstream out(dir / "diagonal.xyz");
+    out.precision(12);
+    for (int j = 0; j < 320; ++j) {
+      for (int i = 0; i < 320; ++i) {
+        const double lx = 0.0025 + 0.005 * i, ly = 0.0025 + 0.005 * j;  // local, from the square's corner
+        const double fx = std::fmod(lx, w), fy = std::fmod(ly, w);     // from the cell's corner
+        if (fx + fy >= w - 1e-9) continue;                              // the seen half: x + y < 0
+        out << x0 + lx << ' ' << y0 + ly << ' ' << 10.0 + b * ly << '\n';
+      }
+    }
+  }
+  for (const bool paper : {false, true}) {
+    std::vector<std::string> args = {"map", "--preset", "ccm", "--res", "0.16", "--cloud", (dir / "diagonal.xyz").string(),
+                                     "--out", (dir / (paper ? "paper" : "full")).string()};
+    if (paper) args.push_back("--paper-cell");
+    const CliRun r = run(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find(paper ? "CCM cell paper (9 floats)" : "CCM cell full (10 floats)"), std::string::npos) << r.out;
+    const std::vector<LayerCellRow> rows = read_rows(dir / (paper ? "paper" : "full") / "layer_0.csv");
+    int inner = 0;
+    for (const LayerCellRow& c : rows) {
+      const double lx = c.cx - x0, ly = c.cy - y0;
+      if (lx < w || ly < w || lx > 1.6 - w || ly > 1.6 - w) continue;  // inner cells of the 1.6 m square
+      ++inner;
+      if (paper) {
+        EXPECT_NEAR(c.slope_x, -0.5 * b, 0.01) << "paper cell: slope_x on a diagonal half";
+        EXPECT_EQ(c.cell_class, "traversable") << "paper cell: covered per axis";
+      } else {
+        EXPECT_NEAR(c.slope_x, 0.0, 2e-3) << "full cell: slope_x off 0 on a 12 deg plane along y";
+        EXPECT_NEAR(c.slope_y, b, 2e-3) << "full cell: slope_y off tan 12 deg";
+        EXPECT_EQ(c.cell_class, "unknown") << "full cell: a diagonal half cell is not covered";
+      }
+    }
+    EXPECT_EQ(inner, 64) << "test premise: the inner 8 x 8 cells of the 10 x 10 square";
+  }
+  // Saved paper-cell maps merge with --paper-cell, and give the same paper-cell answer: slope_x -b/2.
+  for (const char* half : {"h1", "h2"}) {
+    ASSERT_EQ(run({"map", "--preset", "ccm", "--res", "0.16", "--paper-cell", "--cloud", (dir / "diagonal.xyz").string(),
+                   "--out", (dir / half).string(), "--save", (dir / (std::string(half) + ".map")).string()})
+                  .code,
+              0);
+  }
+  const CliRun merged = run({"merge", "--preset", "ccm", "--paper-cell", "--in", (dir / "h1.map").string(), "--in",
+                             (dir / "h2.map").string(), "--out", (dir / "merged").string()});
+  ASSERT_EQ(merged.code, 0) << merged.err;
+  int merged_inner = 0;
+  for (const LayerCellRow& c : read_rows(dir / "merged" / "layer_0.csv")) {
+    const double lx = c.cx - x0, ly = c.cy - y0;
+    if (lx < w || ly < w || lx > 1.6 - w || ly > 1.6 - w) continue;
+    ++merged_inner;
+    EXPECT_NEAR(c.slope_x, -0.5 * b, 0.01) << "merged paper cells: slope_x on a diagonal half";
+  }
+  EXPECT_EQ(merged_inner, 64);
+  const CliRun kf = run({"map", "--preset", "kf", "--paper-cell", "--cloud", (dir / "diagonal.xyz").string(), "--out",
+                         (dir / "kf").string()});
+  expect_one_line_error(kf, "--paper-cell", "--paper-cell with a preset without CCM layers");
 }
 
 // =============================================================================================
@@ -704,9 +774,11 @@ TEST(CliErrors, BadInputGivesOneLineAndNonZeroExit) {
       {{"map", "--preset", "ccm", "--res", "nan", "--cloud", good, "--out", out}, "out of range"},
       {{"map", "--preset", "ccm", "--res", "0.08x", "--cloud", good, "--out", out}, "not a number"},
       {{"map", "--preset", "ccm", "--wl", "0", "--cloud", good, "--out", out}, "--wl"},
-      {{"map", "--preset", "ccm", "--res"}, "needs a value"},
-      {{"map", "--preset", "ccm", "--colour", "red"}, "unknown option '--colour'"},
-      {{"map", "--preset", "ccm", "stray"}, "unexpected argument 'stray'"},
+      {{"map", "--preset", "ccm", "--res"}, "--res: 1 required METRES missing"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "--colour", "red"}, "not expected: red --colour"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "stray"}, "not expected: stray"},
+      {{"map", "--preset", "ccm", "--preset", "kf", "--cloud", good, "--out", out}, "--preset: At Most 1"},
+      {{"map", "--preset", "ccm", "--cloud", good, "--out", out, "--at", "1,2"}, "--at belongs to 'ccmap query'"},
       {{"map", "--preset", "ccm", "--cloud", good, "--poses", (dir / "poses1.txt").string(), "--out", out},
        "2 poses for 1 clouds"},
       {{"map", "--preset", "ccm", "--cloud", good, "--poses", (dir / "nope.txt").string(), "--out", out}, "nope.txt"},
@@ -873,7 +945,7 @@ TEST(CliMerge, TwoHalvesSavedAndMergedEqualOneMapOfBothInAbsoluteCoordinates) {
   const CliRun east = run({"map", "--preset", "ccm", "--cloud", (dir / "east.ply").string(), "--out",
                            (dir / "east").string(), "--save", (dir / "east.map").string()});
   ASSERT_EQ(east.code, 0) << east.err;
-  EXPECT_EQ(fs::file_size(dir / "west.map"), 2359532U + 48U) << "the single-CCM snapshot and the origin record";
+  EXPECT_EQ(fs::file_size(dir / "west.map"), 2621676U + 48U) << "the single-CCM snapshot (full cells) and the origin record";
   const CliRun both = run({"map", "--preset", "ccm", "--cloud", (dir / "west.ply").string(), "--cloud",
                            (dir / "east.ply").string(), "--out", (dir / "both").string()});
   ASSERT_EQ(both.code, 0) << both.err;
@@ -939,6 +1011,9 @@ TEST(CliMerge, RefusalsSayWhy) {
   expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--out", out}), "two or more --in", "one input");
   expect_one_line_error(run({"merge", "--preset", "cadre", "--in", a, "--in", a, "--out", out}), "is it a cadre map",
                         "another preset");
+  // The CCM cell kind is part of a map's shape: a full-cell map is not read as paper cells.
+  expect_one_line_error(run({"merge", "--preset", "ccm", "--paper-cell", "--in", a, "--in", a, "--out", out}),
+                        "saved with --paper-cell", "full-cell maps merged as paper cells");
   expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", (dir / "coarse.map").string(), "--out", out}),
                         "misaligned", "another cell width");
   expect_one_line_error(run({"merge", "--preset", "ccm", "--in", a, "--in", a, "--offset", "0.05,0", "--out", out}),

@@ -6,6 +6,8 @@
 
 #include "experiments/fig4.hpp"
 #include "experiments/fig5.hpp"
+#include "experiments/lateral.hpp"
+#include "ccmap/cell/ccm_cell.hpp"
 #include "experiments/svg_plot.hpp"
 #include "sim/data_dir.hpp"
 
@@ -63,7 +65,7 @@ TEST(ExperimentsFig5, CcmBeatsConstantMapsAndKalmanFailsThreeSigma) {
   EXPECT_GT(kal->violation_share, 5.0 * ccm->violation_share + 0.2);
   EXPECT_LT(ccm->violation_share, 0.05) << "CCM variance should bound its error";
   // Half resolution: CCM at 2w in about the memory of a constant map at w.
-  EXPECT_EQ(ccm2->bytes, 16U * 36U);
+  EXPECT_EQ(ccm2->bytes, 16U * sizeof(ccmap::CcmCell));  // 40 B: the full cell
   EXPECT_EQ(omg->bytes, 49U * 12U);
   EXPECT_LT(ccm2->rms_m, 1.3 * omg->rms_m) << "CCM at 2w should be about as precise as constant maps at w";
 }
@@ -92,4 +94,25 @@ TEST(ExperimentsSvg, NiceTicksAndWellFormedOutput) {
   EXPECT_NE(svg.find("<svg"), std::string::npos);
   EXPECT_NE(svg.find("a &lt; b"), std::string::npos) << "title must be escaped";
   EXPECT_NE(svg.find("</svg>"), std::string::npos);
+}
+
+TEST(ExperimentsLateral, FullCellSlopesAreExactWhereThePaperCellLeaks) {
+  const ex::LateralConfig cfg = ex::LateralConfig::quick();
+  const ex::LateralResult r = ex::run_lateral(cfg);
+  ASSERT_EQ(r.slopes.size(), 8U);
+  for (const ex::LateralSlopeRow& s : r.slopes) {
+    EXPECT_LT(s.full_max, 1e-4) << "full cell slope error on " << s.name;
+  }
+  EXPECT_NEAR(r.slopes[0].paper_slope_x, -0.5 * std::tan(12.0 * M_PI / 180.0), 0.005)
+      << "paper cell on the diagonal half: slope_x should be -b/2";
+  EXPECT_GT(r.slopes[1].paper_rms, 0.03) << "paper cell on random half cells";
+  EXPECT_EQ(r.slopes[0].full_covered, 0) << "a diagonal half cell is not covered";
+  EXPECT_EQ(r.slopes[0].paper_covered, 1) << "the paper cell's per-axis test passes a diagonal half";
+  ASSERT_EQ(r.coverage.size(), 4U);
+  EXPECT_NEAR(r.coverage[0].full_share, 0.80, 0.005) << "an axis-aligned edge needs tau of the cell seen";
+  EXPECT_NEAR(r.coverage[0].paper_share, 0.80, 0.005);
+  for (const ex::LateralCoverageRow& c : r.coverage) {
+    EXPECT_GE(c.full_share, 0.795) << "full cell at " << c.edge_deg << " deg";
+  }
+  EXPECT_LT(r.coverage[3].paper_share, 0.55) << "the paper cell passes half a cell cut at 45 deg";
 }

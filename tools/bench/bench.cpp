@@ -71,6 +71,14 @@ void BM_CadreFrame100k(benchmark::State& s) { frame_update<ccmap::CadreConfig>(s
 void BM_CellCcm(benchmark::State& s) { frame_update<ccmap::SingleCcmConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
 void BM_CellKalman(benchmark::State& s) { frame_update<ccmap::SingleKalmanConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
 void BM_CellOmg(benchmark::State& s) { frame_update<ccmap::SingleOmgConfig>(s, 400, 250, 0.08F, Path::kMapFrame); }
+// The same with the paper's 9-float CCM cell (PaperCell<Config>): the cost of the lateral
+// covariance is the difference (docs/performance.md).
+using PaperCadre = ccmap::PaperCell<ccmap::CadreConfig>;
+void BM_CadreFramePaperCell(benchmark::State& s) { frame_update<PaperCadre>(s, 850, 650, 0.04F, Path::kMapFrame); }
+void BM_CadreFrameSensorPaperCell(benchmark::State& s) { frame_update<PaperCadre>(s, 850, 650, 0.04F, Path::kSensorFrame); }
+void BM_CellCcmPaperCell(benchmark::State& s) {
+  frame_update<ccmap::PaperCell<ccmap::SingleCcmConfig>>(s, 400, 250, 0.08F, Path::kMapFrame);
+}
 // The flight cycle of the timing test (tests/support/flight_cycle.hpp): move_to, a sensor-frame
 // frame with 8 % unusable pixels, the corridor footprint and the 2 m path; ten frames of the drive, cycled.
 void BM_FlightCycle(benchmark::State& state) {
@@ -95,6 +103,9 @@ BENCHMARK(BM_CadreFrame100k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CellCcm)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CellKalman)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CellOmg)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CadreFramePaperCell)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CadreFrameSensorPaperCell)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CellCcmPaperCell)->Unit(benchmark::kMicrosecond);
 
 ccmap::Stack<ccmap::CadreConfig>& mapped_cadre() {
   static std::unique_ptr<ccmap::Stack<ccmap::CadreConfig>> stack = [] {
@@ -224,6 +235,7 @@ void BM_StaticMemory(benchmark::State& state) {
   for (auto _ : state) {
   }
   state.counters["CadreConfig_bytes"] = static_cast<double>(sizeof(ccmap::Stack<ccmap::CadreConfig>));
+  state.counters["CadreConfig_paper_cell_bytes"] = static_cast<double>(sizeof(ccmap::Stack<PaperCadre>));
   state.counters["SingleCcmConfig_bytes"] = static_cast<double>(sizeof(ccmap::Stack<ccmap::SingleCcmConfig>));
   state.counters["SingleKalmanConfig_bytes"] = static_cast<double>(sizeof(ccmap::Stack<ccmap::SingleKalmanConfig>));
   state.counters["SingleOmgConfig_bytes"] = static_cast<double>(sizeof(ccmap::Stack<ccmap::SingleOmgConfig>));

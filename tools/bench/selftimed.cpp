@@ -4,7 +4,7 @@
 //   <case> <median> <unit>  (min <min>, max <max>, <reps> reps)
 // Frames are the synthetic CADRE frames of tests/support/cadre_frames.hpp.
 //
-//   ccmap_bench_selftimed [reps]     (default 10 repetitions per case)
+//   ccmap_bench_selftimed [reps]     (default 10 repetitions per case; --help; a bad count: exit 2)
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -17,6 +17,7 @@
 #include "ccmap/map/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/platform/platform.hpp"
+#include "parse_args.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/flight_cycle.hpp"
 
@@ -91,15 +92,40 @@ void per_point_cost(const char* name, float width, const std::vector<ccmap::test
   report(name, ns, "ns/point");
 }
 
+/// The flight cycle of the timing test, `reps` cycles of the ten-frame drive: wall and thread CPU.
+template <typename Config>
+void flight_cycle(const char* name, int reps) {
+  auto stack = make_stack<Config>(0.04F);
+  std::vector<double> wall;
+  std::vector<double> cpu;
+  for (int r = 0; r < reps; ++r) {
+    const int k = r % 10;
+    const ccmap::test::CadreFrame frame = ccmap::test::cycle_frame(k);
+    const std::uint64_t c0 = ccmap::platform::thread_cpu_ns();
+    const std::uint64_t t0 = monotonic_ns();
+    const ccmap::test::CycleOutcome o = ccmap::test::run_cycle(*stack, ccmap::test::cycle_pose(k), frame);
+    wall.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-6);
+    cpu.push_back(static_cast<double>(ccmap::platform::thread_cpu_ns() - c0) * 1e-6);
+    if (!ccmap::test::cycle_ok(o, frame.sensor_points.size())) {
+      std::fprintf(stderr, "%s %d failed\n", name, r);
+      std::exit(1);
+    }
+  }
+  char label[64];
+  std::snprintf(label, sizeof label, "%s (wall)", name);
+  report(label, wall, "ms");
+  std::snprintf(label, sizeof label, "%s (thread CPU)", name);
+  report(label, cpu, "ms");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace ccmap;
-  const int reps = argc > 1 ? std::atoi(argv[1]) : 10;
-  if (reps < 1) {
-    std::fprintf(stderr, "usage: ccmap_bench_selftimed [reps >= 1]\n");
-    return 2;
-  }
+  int reps = 10;
+  CLI::App app("The benchmark cases of docs/performance.md timed with the platform clock.", "ccmap_bench_selftimed");
+  app.add_option("reps", reps, "repetitions per case")->check(CLI::Range(1, 1000000))->capture_default_str();
+  if (const int code = tools::parse_args(app, argc, argv); code >= 0) return code;
   std::printf("# ccmap_bench_selftimed: platform %s, %d reps, synthetic CADRE frames\n", platform::name(), reps);
 
   // Static memory of each preset (the whole map is one object).
@@ -107,34 +133,21 @@ int main(int argc, char** argv) {
   std::printf("%-44s %12zu bytes\n", "sizeof Stack<SingleCcmConfig>", sizeof(Stack<SingleCcmConfig>));
   std::printf("%-44s %12zu bytes\n", "sizeof Stack<SingleKalmanConfig>", sizeof(Stack<SingleKalmanConfig>));
   std::printf("%-44s %12zu bytes\n", "sizeof Stack<SingleOmgConfig>", sizeof(Stack<SingleOmgConfig>));
+  std::printf("%-44s %12zu bytes\n", "sizeof Stack<PaperCell<CadreConfig>>", sizeof(Stack<PaperCell<CadreConfig>>));
 
-  // The flight cycle of the timing test (move, sensor-frame update, corridor queries).
-  {
-    auto stack = make_stack<CadreConfig>(0.04F);
-    std::vector<double> wall;
-    std::vector<double> cpu;
-    for (int r = 0; r < reps; ++r) {
-      const int k = r % 10;
-      const test::CadreFrame frame = test::cycle_frame(k);
-      const std::uint64_t c0 = platform::thread_cpu_ns();
-      const std::uint64_t t0 = monotonic_ns();
-      const test::CycleOutcome o = test::run_cycle(*stack, test::cycle_pose(k), frame);
-      wall.push_back(static_cast<double>(monotonic_ns() - t0) * 1e-6);
-      cpu.push_back(static_cast<double>(platform::thread_cpu_ns() - c0) * 1e-6);
-      if (!test::cycle_ok(o, frame.sensor_points.size())) {
-        std::fprintf(stderr, "flight cycle %d failed\n", r);
-        std::exit(1);
-      }
-    }
-    report("flight cycle (wall)", wall, "ms");
-    report("flight cycle (thread CPU)", cpu, "ms");
-  }
+  // The flight cycle of the timing test (move, sensor-frame update, corridor queries), with the
+  // full and with the paper's CCM cell (the difference is the lateral covariance's cost).
+  flight_cycle<CadreConfig>("flight cycle", reps);
+  flight_cycle<PaperCell<CadreConfig>>("flight cycle, paper cell", reps);
   // Full frame updates on the CADRE preset.
   {
     const auto cadre = frames_of(3, 850, 650);
     auto stack = make_stack<CadreConfig>(0.04F);
     report("cadre frame 552500 pts, map frame", time_frames(*stack, cadre, reps, false), "ms");
     report("cadre frame 552500 pts, sensor frame", time_frames(*stack, cadre, reps, true), "ms");
+    auto paper = make_stack<PaperCell<CadreConfig>>(0.04F);
+    report("cadre frame, map frame, paper cell", time_frames(*paper, cadre, reps, false), "ms");
+    report("cadre frame, sensor frame, paper cell", time_frames(*paper, cadre, reps, true), "ms");
   }
   {
     const auto small = frames_of(3, 125, 80);
@@ -148,6 +161,7 @@ int main(int argc, char** argv) {
   }
   // Per-point cost of each cell kind in the same run: one-layer stacks, 8 cm cells.
   per_point_cost<SingleCcmConfig>("per point, CCM cell (SingleCcm)", 0.08F, medium, reps);
+  per_point_cost<PaperCell<SingleCcmConfig>>("per point, CCM paper cell", 0.08F, medium, reps);
   per_point_cost<SingleKalmanConfig>("per point, Kalman cell (SingleKalman)", 0.08F, medium, reps);
   per_point_cost<SingleOmgConfig>("per point, OMG cell (SingleOmg)", 0.08F, medium, reps);
 

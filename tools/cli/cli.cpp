@@ -1,6 +1,8 @@
 #include "cli.hpp"
 
 #include <algorithm>
+#include <functional>
+#include <utility>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -15,6 +17,8 @@
 #include <system_error>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+
 #include "ccmap/cell/ccm_cell.hpp"
 #include "cloud_reader.hpp"
 #include "csv_writer.hpp"
@@ -23,129 +27,12 @@
 #include "map_runner.hpp"
 #include "origin.hpp"
 #include "png.hpp"
+#include "raster_io.hpp"
 #include "saved_map.hpp"
 #include "tiling.hpp"
 
 namespace ccmap::tools {
 namespace {
-
-constexpr const char* kMainHelp =
-    "usage: ccmap <command> [options]\n"
-    "\n"
-    "Builds Converging Covariance Maps (CCM) from point clouds.\n"
-    "\n"
-    "commands:\n"
-    "  map     map clouds and write per-layer CSV files and pictures\n"
-    "  query   map clouds and print the map's answer at one point\n"
-    "  merge   merge maps saved by 'ccmap map --save' (or snapshots) and write the same output\n"
-    "\n"
-    "Run 'ccmap map --help', 'ccmap query --help' or 'ccmap merge --help' for the options.\n";
-
-constexpr const char* kMapHelp =
-    "usage: ccmap map --preset NAME --cloud FILE [--cloud FILE ...] --out DIR [--save FILE]\n"
-    "                 [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
-    "                 [--bounds XMIN,YMIN,XMAX,YMAX] [--gate K]\n"
-    "\n"
-    "  --preset NAME   cadre: 4 cm piece-wise constant Kalman layer, then 8/16/32/64 cm CCM layers\n"
-    "                  ccm, kf, omg: one 256 x 256 layer of CCM, Kalman or OMG cells\n"
-    "  --res METRES    finest cell width (default 0.04 for cadre, 0.08 otherwise); the layers of\n"
-    "                  cadre keep their 1:2:4:8:16 ratios\n"
-    "  --wl W_L        weight limit W_l of CCM and OMG cells (default 1000)\n"
-    "  --gate K        the library's outlier gate at K standard deviations (1..100) with its change\n"
-    "                  rule (docs/design.md, 'Outlier gate and change'); default 0: off, every\n"
-    "                  point trusted. Each file is one frame and the gate judges at most 512 cells\n"
-    "                  per pool and frame: held points beyond that are dropped (counted)\n"
-    "  --cloud FILE    one frame, map-frame coordinates: .ply (ascii/binary), .las (1.0-1.4,\n"
-    "                  uncompressed) or text 'x y z [w]' per line; repeat for more frames,\n"
-    "                  applied in order. A per-point weight (PLY property, 4th text column)\n"
-    "                  replaces the sensor model's weight for CCM and OMG cells (Kalman cells\n"
-    "                  weigh by range variance); weights <= 0 or non-finite are counted as bad.\n"
-    "  --poses FILE    one line 'x y z yaw' per frame: the sensor position in the map frame; the\n"
-    "                  map is re-centred on (x, y) before the frame and follows the poses like a\n"
-    "                  rover's map: points beyond its windows count as outside map.\n"
-    "  --sensor NAME   lidar (default): constant range noise --sigma (default 0.005 m);\n"
-    "                  stereo: the CADRE stereo model (noise grows with range^2 from the pose;\n"
-    "                  without --poses, from the local origin)\n"
-    "  --bounds XMIN,YMIN,XMAX,YMAX\n"
-    "                  map only the points inside this map-frame rectangle (absolute coordinates,\n"
-    "                  edges included); the others count as outside map\n"
-    "  --out DIR       writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
-    "                  normal_var,class}.png; class colours: unknown grey, traversable green,\n"
-    "                  obstacle red, steep orange, unobserved black\n"
-    "  --costmap       also writes DIR/costmap_<k>.png and .pgm per layer: a planner's cost raster\n"
-    "                  of layer k's cells (one pixel per cell of the picture's area, north up) in\n"
-    "                  costmap_2d values as grey levels: 0 free .. 252 cost (inclination and\n"
-    "                  relief against the layer's limits), 253 inscribed, 254 lethal (obstacle or\n"
-    "                  steep), 255 unknown or unobserved\n"
-    "  --inflate M     with --costmap: cost pixels within M metres of a lethal one are inscribed\n"
-    "  --save FILE     also writes a map for 'ccmap merge': the library's snapshot followed by the\n"
-    "                  origin below (tools/cli/saved_map.hpp). With --poses, the final map; without,\n"
-    "                  the map of one stack at the origin holding the points that fall in its\n"
-    "                  windows (what a rover there holds; the CSV files cover every tile)\n"
-    "\n"
-    "Without --poses the whole of every cloud is mapped: the tool sweeps the stack over the\n"
-    "clouds in tiles (move the stack to a tile, fold the tile's points, export the tile's cells),\n"
-    "so every layer covers the clouds' extent and every point's cell appears once in each layer's\n"
-    "CSV, with all the points that fall in it. While its tile is mapped a point lies inside every\n"
-    "layer's window, so only its range noise routes it: with the lidar model every point goes to\n"
-    "the finest layer its noise allows (cadre: the Kalman layer while --sigma <= res / (4 sqrt 3),\n"
-    "5.8 mm for 4 cm cells) and the coarser layers answer by pooling their 2 x 2 children (paper\n"
-    "Section IV-F), as the cells next to a rover do. A progress line follows every tenth of the\n"
-    "tiles.\n"
-    "\n"
-    "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the per-axis\n"
-    "median of the points, rounded to the coarsest cell width; with --poses, of the first cloud)\n"
-    "in double precision before the float library sees them, and adds it back to every output\n"
-    "coordinate and height. Points beyond +-1e9 m, or farther than 1e5 m (the library's range)\n"
-    "from the origin on an axis, are counted as out of range.\n";
-
-constexpr const char* kQueryHelp =
-    "usage: ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --at X,Y\n"
-    "                   [--footprint LENGTH,WIDTH[,YAW_DEG]] [--max-unknown-share F]\n"
-    "       ccmap query --preset NAME --cloud FILE [--cloud FILE ...] --path X1,Y1:X2,Y2[:...]\n"
-    "                   --footprint LENGTH,WIDTH [--step METRES] [--max-unknown-share F]\n"
-    "                   [--res METRES] [--wl W_L] [--poses FILE] [--sensor lidar|stereo] [--sigma METRES]\n"
-    "                   [--bounds XMIN,YMIN,XMAX,YMAX] [--gate K]\n"
-    "\n"
-    "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
-    "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
-    "variance, elevation variance and class, one 'key: value' per line. Without --poses only the\n"
-    "tile that holds (X, Y) is mapped (the answer is the whole map's); a point whose tile holds no\n"
-    "point of the clouds is outside the map (status: outside_map).\n"
-    "\n"
-    "  --footprint L,W[,YAW_DEG]  with --at: also the rover body, an L x W m rectangle centred\n"
-    "                  there, its length along YAW_DEG (degrees from +x, default 0): adds\n"
-    "                  footprint_class (traversable|obstacle|steep|unknown), footprint_unknown_share,\n"
-    "                  footprint_max_step_m, footprint_max_inclination_deg\n"
-    "  --path X1,Y1:X2,Y2[:...]  the body swept along this polyline (map frame, 2 .. 256 points),\n"
-    "                  its length along each segment: prints first_hazard_m (obstacle or steep)\n"
-    "                  and first_unknown_m, each a distance along the path or 'none'\n"
-    "  --step M        distance between the body's poses along --path (default: the finest cell)\n"
-    "  --max-unknown-share F  a footprint with a larger unknown share is unknown (default 0.1)\n"
-    "\n"
-    "With --footprint (or --path) and without --poses the clouds are not tiled: the stack is\n"
-    "centred on the footprint's centre (the path's first point) and every cloud folded into it as\n"
-    "one frame, as a rover standing there would map the ground; points beyond its windows count\n"
-    "as outside map, and the point answer of --at comes from the same map. With --poses the\n"
-    "queries read the map at the last pose.\n";
-
-constexpr const char* kMergeHelp =
-    "usage: ccmap merge --preset NAME --in FILE --in FILE [--in FILE ...] [--offset DX,DY] --out DIR\n"
-    "\n"
-    "Merges maps of the same preset and cell width: each --in is a map saved by 'ccmap map --save'\n"
-    "or a snapshot written by flight software (save_snapshot; its origin is then 0). The result\n"
-    "holds the first map's parameters and windows; the cells of the others are merged exactly\n"
-    "(CCM cells as sufficient statistics, Kalman cells in information form, docs/design.md) where\n"
-    "they fall in those windows, and counted as outside otherwise. Writes the same CSV files and\n"
-    "pictures as 'ccmap map', in absolute coordinates (the first map's origin added back).\n"
-    "\n"
-    "  --in FILE       a saved map; give two or more. Merge only maps built independently: a map\n"
-    "                  that already holds another's points counts them twice\n"
-    "  --offset DX,DY  the map origin of every further --in relative to the first's (m): for\n"
-    "                  snapshots without a saved origin; replaces the saved origins' difference.\n"
-    "                  Must be a whole number of coarsest cells (cadre: 0.64 m), or the maps are\n"
-    "                  refused as misaligned\n"
-    "  --out DIR       as for 'ccmap map'\n";
 
 /// Thrown inside this file only, turned into "ccmap: error: ..." by run_cli.
 struct CliError {
@@ -217,7 +104,8 @@ struct Options {
   double res = 0.0;
   double wl = 0.0;
   double gate = 0.0;  ///< outlier gate, standard deviations; 0 = off
-  std::vector<std::string> clouds;
+  std::vector<std::string> clouds;  ///< the frames in order: cloud files and --dem rasters
+  std::vector<bool> dem;             ///< per frame: a raster DEM (--dem), else a cloud file
   std::string poses;
   std::string out_dir;
   std::string save;
@@ -229,7 +117,6 @@ struct Options {
   SensorChoice sensor = SensorChoice::kLidar;
   double sigma = 0.005;
   AreaBounds bounds;
-  bool help = false;
   bool have_footprint = false;
   double footprint_length = 0.0, footprint_width = 0.0, footprint_yaw_deg = 0.0;
   bool footprint_has_yaw = false;
@@ -238,6 +125,9 @@ struct Options {
   double max_unknown_share = 0.1;
   bool costmap = false;
   double inflate = 0.0;
+  bool paper_cell = false;  ///< --paper-cell: the paper's 9-float CCM cells (PaperCell<Config>)
+  bool geotiff = false;  ///< --geotiff: DIR/layer_<k>.tif too
+  int epsg = 0;          ///< --epsg CODE; 0: none given
   /// A planner query (--footprint or --path) without --poses: a map centred on it, not tiles.
   [[nodiscard]] bool centred_map() const { return (have_footprint || !path.empty()) && poses.empty(); }
 };
@@ -256,120 +146,306 @@ std::vector<double> parse_list(const std::string& flag, const std::string& text,
   return out;
 }
 
-Options parse_options(int argc, char** argv) {
-  Options o;
-  o.command = argv[1];
-  for (int i = 2; i < argc; ++i) {
-    std::string arg = argv[i];
-    std::string value;
-    bool have_value = false;
-    if (arg == "--help" || arg == "-h") {
-      o.help = true;
-      continue;
+/// --path X1,Y1:X2,Y2[:...]: two or more finite points, x0 y0 x1 y1 ...
+std::vector<double> parse_path(const std::string& value) {
+  std::vector<double> path;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = value.find(':', start);
+    const std::string point = value.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    const std::vector<double> xy = parse_list("--path", point, ',');
+    if (xy.size() != 2 || !std::isfinite(xy[0]) || !std::isfinite(xy[1])) {
+      fail("--path: expected X1,Y1:X2,Y2[:...] (finite), got '" + point + "'", 2);
     }
-    if (arg == "--costmap") {
-      o.costmap = true;
-      continue;
-    }
-    if (arg.rfind("--", 0) != 0) fail("unexpected argument '" + arg + "' (options start with --)", 2);
-    const std::size_t eq = arg.find('=');
-    if (eq != std::string::npos) {
-      value = arg.substr(eq + 1);
-      arg = arg.substr(0, eq);
-      have_value = true;
-    }
-    static const char* kKnown[] = {"--preset", "--res",    "--wl",   "--cloud", "--poses",
-                                   "--out",    "--at",     "--sensor", "--sigma", "--bounds",
-                                   "--footprint", "--path", "--step", "--max-unknown-share", "--inflate",
-                                   "--save",   "--in",     "--offset", "--gate"};
-    if (std::find_if(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return arg == k; }) == std::end(kKnown)) {
-      fail("unknown option '" + arg + "' (see 'ccmap " + o.command + " --help')", 2);
-    }
-    if (!have_value) {
-      if (i + 1 >= argc) fail(arg + " needs a value", 2);
-      value = argv[++i];
-    }
-    if (arg == "--preset") {
-      o.preset = value;
-    } else if (arg == "--res") {
-      o.res = parse_positive(arg, value, 100.0);
-    } else if (arg == "--wl") {
-      o.wl = parse_positive(arg, value, 1e30, /*allow_inf=*/true);
-    } else if (arg == "--gate") {
-      o.gate = parse_number(arg, value);
-      const bool off = o.gate >= 0.0 && o.gate <= 0.0;  // exactly 0 (no float ==)
-      if (!off && !(o.gate >= 1.0 && o.gate <= 100.0)) {
-        fail("--gate: " + value + " is out of range (expected 0 or a number in 1..100)", 2);
-      }
-    } else if (arg == "--cloud") {
-      if (value.empty()) fail("--cloud needs a file name", 2);
-      o.clouds.push_back(value);
-    } else if (arg == "--poses") {
-      o.poses = value;
-    } else if (arg == "--out") {
-      if (value.empty()) fail("--out needs a directory", 2);
-      o.out_dir = value;
-    } else if (arg == "--at") {
-      parse_pair("--at", value, &o.at_x, &o.at_y);
-      o.have_at = true;
-    } else if (arg == "--save") {
-      if (value.empty()) fail("--save needs a file name", 2);
-      o.save = value;
-    } else if (arg == "--in") {
-      if (value.empty()) fail("--in needs a file name", 2);
-      o.inputs.push_back(value);
-    } else if (arg == "--offset") {
-      parse_pair("--offset", value, &o.offset_x, &o.offset_y);
-      o.have_offset = true;
-    } else if (arg == "--sensor") {
-      if (value == "lidar") o.sensor = SensorChoice::kLidar;
-      else if (value == "stereo") o.sensor = SensorChoice::kCadreStereo;
-      else fail("--sensor: unknown sensor '" + value + "' (expected lidar or stereo)", 2);
-    } else if (arg == "--sigma") {
-      o.sigma = parse_positive(arg, value, 10.0);
-    } else if (arg == "--bounds") {
-      o.bounds = parse_bounds(value);
-    } else if (arg == "--footprint") {
-      const std::vector<double> v = parse_list(arg, value, ',');
-      if (v.size() < 2 || v.size() > 3) fail("--footprint: expected LENGTH,WIDTH[,YAW_DEG], got '" + value + "'", 2);
-      for (std::size_t k = 0; k < v.size(); ++k) {
-        if (!std::isfinite(v[k]) || (k < 2 && !(v[k] > 0.0))) {
-          fail("--footprint: '" + value + "': length and width must be > 0, all finite", 2);
-        }
-      }
-      o.footprint_length = v[0];
-      o.footprint_width = v[1];
-      o.footprint_has_yaw = v.size() == 3;
-      o.footprint_yaw_deg = o.footprint_has_yaw ? v[2] : 0.0;
-      o.have_footprint = true;
-    } else if (arg == "--path") {
-      o.path.clear();
-      std::size_t start = 0;
-      while (true) {
-        const std::size_t end = value.find(':', start);
-        const std::string point = value.substr(start, end == std::string::npos ? std::string::npos : end - start);
-        const std::vector<double> xy = parse_list(arg, point, ',');
-        if (xy.size() != 2 || !std::isfinite(xy[0]) || !std::isfinite(xy[1])) {
-          fail("--path: expected X1,Y1:X2,Y2[:...] (finite), got '" + point + "'", 2);
-        }
-        o.path.insert(o.path.end(), xy.begin(), xy.end());
-        if (end == std::string::npos) break;
-        start = end + 1;
-      }
-      if (o.path.size() < 4) fail("--path: at least two points X1,Y1:X2,Y2", 2);
-    } else if (arg == "--step") {
-      o.step = parse_positive(arg, value, 100.0);
-    } else if (arg == "--max-unknown-share") {
-      o.max_unknown_share = parse_number(arg, value);
-      if (!(o.max_unknown_share >= 0.0 && o.max_unknown_share <= 1.0)) {
-        fail("--max-unknown-share: " + value + " is out of range (expected 0 .. 1)", 2);
-      }
-    } else if (arg == "--inflate") {
-      o.inflate = parse_number(arg, value);
-      if (!(o.inflate >= 0.0) || !std::isfinite(o.inflate)) fail("--inflate: " + value + " is out of range (expected >= 0)", 2);
-    }
+    path.insert(path.end(), xy.begin(), xy.end());
+    if (end == std::string::npos) break;
+    start = end + 1;
   }
-  return o;
+  if (path.size() < 4) fail("--path: at least two points X1,Y1:X2,Y2", 2);
+  return path;
+}
+
+// --- the command line (CLI11) -------------------------------------------------------------
+// CLI11 owns the structure: subcommands, which option belongs where, required options, options
+// that need or exclude others, duplicates, and the generated --help. The value formats (X,Y,
+// bounds, paths, ranges) stay with the parse_* functions above, whose messages name the option.
+
+/// The explanatory paragraphs of each command's --help (after the generated option list).
+constexpr const char* kMapFooter =
+    "Without --poses the whole of every cloud is mapped: the tool sweeps the stack over the\n"
+    "clouds in tiles (move the stack to a tile, fold the tile's points, export the tile's cells),\n"
+    "so every layer covers the clouds' extent and every point's cell appears once in each layer's\n"
+    "CSV, with all the points that fall in it. While its tile is mapped a point lies inside every\n"
+    "layer's window, so only its range noise routes it: with the lidar model every point goes to\n"
+    "the finest layer its noise allows (cadre: the Kalman layer while --sigma <= res / (4 sqrt 3),\n"
+    "5.8 mm for 4 cm cells) and the coarser layers answer by pooling their 2 x 2 children (paper\n"
+    "Section IV-F), as the cells next to a rover do. A progress line follows every tenth of the\n"
+    "tiles.\n"
+    "\n"
+    "Coordinates may be absolute (e.g. UTM): the tool subtracts a local origin (the per-axis\n"
+    "median of the points, rounded to the coarsest cell width; with --poses, of the first cloud)\n"
+    "in double precision before the float library sees them, and adds it back to every output\n"
+    "coordinate and height. Points beyond +-1e9 m, or farther than 1e5 m (the library's range)\n"
+    "from the origin on an axis, are counted as out of range.";
+
+constexpr const char* kQueryFooter =
+    "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
+    "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
+    "variance, elevation variance and class, one 'key: value' per line. Without --poses only the\n"
+    "tile that holds (X, Y) is mapped (the answer is the whole map's); a point whose tile holds no\n"
+    "point of the clouds is outside the map (status: outside_map).\n"
+    "\n"
+    "With --footprint (or --path) and without --poses the clouds are not tiled: the stack is\n"
+    "centred on the footprint's centre (the path's first point) and every cloud folded into it as\n"
+    "one frame, as a rover standing there would map the ground; points beyond its windows count\n"
+    "as outside map, and the point answer of --at comes from the same map. With --poses the\n"
+    "queries read the map at the last pose.";
+
+constexpr const char* kMergeFooter =
+    "Merges maps of the same preset and cell width: each --in is a map saved by 'ccmap map --save'\n"
+    "or a snapshot written by flight software (save_snapshot; its origin is then 0). The result\n"
+    "holds the first map's parameters and windows; the cells of the others are merged exactly\n"
+    "(CCM cells as sufficient statistics, Kalman cells in information form, docs/design.md) where\n"
+    "they fall in those windows, and counted as outside otherwise. Writes the same CSV files and\n"
+    "pictures as 'ccmap map', in absolute coordinates (the first map's origin added back).";
+
+/// An option whose value text goes to `parse` (which may fail with the option's message).
+CLI::Option* add_value(CLI::App* app, const std::string& name, const std::string& type, const std::string& help,
+                       std::function<void(const std::string&)> parse) {
+  return app->add_option_function<std::string>(name, std::move(parse), help)->type_name(type);
+}
+
+/// An option naming a file or directory: an empty value is refused ("--out needs a directory").
+CLI::Option* add_name(CLI::App* app, const std::string& name, const std::string& type, const std::string& what,
+                      const std::string& help, std::string* target) {
+  return add_value(app, name, type, help, [name, what, target](const std::string& v) {
+    if (v.empty()) fail(name + " needs " + what, 2);
+    *target = v;
+  });
+}
+
+/// A repeatable option: `parse` runs for every occurrence as it is parsed, so that repeated
+/// options (and --cloud / --dem between them) keep their command-line order.
+CLI::Option* add_repeated(CLI::App* app, const std::string& name, const std::string& type, const std::string& help,
+                          std::function<void(const std::string&)> parse) {
+  return add_value(app, name, type, help, std::move(parse))
+      ->trigger_on_parse()
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+}
+
+/// --cloud FILE or --dem FILE: one more frame.
+void add_frame_option(CLI::App* app, Options& o, const std::string& name, bool dem, const std::string& help) {
+  add_repeated(app, name, "FILE", help, [&o, name, dem](const std::string& v) {
+    if (v.empty()) fail(name + " needs a file name", 2);
+    o.clouds.push_back(v);
+    o.dem.push_back(dem);
+  });
+}
+
+/// --paper-cell: 'ccmap map', 'ccmap query' and 'ccmap merge' (a paper-cell map merges only
+/// with paper-cell maps: another cell kind is another snapshot shape).
+void add_paper_cell_option(CLI::App* app, Options& o) {
+  app->add_flag("--paper-cell", o.paper_cell,
+                "CCM cells of the paper's 9 floats (slopes per axis, eq. 9; coverage per\n"
+                "axis, eq. 12) instead of the full cell with the lateral covariance (the\n"
+                "least-squares plane; coverage by the smaller eigenvalue); cadre and ccm only");
+}
+
+/// --preset, the frames and the mapping parameters: 'ccmap map' and 'ccmap query'.
+void add_mapping_options(CLI::App* app, Options& o) {
+  add_value(app, "--preset", "NAME",
+            "cadre: 4 cm piece-wise constant Kalman layer, then 8/16/32/64 cm CCM layers\n"
+            "ccm, kf, omg: one 256 x 256 layer of CCM, Kalman or OMG cells",
+            [&o](const std::string& v) { o.preset = v; })
+      ->required();
+  add_paper_cell_option(app, o);
+  add_value(app, "--res", "METRES",
+            "finest cell width (default 0.04 for cadre, 0.08 otherwise); the layers of\n"
+            "cadre keep their 1:2:4:8:16 ratios",
+            [&o](const std::string& v) { o.res = parse_positive("--res", v, 100.0); });
+  add_value(app, "--wl", "W_L", "weight limit W_l of CCM and OMG cells (default 1000)",
+            [&o](const std::string& v) { o.wl = parse_positive("--wl", v, 1e30, /*allow_inf=*/true); });
+  add_value(app, "--gate", "K",
+            "the library's outlier gate at K standard deviations (1..100) with its change\n"
+            "rule (docs/design.md section 9); default 0: off, every point trusted. Each\n"
+            "file is one frame and a frame judges at most 512 cells per pool: held points\n"
+            "beyond that are dropped (counted)",
+            [&o](const std::string& v) {
+              o.gate = parse_number("--gate", v);
+              const bool off = o.gate >= 0.0 && o.gate <= 0.0;  // exactly 0 (no float ==)
+              if (!off && !(o.gate >= 1.0 && o.gate <= 100.0)) {
+                fail("--gate: " + v + " is out of range (expected 0 or a number in 1..100)", 2);
+              }
+            });
+  add_frame_option(app, o, "--cloud", false,
+            "one frame, map-frame coordinates: .ply (ascii/binary), .las (1.0-1.4,\n"
+            "uncompressed) or text 'x y z [w]' per line; repeat for more frames,\n"
+            "applied in order. A per-point weight (PLY property, 4th text column)\n"
+            "replaces the sensor model's weight for CCM and OMG cells (Kalman cells\n"
+            "weigh by range variance); weights <= 0 or non-finite are counted as bad.");
+  add_frame_option(app, o, "--dem", true,
+            "one frame from a raster DEM (GeoTIFF, ESRI ASCII grid, anything GDAL reads):\n"
+            "one point per cell with data, at the cell centre; no-data cells skipped.\n"
+            "Choose --res of a few DEM cells (a cell needs min-weight points to be known)");
+  add_value(app, "--poses", "FILE",
+            "one line 'x y z yaw' per frame: the sensor position in the map frame; the\n"
+            "map is re-centred on (x, y) before the frame and follows the poses like a\n"
+            "rover's map: points beyond its windows count as outside map.",
+            [&o](const std::string& v) { o.poses = v; });
+  add_value(app, "--sensor", "lidar|stereo",
+            "lidar (default): constant range noise --sigma (default 0.005 m);\n"
+            "stereo: the CADRE stereo model (noise grows with range^2 from the pose;\n"
+            "without --poses, from the local origin)",
+            [&o](const std::string& v) {
+              if (v == "lidar") o.sensor = SensorChoice::kLidar;
+              else if (v == "stereo") o.sensor = SensorChoice::kCadreStereo;
+              else fail("--sensor: unknown sensor '" + v + "' (expected lidar or stereo)", 2);
+            });
+  add_value(app, "--sigma", "METRES", "lidar range noise (default 0.005 m)",
+            [&o](const std::string& v) { o.sigma = parse_positive("--sigma", v, 10.0); });
+  add_value(app, "--bounds", "XMIN,YMIN,XMAX,YMAX",
+            "map only the points inside this map-frame rectangle (absolute coordinates,\n"
+            "edges included); the others count as outside map",
+            [&o](const std::string& v) { o.bounds = parse_bounds(v); });
+}
+
+/// --out, --geotiff, --epsg: the outputs of 'ccmap map' and 'ccmap merge'.
+void add_output_options(CLI::App* app, Options& o) {
+  add_name(app, "--out", "DIR", "a directory",
+           "writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
+           "normal_var,class}.png; class colours: unknown grey, traversable green,\n"
+           "obstacle red, steep orange, unobserved black",
+           &o.out_dir)
+      ->required();
+  CLI::Option* geotiff = app->add_flag("--geotiff", o.geotiff,
+                                       "also writes DIR/layer_<k>.tif per layer (GDAL): the pictures' area, one pixel\n"
+                                       "per cell in absolute coordinates; Float64 bands height, slope_x, slope_y,\n"
+                                       "normal_var, class (0 unknown, 1 traversable, 2 obstacle, 3 steep), NaN where\n"
+                                       "unobserved");
+  add_value(app, "--epsg", "CODE",
+            "with --geotiff: the coordinate system written (default: the first --dem's, if\n"
+            "it has one, else none)",
+            [&o](const std::string& v) {
+              const double code = parse_number("--epsg", v);
+              if (!(code >= 1.0 && code <= 999999.0) || code != std::floor(code)) {
+                fail("--epsg: " + v + " is not an EPSG code (expected a whole number 1 .. 999999)", 2);
+              }
+              o.epsg = static_cast<int>(code);
+            })
+      ->needs(geotiff);
+}
+
+void add_map_command(CLI::App& app, Options& o) {
+  CLI::App* map = app.add_subcommand("map", "map clouds and write per-layer CSV files and pictures");
+  add_mapping_options(map, o);
+  add_output_options(map, o);
+  CLI::Option* costmap = map->add_flag("--costmap", o.costmap,
+                                       "also writes DIR/costmap_<k>.png and .pgm per layer: a planner's cost raster\n"
+                                       "of layer k's cells (one pixel per cell of the picture's area, north up) in\n"
+                                       "costmap_2d values as grey levels: 0 free .. 252 cost (inclination and\n"
+                                       "relief against the layer's limits), 253 inscribed, 254 lethal (obstacle or\n"
+                                       "steep), 255 unknown or unobserved");
+  add_value(map, "--inflate", "M", "with --costmap: cost pixels within M metres of a lethal one are inscribed",
+            [&o](const std::string& v) {
+              o.inflate = parse_number("--inflate", v);
+              if (!(o.inflate >= 0.0) || !std::isfinite(o.inflate)) fail("--inflate: " + v + " is out of range (expected >= 0)", 2);
+            })
+      ->needs(costmap);
+  add_name(map, "--save", "FILE", "a file name",
+           "also writes a map for 'ccmap merge': the library's snapshot followed by the\n"
+           "origin (tools/cli/saved_map.hpp). With --poses, the final map; without,\n"
+           "the map of one stack at the origin holding the points that fall in its\n"
+           "windows (what a rover there holds; the CSV files cover every tile)",
+           &o.save);
+  map->footer(kMapFooter);
+}
+
+void add_query_command(CLI::App& app, Options& o) {
+  CLI::App* query = app.add_subcommand("query", "map clouds and print the map's answer at one point or along a path");
+  add_mapping_options(query, o);
+  CLI::Option* at = add_value(query, "--at", "X,Y", "the map-frame point asked (absolute coordinates)",
+                              [&o](const std::string& v) {
+                                parse_pair("--at", v, &o.at_x, &o.at_y);
+                                o.have_at = true;
+                              });
+  CLI::Option* footprint = add_value(
+      query, "--footprint", "L,W[,YAW_DEG]",
+      "with --at: also the rover body, an L x W m rectangle centred there, its\n"
+      "length along YAW_DEG (degrees from +x, default 0): adds footprint_class\n"
+      "(traversable|obstacle|steep|unknown), footprint_unknown_share,\n"
+      "footprint_max_step_m, footprint_max_inclination_deg",
+      [&o](const std::string& v) {
+        const std::vector<double> n = parse_list("--footprint", v, ',');
+        if (n.size() < 2 || n.size() > 3) fail("--footprint: expected LENGTH,WIDTH[,YAW_DEG], got '" + v + "'", 2);
+        for (std::size_t k = 0; k < n.size(); ++k) {
+          if (!std::isfinite(n[k]) || (k < 2 && !(n[k] > 0.0))) {
+            fail("--footprint: '" + v + "': length and width must be > 0, all finite", 2);
+          }
+        }
+        o.footprint_length = n[0];
+        o.footprint_width = n[1];
+        o.footprint_has_yaw = n.size() == 3;
+        o.footprint_yaw_deg = o.footprint_has_yaw ? n[2] : 0.0;
+        o.have_footprint = true;
+      });
+  CLI::Option* path = add_value(query, "--path", "X1,Y1:X2,Y2[:...]",
+                                "the body swept along this polyline (map frame, 2 .. 256 points),\n"
+                                "its length along each segment: prints first_hazard_m (obstacle or steep)\n"
+                                "and first_unknown_m, each a distance along the path or 'none'",
+                                [&o](const std::string& v) { o.path = parse_path(v); });
+  path->needs(footprint)->excludes(at);
+  add_value(query, "--step", "M", "distance between the body's poses along --path (default: the finest cell)",
+            [&o](const std::string& v) { o.step = parse_positive("--step", v, 100.0); })
+      ->needs(path);
+  add_value(query, "--max-unknown-share", "F", "a footprint with a larger unknown share is unknown (default 0.1)",
+            [&o](const std::string& v) {
+              o.max_unknown_share = parse_number("--max-unknown-share", v);
+              if (!(o.max_unknown_share >= 0.0 && o.max_unknown_share <= 1.0)) {
+                fail("--max-unknown-share: " + v + " is out of range (expected 0 .. 1)", 2);
+              }
+            });
+  query->footer(kQueryFooter);
+}
+
+void add_merge_command(CLI::App& app, Options& o) {
+  CLI::App* merge = app.add_subcommand("merge", "merge maps saved by 'ccmap map --save' (or snapshots) and write the same output");
+  add_value(merge, "--preset", "NAME", "the maps' preset (cadre, ccm, kf or omg)", [&o](const std::string& v) { o.preset = v; })
+      ->required();
+  add_paper_cell_option(merge, o);
+  add_repeated(merge, "--in", "FILE",
+            "a saved map; give two or more. Merge only maps built independently: a map\n"
+            "that already holds another's points counts them twice",
+            [&o](const std::string& v) {
+              if (v.empty()) fail("--in needs a file name", 2);
+              o.inputs.push_back(v);
+            });
+  add_value(merge, "--offset", "DX,DY",
+            "the map origin of every further --in relative to the first's (m): for\n"
+            "snapshots without a saved origin; replaces the saved origins' difference.\n"
+            "Must be a whole number of coarsest cells (cadre: 0.64 m), or the maps are\n"
+            "refused as misaligned",
+            [&o](const std::string& v) {
+              parse_pair("--offset", v, &o.offset_x, &o.offset_y);
+              o.have_offset = true;
+            });
+  add_output_options(merge, o);
+  merge->footer(kMergeFooter);
+}
+
+/// For an option given to the wrong command: "--at belongs to 'ccmap query'", or empty when no
+/// other command knows `arg` either.
+std::string foreign_option_hint(const CLI::App& app, const CLI::App& used, const std::string& arg) {
+  const std::string name = arg.substr(0, arg.find('='));
+  if (name.rfind("--", 0) != 0) return {};
+  std::vector<std::string> owners;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    if (sub != &used && sub->get_option_no_throw(name) != nullptr) owners.push_back("'ccmap " + sub->get_name() + "'");
+  }
+  if (owners.empty()) return {};
+  std::string text = name + " belongs to " + owners[0];
+  for (std::size_t i = 1; i < owners.size(); ++i) text += " and " + owners[i];
+  if (used.get_name() == "merge") text += " (the maps bring their own parameters)";
+  return text;
 }
 
 std::string base_name(const std::string& path) {
@@ -388,15 +464,21 @@ struct MappedClouds {
   bool tiled = false;                  ///< no --poses: the stack was swept over the clouds
   std::vector<std::vector<LayerCellRow>> rows;  ///< tiled: the rows of every layer
   TileQuery query;                     ///< tiled query: where the answer is
+  std::string srs_wkt;                 ///< coordinate system of the GeoTIFFs: --epsg, else the first DEM's
 };
 
 const char* sensor_name(const Options& o) {
   return o.sensor == SensorChoice::kLidar ? "lidar" : "stereo (CADRE model)";
 }
 
-Cloud read_nonempty_cloud(const std::string& path) {
-  Cloud cloud = read_cloud(path);
+/// Frame f of the options: a cloud file, or a raster DEM read as a cloud (one point per cell
+/// with data); the first DEM's coordinate system becomes the GeoTIFFs' when --epsg is not given.
+Cloud read_frame(const Options& o, std::size_t f, MappedClouds& m) {
+  const std::string& path = o.clouds[f];
+  std::string srs;
+  Cloud cloud = o.dem[f] ? read_dem(path, &srs) : read_cloud(path);
   if (!cloud.ok()) fail(cloud.error);
+  if (m.srs_wkt.empty() && o.epsg == 0) m.srs_wkt = srs;
   if (cloud.size() == 0) {
     fail(path + ": empty cloud (" + std::to_string(cloud.declared) + " points, " +
          std::to_string(cloud.skipped_non_finite) + " of them non-finite)");
@@ -410,6 +492,7 @@ void print_header(const Options& o, const MappedClouds& m, std::ostream& out) {
   out << " m, W_l " << fmt("%g", m.runner->weight_limit()) << ", min weight " << fmt("%g", m.runner->min_weight())
       << ", sensor " << sensor_name(o);
   if (o.sensor == SensorChoice::kLidar) out << " (sigma " << fmt("%g", o.sigma) << " m)";
+  if (preset_has_ccm(o.preset)) out << ", CCM cell " << (o.paper_cell ? "paper (9 floats)" : "full (10 floats)");
   out << "\n";
   out << "origin (map frame): " << fmt("%.3f", m.origin.xyz[0]) << ' ' << fmt("%.3f", m.origin.xyz[1]) << ' '
       << fmt("%.3f", m.origin.xyz[2]) << "  (per-axis median of the " << (o.poses.empty() ? "" : "first cloud's ")
@@ -494,7 +577,7 @@ void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool 
   }
   std::vector<float> xyz, weights;
   for (std::size_t f = 0; f < o.clouds.size(); ++f) {
-    const Cloud cloud = read_nonempty_cloud(o.clouds[f]);
+    const Cloud cloud = read_frame(o, f, m);
     m.read += cloud.declared;
     if (f == 0) {
       if (!robust_origin({&cloud}, o.bounds, m.widths.back(), &m.origin, &error)) fail(o.clouds[f] + ": " + error);
@@ -524,8 +607,8 @@ std::vector<Cloud> read_all_clouds(const Options& o, MappedClouds& m, std::ostre
   std::vector<Cloud> clouds;
   std::vector<const Cloud*> all;
   clouds.reserve(o.clouds.size());
-  for (const std::string& path : o.clouds) {
-    clouds.push_back(read_nonempty_cloud(path));
+  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
+    clouds.push_back(read_frame(o, f, m));
     m.read += clouds.back().declared;
   }
   for (const Cloud& c : clouds) all.push_back(&c);
@@ -583,12 +666,11 @@ void map_in_tiles(const Options& o, MappedClouds& m, std::ostream& out, bool ver
 }
 
 MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
-  if (o.preset.empty()) fail("--preset is required (cadre, ccm, kf or omg)", 2);
   std::string error;
   MappedClouds m;
-  m.runner = make_map_runner(o.preset, &error);
+  m.runner = make_map_runner(o.preset, o.paper_cell, &error);
   if (!m.runner) fail(error, 2);
-  if (o.clouds.empty()) fail("at least one --cloud FILE is required", 2);
+  if (o.clouds.empty()) fail("at least one --cloud FILE (or --dem FILE) is required", 2);
 
   const int layers = preset_layer_count(o.preset);
   const double finest = o.res > 0.0 ? o.res : preset_default_cell_width(o.preset);
@@ -720,6 +802,10 @@ void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
           << kMaxImageCells << " a picture may have: no pictures for it (the CSV holds every cell)\n";
     } else {
       if (!write_layer_images(prefix, rows, window, &error)) fail(error);
+      if (o.geotiff && !write_layer_geotiff(prefix + ".tif", rows, extent, m.widths[static_cast<std::size_t>(k)],
+                                            m.srs_wkt, &error)) {
+        fail(error);
+      }
       if (o.costmap) {
         const std::vector<std::uint8_t> cost = layer_costmap(m, k, rows, extent, o.inflate);
         const std::string cost_prefix = o.out_dir + "/costmap_" + std::to_string(k);
@@ -748,18 +834,24 @@ void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
   }
   out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
       << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+  if (o.geotiff) {
+    out << "geotiff: " << o.out_dir << "/layer_<k>.tif, the pictures' area in absolute coordinates ("
+        << (o.epsg > 0 ? "EPSG:" + std::to_string(o.epsg) : (m.srs_wkt.empty() ? "no coordinate system" : "the DEM's coordinate system"))
+        << "); bands height, slope_x, slope_y, normal_var, class (0 unknown, 1 traversable, 2 obstacle, 3 steep), NaN unobserved\n";
+  }
 }
 
-/// Options that belong to one command only.
-void refuse_foreign_options(const Options& o) {
-  if (o.command != "query" && o.have_at) fail("--at belongs to 'ccmap query'", 2);
-  if (o.command != "map" && !o.save.empty()) fail("--save belongs to 'ccmap map'", 2);
-  if (o.command != "merge" && !o.inputs.empty()) fail("--in belongs to 'ccmap merge'", 2);
-  if (o.command != "merge" && o.have_offset) fail("--offset belongs to 'ccmap merge'", 2);
-  if (o.command == "merge" && (!o.clouds.empty() || !o.poses.empty() || o.res > 0.0 || o.wl > 0.0 || o.gate > 0.0 ||
-                                 o.bounds.set)) {
-    fail("ccmap merge takes --preset, --in, --offset and --out (the maps bring their own parameters)", 2);
+/// --geotiff, --epsg and --dem: refused up front (exit 2) in a build without GDAL or with an
+/// unknown EPSG code, before any cloud is read. Returns the GeoTIFFs' coordinate system of --epsg
+/// (empty without it).
+std::string check_raster_options(const Options& o) {
+  const bool any_dem = std::find(o.dem.begin(), o.dem.end(), true) != o.dem.end();
+  if ((o.geotiff || any_dem) && !raster_io_available()) {
+    fail(std::string(o.geotiff ? "--geotiff" : "--dem") + ": " + raster_io_unavailable_reason(), 2);
   }
+  std::string wkt, error;
+  if (o.epsg > 0 && !srs_from_epsg(o.epsg, &wkt, &error)) fail("--epsg: " + error, 2);
+  return wkt;
 }
 
 /// A tiled map has no single stack: the saved map is that of one stack at the origin, every cloud
@@ -770,8 +862,9 @@ void fold_one_window(const Options& o, MappedClouds& m, std::ostream& out) {
   const float sensor[3] = {0.0F, 0.0F, 0.0F};
   FrameStats totals;
   std::vector<float> xyz, weights;
-  for (const std::string& path : o.clouds) {
-    const Cloud cloud = read_nonempty_cloud(path);
+  for (std::size_t f = 0; f < o.clouds.size(); ++f) {
+    const std::string& path = o.clouds[f];
+    const Cloud cloud = read_frame(o, f, m);
     FrameStats kept_back;
     local_frame_points(cloud, m.origin, o.bounds, &xyz, &weights, &kept_back);
     FrameStats stats;
@@ -784,12 +877,9 @@ void fold_one_window(const Options& o, MappedClouds& m, std::ostream& out) {
 }
 
 int run_map(const Options& o, std::ostream& out) {
-  if (o.out_dir.empty()) fail("--out DIR is required", 2);
-  if (o.have_at) fail("--at belongs to 'ccmap query'", 2);
-  if (o.have_footprint || !o.path.empty()) fail("--footprint and --path belong to 'ccmap query'", 2);
-  if (o.step > 0.0 || o.max_unknown_share != 0.1) fail("--step and --max-unknown-share belong to 'ccmap query'", 2);
-  if (o.inflate > 0.0 && !o.costmap) fail("--inflate needs --costmap", 2);
+  const std::string epsg_wkt = check_raster_options(o);
   MappedClouds m = build_map(o, out, true);
+  if (o.epsg > 0) m.srs_wkt = epsg_wkt;
   write_outputs(m, o, out);
   if (!o.save.empty()) {
     if (m.tiled) fold_one_window(o, m, out);
@@ -818,19 +908,22 @@ std::int64_t whole_cells(double metres, double width, const std::string& what) {
 }
 
 int run_merge(const Options& o, std::ostream& out) {
-  if (o.preset.empty()) fail("--preset is required (cadre, ccm, kf or omg)", 2);
-  if (o.out_dir.empty()) fail("--out DIR is required", 2);
   if (o.inputs.size() < 2) fail("ccmap merge needs two or more --in FILE", 2);
   std::string error;
   MappedClouds m;
-  m.runner = make_map_runner(o.preset, &error);
+  m.srs_wkt = check_raster_options(o);
+  m.runner = make_map_runner(o.preset, o.paper_cell, &error);
   if (!m.runner) fail(error, 2);
   const int layers = preset_layer_count(o.preset);
   const std::int64_t coarse_factor = std::int64_t{1} << (layers - 1);  // finest cells per coarsest cell
   std::vector<SavedMap> maps(o.inputs.size());
   for (std::size_t i = 0; i < o.inputs.size(); ++i) {
     if (!read_saved_map(o.inputs[i], m.runner->snapshot_size(), &maps[i], &error)) {
-      fail(error + " (is it a " + o.preset + " map?)");
+      // A map of the other CCM cell kind has another size: say which flag would read it.
+      const std::string kind = !preset_has_ccm(o.preset) ? ""
+                               : o.paper_cell             ? " of paper cells (saved with --paper-cell)"
+                                                          : " of full cells (saved without --paper-cell)";
+      fail(error + " (is it a " + o.preset + " map" + kind + "?)");
     }
   }
   if (!m.runner->load_snapshot(maps[0].snapshot, &error)) fail(o.inputs[0] + ": " + error);
@@ -907,11 +1000,7 @@ int run_path_query(const Options& o, const MappedClouds& m, std::ostream& out) {
 
 int run_query(const Options& o, std::ostream& out) {
   if (!o.have_at && o.path.empty()) fail("--at X,Y or --path X1,Y1:X2,Y2[:...] is required", 2);
-  if (o.have_at && !o.path.empty()) fail("--at and --path are two queries: give one", 2);
-  if (!o.out_dir.empty()) fail("--out belongs to 'ccmap map'", 2);
-  if (o.costmap || o.inflate > 0.0) fail("--costmap and --inflate belong to 'ccmap map'", 2);
-  if (o.step > 0.0 && o.path.empty()) fail("--step belongs to --path", 2);
-  if (!o.path.empty() && !o.have_footprint) fail("--path needs --footprint LENGTH,WIDTH (the body swept along it)", 2);
+  check_raster_options(o);
   std::ostringstream log;
   MappedClouds m = build_map(o, log, true);
   if (!o.path.empty()) return run_path_query(o, m, out);
@@ -964,26 +1053,45 @@ int run_query(const Options& o, std::ostream& out) {
 
 int run_cli(int argc, char** argv, std::ostream& out, std::ostream& err) {
   try {
-    if (argc < 2 || argv == nullptr) {
-      err << kMainHelp;
-      return 2;
+    Options o;
+    CLI::App app("Builds Converging Covariance Maps (CCM) from point clouds.", "ccmap");
+    app.get_formatter()->label("Usage", "usage");
+    app.get_formatter()->column_width(34);
+    app.require_subcommand(1);
+    app.footer("Run 'ccmap map --help', 'ccmap query --help' or 'ccmap merge --help' for the options.");
+    add_map_command(app, o);
+    add_query_command(app, o);
+    add_merge_command(app, o);
+    if (argc >= 2 && argv != nullptr && argv[1] != nullptr && argv[1][0] != '-') {
+      const std::string command = argv[1];
+      if (command == "help") {
+        out << app.help();
+        return 0;
+      }
+      if (command != "map" && command != "query" && command != "merge") {
+        fail("unknown command '" + command + "' (expected map, query or merge)", 2);
+      }
     }
-    const std::string command = argv[1];
-    if (command == "--help" || command == "-h" || command == "help") {
-      out << kMainHelp;
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::CallForHelp&) {
+      out << app.help();  // the selected command's, else the overview
       return 0;
+    } catch (const CLI::ExtrasError& e) {
+      const std::vector<CLI::App*> used = app.get_subcommands();
+      std::string hint;
+      for (const std::string& extra : app.remaining(true)) {
+        if (hint.empty() && !used.empty()) hint = foreign_option_hint(app, *used[0], extra);
+      }
+      fail(hint.empty() ? e.what() : hint, 2);
+    } catch (const CLI::ParseError& e) {
+      std::string message = e.what();
+      std::replace(message.begin(), message.end(), '\n', ' ');
+      fail(message, 2);
     }
-    if (command != "map" && command != "query" && command != "merge") {
-      fail("unknown command '" + command + "' (expected map, query or merge)", 2);
-    }
-    const Options o = parse_options(argc, argv);
-    if (o.help) {
-      out << (command == "map" ? kMapHelp : (command == "query" ? kQueryHelp : kMergeHelp));
-      return 0;
-    }
-    refuse_foreign_options(o);
-    if (command == "merge") return run_merge(o, out);
-    return command == "map" ? run_map(o, out) : run_query(o, out);
+    o.command = app.get_subcommands().at(0)->get_name();
+    if (o.command == "merge") return run_merge(o, out);
+    return o.command == "map" ? run_map(o, out) : run_query(o, out);
   } catch (const CliError& e) {
     err << "ccmap: error: " << e.message << "\n";
     return e.code;

@@ -269,13 +269,29 @@ int preset_layer_count(const std::string& preset) {
   return 0;
 }
 
-std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, std::string* error) {
-  if (preset == "cadre") return std::make_unique<StackRunner<CadreConfig>>();
-  if (preset == "ccm") return std::make_unique<StackRunner<SingleCcmConfig>>();
+bool preset_has_ccm(const std::string& preset) { return preset == "cadre" || preset == "ccm"; }
+
+std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, bool paper_cell, std::string* error) {
+  if (paper_cell && preset_layer_count(preset) > 0 && !preset_has_ccm(preset)) {
+    *error = "--paper-cell: preset '" + preset + "' has no CCM layer (the option applies to cadre and ccm)";
+    return nullptr;
+  }
+  if (preset == "cadre") {
+    if (paper_cell) return std::make_unique<StackRunner<PaperCell<CadreConfig>>>();
+    return std::make_unique<StackRunner<CadreConfig>>();
+  }
+  if (preset == "ccm") {
+    if (paper_cell) return std::make_unique<StackRunner<PaperCell<SingleCcmConfig>>>();
+    return std::make_unique<StackRunner<SingleCcmConfig>>();
+  }
   if (preset == "kf") return std::make_unique<StackRunner<SingleKalmanConfig>>();
   if (preset == "omg") return std::make_unique<StackRunner<SingleOmgConfig>>();
   *error = "unknown preset '" + preset + "' (expected one of: cadre, ccm, kf, omg)";
   return nullptr;
+}
+
+std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, std::string* error) {
+  return make_map_runner(preset, false, error);
 }
 
 }  // namespace ccmap::tools

@@ -133,7 +133,13 @@ const std::vector<std::string>& preset_names();
 double preset_default_cell_width(const std::string& preset);
 /// Number of layers of a preset; 0 for an unknown preset.
 int preset_layer_count(const std::string& preset);
-/// A runner for the preset, not yet initialised; nullptr with a message for an unknown preset.
+/// True if the preset has CCM layers (cadre, ccm).
+bool preset_has_ccm(const std::string& preset);
+/// A runner for the preset, not yet initialised: full CCM cells, or the paper's 9-float cells
+/// with paper_cell (PaperCell<Config>). nullptr with a message for an unknown preset, or for
+/// paper_cell with a preset without CCM layers.
+std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, bool paper_cell, std::string* error);
+/// The same with full CCM cells.
 std::unique_ptr<MapRunner> make_map_runner(const std::string& preset, std::string* error);
 
 }  // namespace ccmap::tools

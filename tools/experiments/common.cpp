@@ -31,11 +31,12 @@ int parse_experiment_args(int argc, char** argv, const std::string& description,
   const char* prog = argc > 0 ? argv[0] : "experiment";
   auto usage = [&](FILE* f) {
     std::fprintf(f,
-                 "%s\n\nusage: %s [--seed N] [--out DIR] [--quick] [--data DIR] [--gate K] [--change-points M]\n"
-                 "       [--change-share S]\n"
+                 "%s\n\nusage: %s [--seed N] [--out DIR] [--quick] [--data DIR] [--paper-cell] [--gate K]\n"
+                 "       [--change-points M] [--change-share S]\n"
                  "  --seed N    random seed (default 1); results are deterministic by seed\n"
                  "  --out DIR   output directory for figures (default out/experiments)\n"
                  "  --quick     reduced size (what the CI test runs)\n"
+                 "  --paper-cell  the paper's 9-float CCM cell (no lateral covariance) instead of the full cell\n"
                  "  --data DIR  real-data directory (default $CCMAP_DATA_DIR, else the shared data next to the "
                  "source tree)\n"
                  "  --gate K, --change-points M, --change-share S\n"
@@ -51,6 +52,8 @@ int parse_experiment_args(int argc, char** argv, const std::string& description,
       return 0;
     } else if (a == "--quick") {
       args->quick = true;
+    } else if (a == "--paper-cell") {
+      args->paper_cell = true;
     } else if (a == "--seed" && has_value) {
       char* end = nullptr;
       args->seed = std::strtoull(argv[++i], &end, 10);

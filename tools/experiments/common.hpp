@@ -27,10 +27,12 @@ struct GateSetting {
 ///   --seed N   (default 1)  --out DIR (default out/experiments)  --quick (reduced size)
 ///   --data DIR (real data; default $CCMAP_DATA_DIR, else <source>/../shared/data)
 ///   --gate K, --change-points M, --change-share S   (the outlier gate: GateSetting)
+///   --paper-cell (the paper's 9-float CCM cell, CcmPaperCell, instead of the full CcmCell)
 struct ExperimentArgs {
   std::uint64_t seed = 1;
   std::string out_dir = "out/experiments";
   bool quick = false;
+  bool paper_cell = false;
   std::string data_dir;  ///< resolved (never empty after parse_experiment_args)
   GateSetting gate;
 };

@@ -39,11 +39,13 @@ double rect_coverage(const sim::Rect& r, double x0, double y0, double w) {
   return ox * oy / (w * w);
 }
 
-/// The two single-layer maps of one resolution (heap: a few MB each).
+/// The two single-layer maps of one resolution (heap: a few MB each). CcmConfig: SingleCcmConfig
+/// (full cells) or PaperCell<SingleCcmConfig>.
+template <typename CcmConfig>
 struct MapPair {
   double width_m = 0.0;
   GateSetting gate;
-  std::unique_ptr<Stack<SingleCcmConfig>> ccm = std::make_unique<Stack<SingleCcmConfig>>();
+  std::unique_ptr<Stack<CcmConfig>> ccm = std::make_unique<Stack<CcmConfig>>();
   std::unique_ptr<Stack<SingleOmgConfig>> omg = std::make_unique<Stack<SingleOmgConfig>>();
   bool reset() {
     StackParams params = default_stack_params(static_cast<float>(width_m));
@@ -85,8 +87,9 @@ class SteepCache {
 };
 
 /// CCM class with the obstacle test before the coverage test (DetectionMethod::kCcmObstacleFirst).
-CellClass obstacle_first_class(const Stack<SingleCcmConfig>& stack, std::int32_t i, std::int32_t j, float w) {
-  const CcmCell c = stack.pooled_cell(0, CellIndex{i, j});
+template <typename CcmConfig>
+CellClass obstacle_first_class(const Stack<CcmConfig>& stack, std::int32_t i, std::int32_t j, float w) {
+  const auto c = stack.pooled_cell(0, CellIndex{i, j});
   if (c.weight >= stack.params().min_weight && c.weight > 0.0F &&
       ccm_surface(c).normal_variance > stack.normal_variance_threshold(0)) {
     return CellClass::kObstacle;
@@ -95,7 +98,8 @@ CellClass obstacle_first_class(const Stack<SingleCcmConfig>& stack, std::int32_t
 }
 
 /// Classifies the cells one frame observes and tallies them (see detection.hpp).
-void tally_frame(const MapPair& maps, const sim::StereoParams& sp, const sim::Point3& camera, double yaw,
+template <typename CcmConfig>
+void tally_frame(const MapPair<CcmConfig>& maps, const sim::StereoParams& sp, const sim::Point3& camera, double yaw,
                  const sim::HeightRaster& ground_raster, const sim::Rect& box, double min_coverage, SteepCache& steep,
                  DetectionCounts* counts /* [3], by DetectionMethod */) {
   const double w = maps.width_m;
@@ -146,7 +150,8 @@ void tally_frame(const MapPair& maps, const sim::StereoParams& sp, const sim::Po
 }
 
 /// Whether a cell holding part of the box (c > 0) is marked hazard by `method`.
-bool obstacle_marked(const MapPair& maps, DetectionMethod method, const sim::Rect& box) {
+template <typename CcmConfig>
+bool obstacle_marked(const MapPair<CcmConfig>& maps, DetectionMethod method, const sim::Rect& box) {
   const double w = maps.width_m;
   const float wf = static_cast<float>(w);
   const auto i0 = static_cast<std::int32_t>(std::floor(box.x0 / w)), i1 = static_cast<std::int32_t>(std::floor(box.x1 / w));
@@ -264,8 +269,12 @@ bool whole_cell_in_view(const sim::StereoParams& sp, const sim::Point3& camera, 
   return true;
 }
 
-DetectionResult run_detection(const DetectionConfig& cfg) {
+namespace {
+
+template <typename CcmConfig>
+DetectionResult run_trials(const DetectionConfig& cfg) {
   DetectionResult result;
+  result.paper_cell = cfg.paper_cell;
   result.first_seed = cfg.first_seed;
   result.maps = cfg.gate.describe(default_stack_params(0.08F));
   result.end_seed = cfg.first_seed + cfg.trials;
@@ -295,7 +304,7 @@ DetectionResult run_detection(const DetectionConfig& cfg) {
       sim::generate_path(sim::Pose2{0.0, 0.0, 0.0}, {sim::PathSegment{drive, 0.0}}, cfg.frame_spacing_m);
   const double half_width = max_range * 0.5 * sp.width_px / sp.focal_px + 0.2;
 
-  std::vector<MapPair> maps(cfg.cell_widths_m.size());
+  std::vector<MapPair<CcmConfig>> maps(cfg.cell_widths_m.size());
   for (std::size_t k = 0; k < maps.size(); ++k) {
     maps[k].width_m = cfg.cell_widths_m[k];
     maps[k].gate = cfg.gate;
@@ -318,7 +327,7 @@ DetectionResult run_detection(const DetectionConfig& cfg) {
     const sim::ProceduralTerrain ground(tp);
     const sim::HeightRaster base = sim::rasterize(ground, area, res);
     std::vector<SteepCache> steep;
-    for (const MapPair& mp : maps) steep.emplace_back(&ground, mp.width_m);
+    for (const MapPair<CcmConfig>& mp : maps) steep.emplace_back(&ground, mp.width_m);
 
     for (const auto& [size_um, users] : sizes) {
       const double size_wanted = static_cast<double>(size_um) * 1e-6;
@@ -358,7 +367,7 @@ DetectionResult run_detection(const DetectionConfig& cfg) {
         const sim::Point3& cam = frame.sensor_position_map;
         const PointXYZ origin{static_cast<float>(cam.x), static_cast<float>(cam.y), static_cast<float>(cam.z)};
         for (std::size_t u = 0; u < users.size(); ++u) {
-          MapPair& mp = maps[users[u].first];
+          MapPair<CcmConfig>& mp = maps[users[u].first];
           const float fx = static_cast<float>(pose.x), fy = static_cast<float>(pose.y);
           if (mp.ccm->move_to(fx, fy) != Status::kOk || mp.omg->move_to(fx, fy) != Status::kOk ||
               mp.ccm->update_frame(points.data(), points.size(), origin, nullptr) != Status::kOk ||
@@ -375,7 +384,7 @@ DetectionResult run_detection(const DetectionConfig& cfg) {
         }
       }
       for (std::size_t u = 0; u < users.size(); ++u) {
-        const MapPair& mp = maps[users[u].first];
+        const MapPair<CcmConfig>& mp = maps[users[u].first];
         for (DetectionMethod m : kDetectionMethods) {
           DetectionCounts& c = counts[u][static_cast<std::size_t>(m)];
           c.trials = 1;
@@ -394,6 +403,12 @@ DetectionResult run_detection(const DetectionConfig& cfg) {
   return result;
 }
 
+}  // namespace
+
+DetectionResult run_detection(const DetectionConfig& cfg) {
+  return cfg.paper_cell ? run_trials<PaperCell<SingleCcmConfig>>(cfg) : run_trials<SingleCcmConfig>(cfg);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Shards
 // ---------------------------------------------------------------------------------------------
@@ -407,6 +422,7 @@ bool write_detection_csv(const std::string& path, const DetectionResult& result,
   std::ofstream out(path);
   out << "# ccmap fig6/fig7 detection shard: integer cell-frame counts (see tools/experiments/detection.hpp)\n";
   out << "# seeds " << result.first_seed << ":" << result.end_seed << "\n";
+  out << "# ccm cell " << (result.paper_cell ? "paper" : "full") << "\n";
   out << "# maps " << result.maps << "\n" << kCsvHeader << "\n";
   for (const DetectionRow& r : result.rows) {
     const DetectionCounts& c = r.counts;
@@ -429,6 +445,7 @@ bool read_detection_csv(const std::string& path, DetectionResult* out, std::stri
   std::ifstream in(path);
   if (!in) return fail("cannot open");
   DetectionResult r;
+  r.paper_cell = true;  // shards written before the cell kinds existed hold the paper's cell
   bool seeds = false, header = false;
   std::string line;
   while (std::getline(in, line)) {
@@ -442,6 +459,7 @@ bool read_detection_csv(const std::string& path, DetectionResult* out, std::stri
       } else if (line.rfind("# maps ", 0) == 0) {
         r.maps = line.substr(7);
       }
+      if (line == "# ccm cell full") r.paper_cell = false;
       continue;
     }
     if (!header) {
@@ -484,9 +502,14 @@ bool read_detection_csv(const std::string& path, DetectionResult* out, std::stri
 
 bool merge_detection_results(const std::vector<DetectionResult>& shards, DetectionResult* out, std::string* error) {
   DetectionResult merged;
+  merged.paper_cell = !shards.empty() && shards.front().paper_cell;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges;
   if (!shards.empty()) merged.maps = shards.front().maps;
   for (const DetectionResult& s : shards) {
+    if (s.paper_cell != merged.paper_cell) {
+      if (error != nullptr) *error = "shards of the paper cell and of the full cell cannot be merged";
+      return false;
+    }
     if (s.maps != merged.maps) {
       if (error != nullptr) *error = "shards of different maps: '" + merged.maps + "' and '" + s.maps + "'";
       return false;
@@ -555,8 +578,8 @@ std::string detection_table(const DetectionResult& result) {
                format("%.2f", r.false_obstacle_ratio())});
   }
   std::ostringstream o;
-  o << "seeds " << result.first_seed << ":" << result.end_seed
-    << "; m2f = time-summed area (m^2 x frames); missed share = missed / known obstacle area;\n"
+  o << "seeds " << result.first_seed << ":" << result.end_seed << ", " << (result.paper_cell ? "paper" : "full")
+    << " CCM cell; m2f = time-summed area (m^2 x frames); missed share = missed / known obstacle area;\n"
        "obstacle unknown = unknown / observed obstacle area; FN/obstacle = false-obstacle area / known obstacle area;\n"
        "detected = trials with the obstacle marked in at least one frame\n\n"
     << t.str() << "\n";
@@ -591,7 +614,8 @@ bool write_detection_plots(const DetectionResult& result, const std::string& out
       }
     return std::make_pair(x, y);
   };
-  const std::string seeds = format("%llu trials", static_cast<unsigned long long>(result.end_seed - result.first_seed));
+  const std::string seeds = format("%llu trials, %s CCM cell", static_cast<unsigned long long>(result.end_seed - result.first_seed),
+                                   result.paper_cell ? "paper" : "full");
   auto colour = [](std::size_t k) { return std::string(palette_color(static_cast<int>(k))); };
   SvgPlot ccm;
   ccm.title = "Fig. 6: CCM (obstacle test before coverage) (" + seeds + ")";

@@ -86,6 +86,7 @@ struct DetectionConfig {
   double lateral_offset_max_m = 0.2;
   double border_streak_probability = 0.0;  ///< sim streaks (Section V-E); 0 = off
   GateSetting gate;              ///< both maps' outlier gate (default: the library's)
+  bool paper_cell = false;       ///< CCM map of the paper's 9-float cell (PaperCell<SingleCcmConfig>)
   bool progress = false;         ///< one line per trial on stderr
   static DetectionConfig quick() {
     DetectionConfig c;
@@ -147,6 +148,7 @@ struct DetectionRow {
 struct DetectionResult {
   std::uint64_t first_seed = 0, end_seed = 0;  ///< seeds [first, end) (one shard)
   std::string maps;                            ///< the maps' gate (GateSetting::describe); shards of different maps do not merge
+  bool paper_cell = false;                     ///< the CCM map's cell (CSV line "# ccm cell paper|full")
   std::vector<DetectionRow> rows;              ///< method-major, then width, then ratio
   const DetectionRow* find(DetectionMethod method, double cell_width_m, double size_ratio) const;
   DetectionRow* find(DetectionMethod method, double cell_width_m, double size_ratio);
@@ -158,8 +160,9 @@ DetectionResult run_detection(const DetectionConfig& config);
 /// Shard file (CSV with a "# seeds A:B" line and a "# maps ..." line); false with a reason.
 bool write_detection_csv(const std::string& path, const DetectionResult& result, std::string* error);
 bool read_detection_csv(const std::string& path, DetectionResult* out, std::string* error);
-/// Sums shards (rows matched by method, width, ratio). Refused: overlapping seed ranges, shards
-/// of different maps (their "# maps" lines differ).
+/// Sums shards (rows matched by method, width, ratio). Refused: overlapping seed ranges, shards of
+/// different CCM cells, shards of different maps (their "# maps" lines differ). A shard without
+/// the "# ccm cell" line (written before the full cell) is read as the paper cell's.
 bool merge_detection_results(const std::vector<DetectionResult>& shards, DetectionResult* out, std::string* error);
 
 /// Table with areas (m^2 x frames), shares and the paper's expectation beside.

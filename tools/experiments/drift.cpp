@@ -25,10 +25,14 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 bool near(double a, double b) { return std::fabs(a - b) <= 1e-9 * std::max(1.0, std::fabs(a)); }
 
+template <typename CcmConfig>
 struct DriftMap {
   std::size_t row = 0;  ///< index into DriftResult::rows
-  std::unique_ptr<Stack<SingleCcmConfig>> stack = std::make_unique<Stack<SingleCcmConfig>>();
+  std::unique_ptr<Stack<CcmConfig>> stack = std::make_unique<Stack<CcmConfig>>();
 };
+
+template <typename CcmConfig>
+DriftResult drift_runs(const DriftConfig& cfg);
 
 }  // namespace
 
@@ -41,6 +45,13 @@ const DriftRow* DriftResult::find(double w, double wl, double drift, bool uncert
 }
 
 DriftResult run_drift(const DriftConfig& cfg) {
+  return cfg.paper_cell ? drift_runs<PaperCell<SingleCcmConfig>>(cfg) : drift_runs<SingleCcmConfig>(cfg);
+}
+
+namespace {
+
+template <typename CcmConfig>
+DriftResult drift_runs(const DriftConfig& cfg) {
   DriftResult result;
   for (const bool uncertain : {false, true}) {
     if (uncertain && !cfg.compare_uncertain_moves) continue;
@@ -71,7 +82,7 @@ DriftResult run_drift(const DriftConfig& cfg) {
       sim::generate_path(sim::Pose2{0.0, 0.0, 0.0}, {sim::PathSegment{cfg.path_length_m, 0.0}}, cfg.frame_spacing_m);
 
   // One map per (width, W_l, drift).
-  std::vector<DriftMap> maps(result.rows.size());
+  std::vector<DriftMap<CcmConfig>> maps(result.rows.size());
   std::vector<std::vector<sim::Pose2>> estimates(cfg.drift_fractions.size());
   for (std::size_t d = 0; d < cfg.drift_fractions.size(); ++d) {
     sim::DriftParams dp;
@@ -111,10 +122,10 @@ DriftResult run_drift(const DriftConfig& cfg) {
         points.push_back(PointXYZ{static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
       }
       const PointXYZ origin{static_cast<float>(cam.x), static_cast<float>(cam.y), static_cast<float>(cam.z)};
-      for (DriftMap& m : maps) {
+      for (DriftMap<CcmConfig>& m : maps) {
         DriftRow& row = result.rows[m.row];
         if (drift_index(row.drift_fraction) != d) continue;
-        Stack<SingleCcmConfig>& s = *m.stack;
+        Stack<CcmConfig>& s = *m.stack;
         // The odometry's 1-sigma error of the move since the last frame (none before the first).
         const double moved = f == 0 ? 0.0 : std::hypot(est.x - estimates[d][f - 1].x, est.y - estimates[d][f - 1].y);
         const double fraction = cfg.odometry_sigma_fraction >= 0.0 ? cfg.odometry_sigma_fraction : row.drift_fraction;
@@ -158,6 +169,8 @@ DriftResult run_drift(const DriftConfig& cfg) {
   result.points_per_frame = truth.empty() ? 0.0 : static_cast<double>(total_points) / static_cast<double>(truth.size());
   return result;
 }
+
+}  // namespace
 
 double drift_crossing(const DriftResult& result, double w, double wl, double tolerance, bool uncertain) {
   std::vector<const DriftRow*> rows;

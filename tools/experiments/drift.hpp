@@ -56,6 +56,7 @@ struct DriftConfig {
   double raster_resolution_m = 0.01;
   double tolerance = 0.05;
   std::uint64_t seed = 1;
+  bool paper_cell = false;  ///< CCM maps of the paper's 9-float cell (PaperCell<SingleCcmConfig>)
   bool progress = false;
   GateSetting gate;                     ///< the maps' outlier gate (default: the library's)
   bool compare_uncertain_moves = true;  ///< also run every map with uncertain moves

@@ -1,6 +1,6 @@
 // ccmap_exp_fig10: drift resilience of CCM on wave terrain (paper Fig. 10, Section V-D), each map
 // also with uncertain moves (Stack::move_to(x, y, sigma)).
-//   ccmap_exp_fig10 [--seed N] [--out DIR] [--quick] [--odometry-sigma F]
+//   ccmap_exp_fig10 [--seed N] [--out DIR] [--quick] [--paper-cell] [--odometry-sigma F]
 //   --odometry-sigma F   sigma of the uncertain moves = F x the distance moved (default: each
 //                        run's own drift fraction)
 #include <cstdio>
@@ -38,9 +38,11 @@ int main(int argc, char** argv) {
   cfg.odometry_sigma_fraction = odometry_sigma;
   cfg.seed = args.seed;
   cfg.gate = args.gate;
+  cfg.paper_cell = args.paper_cell;
   cfg.progress = true;
   const DriftResult r = run_drift(cfg);
-  std::printf("Fig. 10: drift resilience (single-layer CCM maps, CADRE stereo)\n%s\n", drift_table(cfg, r).c_str());
+  std::printf("Fig. 10: drift resilience (single-layer CCM maps, %s CCM cell, CADRE stereo)\n%s\n",
+              cfg.paper_cell ? "paper" : "full", drift_table(cfg, r).c_str());
   std::string error;
   if (!write_drift_outputs(cfg, r, args.out_dir, &error)) {
     std::fprintf(stderr, "error: %s\n", error.c_str());

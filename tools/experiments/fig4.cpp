@@ -15,9 +15,11 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-double normal_variance_of(const CcmCell& cell) { return static_cast<double>(ccm_surface(cell).normal_variance); }
+template <typename Cell>
+double normal_variance_of(const Cell& cell) { return static_cast<double>(ccm_surface(cell).normal_variance); }
 
-void feed(CcmCell& cell, double x, double y, double z) {
+template <typename Cell>
+void feed(Cell& cell, double x, double y, double z) {
   // Points are finite and small: ccm_update cannot refuse them; a refusal would be a bug.
   if (ccm_update(cell, static_cast<float>(x), static_cast<float>(y), static_cast<float>(z), 1.0F, kNoWeightLimit) !=
       Status::kOk) {
@@ -51,13 +53,16 @@ CoverageInterval coverage_interval(const Fig4Curve& curve, double threshold) {
   return out;
 }
 
-Fig4Result run_fig4(const Fig4Config& cfg) {
+namespace {
+
+template <typename Cell>
+Fig4Result fig4_curves(const Fig4Config& cfg) {
   Fig4Result r;
   const double w = cfg.cell_width_m, h = cfg.step_height_m;
   const int n = cfg.grid_n + (cfg.grid_n % 2);  // even, so that c = 0.5 is on the grid
   // Noiseless regular grid.
   for (int k = 0; k <= n; ++k) {
-    CcmCell cell{};
+    Cell cell{};
     for (int j = 0; j < n; ++j) {
       const double y = -0.5 * w + (j + 0.5) * w / n;
       for (int i = 0; i < n; ++i) {
@@ -95,7 +100,7 @@ Fig4Result run_fig4(const Fig4Config& cfg) {
       const double c = static_cast<double>(k) / levels;
       double sum = 0.0;
       for (int t = 0; t < cfg.noisy_trials; ++t) {
-        CcmCell cell{};
+        Cell cell{};
         for (int p = 0; p < cfg.noisy_points; ++p) {
           const double x = rng.uniform(-0.5 * w, 0.5 * w), y = rng.uniform(-0.5 * w, 0.5 * w);
           const double z = x >= 0.5 * w - c * w ? h : 0.0;
@@ -115,6 +120,12 @@ Fig4Result run_fig4(const Fig4Config& cfg) {
     r.noisy.push_back(nc);
   }
   return r;
+}
+
+}  // namespace
+
+Fig4Result run_fig4(const Fig4Config& cfg) {
+  return cfg.paper_cell ? fig4_curves<CcmPaperCell>(cfg) : fig4_curves<CcmCell>(cfg);
 }
 
 bool write_fig4_outputs(const Fig4Config& cfg, const Fig4Result& r, const std::string& out_dir, std::string* error) {

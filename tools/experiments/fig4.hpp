@@ -30,6 +30,7 @@ struct Fig4Config {
   double camera_height_m = 0.175;
   double focal_px = 600.0, baseline_m = 0.05, disparity_sigma_px = 0.1, disparity_step_px = 1.0 / 16.0;
   std::uint64_t seed = 1;
+  bool paper_cell = false;                 ///< the paper's 9-float cell (CcmPaperCell) instead of CcmCell
   static Fig4Config quick() {
     Fig4Config c;
     c.grid_n = 100;

@@ -1,5 +1,5 @@
 // ccmap_exp_fig4: CCM normal variance vs obstacle coverage (paper Fig. 4).
-//   ccmap_exp_fig4 [--seed N] [--out DIR] [--quick]
+//   ccmap_exp_fig4 [--seed N] [--out DIR] [--quick] [--paper-cell]
 #include <cstdio>
 #include <string>
 
@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   if (rc >= 0) return rc;
   Fig4Config cfg = args.quick ? Fig4Config::quick() : Fig4Config{};
   cfg.seed = args.seed;
+  cfg.paper_cell = args.paper_cell;
   const Fig4Result r = run_fig4(cfg);
   std::printf("Fig. 4: %.0f cm cell, %.0f cm step (75%% of the cell width), threshold = sigma_s^2 at 50%% coverage\n\n%s\n",
               cfg.cell_width_m * 100, cfg.step_height_m * 100, fig4_table(cfg, r).c_str());

@@ -92,8 +92,11 @@ const Fig5MethodStats* Fig5Run::find(const std::string& method, double cell_widt
   return nullptr;
 }
 
-Fig5Run evaluate_fig5_maps(const sim::Terrain& truth, const sim::Rect& area, const std::vector<sim::Point3>& cloud,
-                           double cell_width_m, double sigma_z_m, double eval_step_m, bool keep_maps) {
+namespace {
+
+template <typename CcmCellT>
+Fig5Run evaluate_maps(const sim::Terrain& truth, const sim::Rect& area, const std::vector<sim::Point3>& cloud,
+                      double cell_width_m, double sigma_z_m, double eval_step_m, bool keep_maps) {
   Fig5Run run;
   run.area = area;
   run.points = cloud.size();
@@ -102,7 +105,7 @@ Fig5Run evaluate_fig5_maps(const sim::Terrain& truth, const sim::Rect& area, con
   run.eval_ny = static_cast<int>(std::floor(area.height() / eval_step_m + 1e-9));
   const float meas_var = static_cast<float>(sigma_z_m * sigma_z_m);
 
-  CellGrid<CcmCell> ccm(area, cell_width_m), ccm2(area, 2.0 * cell_width_m);
+  CellGrid<CcmCellT> ccm(area, cell_width_m), ccm2(area, 2.0 * cell_width_m);
   CellGrid<KalmanCell> kalman(area, cell_width_m);
   CellGrid<OmgCell> omg(area, cell_width_m);
   std::size_t refused = 0;
@@ -138,8 +141,8 @@ Fig5Run evaluate_fig5_maps(const sim::Terrain& truth, const sim::Rect& area, con
   s_ccm.cells_y = s_omg.cells_y = s_kal.cells_y = ccm.ny;
   s_ccm2.cells_x = ccm2.nx;
   s_ccm2.cells_y = ccm2.ny;
-  s_ccm.bytes = ccm.cells.size() * sizeof(CcmCell);
-  s_ccm2.bytes = ccm2.cells.size() * sizeof(CcmCell);
+  s_ccm.bytes = ccm.cells.size() * sizeof(CcmCellT);
+  s_ccm2.bytes = ccm2.cells.size() * sizeof(CcmCellT);
   s_omg.bytes = omg.cells.size() * sizeof(OmgCell);
   s_kal.bytes = kalman.cells.size() * sizeof(KalmanCell);
   for (Fig5MethodStats* s : {&s_ccm, &s_omg, &s_kal, &s_ccm2}) {
@@ -168,7 +171,7 @@ Fig5Run evaluate_fig5_maps(const sim::Terrain& truth, const sim::Rect& area, con
       const int k = ccm.index(x, y, &cx, &cy);
       if (k >= 0) {
         const std::size_t uk = static_cast<std::size_t>(k);
-        const CcmCell& c = ccm.cells[uk];
+        const CcmCellT& c = ccm.cells[uk];
         if (c.weight > 0.0F) {
           const float qx = static_cast<float>(x - cx), qy = static_cast<float>(y - cy);
           record(s_ccm, a_ccm, ccm_height_at(c, surf[uk], qx, qy), ccm_elevation_variance(c, surf[uk], qx, qy));
@@ -193,6 +196,14 @@ Fig5Run evaluate_fig5_maps(const sim::Terrain& truth, const sim::Rect& area, con
   return run;
 }
 
+}  // namespace
+
+Fig5Run evaluate_fig5_maps(const sim::Terrain& truth, const sim::Rect& area, const std::vector<sim::Point3>& cloud,
+                           double cell_width_m, double sigma_z_m, double eval_step_m, bool keep_maps, bool paper_cell) {
+  return paper_cell ? evaluate_maps<CcmPaperCell>(truth, area, cloud, cell_width_m, sigma_z_m, eval_step_m, keep_maps)
+                    : evaluate_maps<CcmCell>(truth, area, cloud, cell_width_m, sigma_z_m, eval_step_m, keep_maps);
+}
+
 Fig5Run run_fig5_synthetic(const Fig5Config& cfg, bool keep_maps) {
   const sim::ProceduralTerrain terrain(fig5_terrain_params(cfg.size_m, cfg.seed));
   sim::CloudParams cp;
@@ -201,7 +212,8 @@ Fig5Run run_fig5_synthetic(const Fig5Config& cfg, bool keep_maps) {
   cp.sigma_z_m = cfg.sigma_z_m;
   cp.seed = sim::hash_combine(cfg.seed, 5);
   const std::vector<sim::Point3> cloud = sim::sample_noisy_cloud(terrain, cp);
-  Fig5Run run = evaluate_fig5_maps(terrain, cp.area, cloud, cfg.cell_width_m, cfg.sigma_z_m, cfg.eval_step_m, keep_maps);
+  Fig5Run run = evaluate_fig5_maps(terrain, cp.area, cloud, cfg.cell_width_m, cfg.sigma_z_m, cfg.eval_step_m, keep_maps,
+                                   cfg.paper_cell);
   run.terrain_name = format("simulated %.0f x %.0f m", cfg.size_m, cfg.size_m);
   return run;
 }
@@ -218,7 +230,8 @@ bool run_fig5_mars(const Fig5Config& cfg, const std::string& data_dir, bool keep
   cp.sigma_z_m = cfg.sigma_z_m;
   cp.seed = sim::hash_combine(cfg.seed, 6);
   const std::vector<sim::Point3> cloud = sim::sample_noisy_cloud(dtm, cp);
-  *out = evaluate_fig5_maps(dtm, cp.area, cloud, cfg.mars_cell_width_m, cfg.sigma_z_m, cfg.mars_eval_step_m, keep_maps);
+  *out = evaluate_fig5_maps(dtm, cp.area, cloud, cfg.mars_cell_width_m, cfg.sigma_z_m, cfg.mars_eval_step_m, keep_maps,
+                            cfg.paper_cell);
   out->terrain_name = format("HiRISE Mars DTM %.0f x %.0f m", cp.area.width(), cp.area.height());
   return true;
 }

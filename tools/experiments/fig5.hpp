@@ -15,7 +15,7 @@
 //    each map's elevation variance (CCM: ccm_elevation_variance at the point; OMG: the mixture
 //    variance; Kalman: its estimate variance).
 // Half-resolution claim: CCM at 2 w against the constant maps at w, with memory
-// (36 B per CCM cell, 12 B per constant cell).
+// (40 B per full CCM cell, 36 B per paper cell with paper_cell, 12 B per constant cell).
 #pragma once
 
 #include <cstdint>
@@ -37,6 +37,7 @@ struct Fig5Config {
   double mars_points_per_m2 = 25.0;
   double mars_eval_step_m = 0.2;
   std::uint64_t seed = 1;
+  bool paper_cell = false;  ///< CcmPaperCell (the paper's 9 floats) instead of CcmCell
   static Fig5Config quick() {
     Fig5Config c;
     c.points_per_m2 = 25.0;
@@ -75,9 +76,11 @@ struct Fig5Run {
 };
 
 /// Builds the three maps at cell_width_m (and CCM at 2 * cell_width_m) from `cloud` and
-/// evaluates them against `truth` over `area`. keep_maps fills error_m/sigma_m.
+/// evaluates them against `truth` over `area`. keep_maps fills error_m/sigma_m; paper_cell
+/// builds the CCM maps of CcmPaperCell instead of CcmCell.
 Fig5Run evaluate_fig5_maps(const sim::Terrain& truth, const sim::Rect& area, const std::vector<sim::Point3>& cloud,
-                           double cell_width_m, double sigma_z_m, double eval_step_m, bool keep_maps);
+                           double cell_width_m, double sigma_z_m, double eval_step_m, bool keep_maps,
+                           bool paper_cell = false);
 
 /// The simulated 20 x 20 m run.
 Fig5Run run_fig5_synthetic(const Fig5Config& config, bool keep_maps);

@@ -1,6 +1,6 @@
 // ccmap_exp_fig6: Monte-Carlo obstacle detection against obstacle size, CCM (paper Fig. 6) and
 // OMG with the roughness filter (Fig. 7), on simulated CADRE stereo over lunar terrain.
-//   ccmap_exp_fig6 [--seed N] [--seeds A:B] [--out DIR] [--quick]     run trials, write a shard
+//   ccmap_exp_fig6 [--seed N] [--seeds A:B] [--out DIR] [--quick] [--paper-cell]   run trials, write a shard
 //   ccmap_exp_fig6 --merge SHARD.csv SHARD.csv ... [--out DIR]          sum shards, table + plots
 // A run writes <out>/fig6_shard_<A>_<B>.csv (integer counts) plus the table and plots of its own
 // trials; --merge sums shards exactly (refusing overlapping seed ranges), so a campaign can be
@@ -95,6 +95,7 @@ int main(int argc, char** argv) {
     DetectionConfig cfg = args.quick ? DetectionConfig::quick() : DetectionConfig{};
     cfg.first_seed = have_range ? seed_a : args.seed;
     cfg.gate = args.gate;
+    cfg.paper_cell = args.paper_cell;
     if (have_range) cfg.trials = seed_b - seed_a;
     cfg.progress = true;
     result = run_detection(cfg);

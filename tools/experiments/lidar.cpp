@@ -24,11 +24,13 @@ struct LocalPoint {
   double x, y, z;  ///< local frame (origin subtracted in double)
 };
 
-/// Fixed grid of the three cell kinds over [x0, x0 + nx w) x [y0, y0 + ny w).
+/// Fixed grid of the three cell kinds over [x0, x0 + nx w) x [y0, y0 + ny w); CcmCellT is
+/// CcmCell or CcmPaperCell (LidarConfig::paper_cell).
+template <typename CcmCellT>
 struct Maps {
   double x0 = 0.0, y0 = 0.0, w = 1.0;
   int nx = 0, ny = 0;
-  std::vector<CcmCell> ccm;
+  std::vector<CcmCellT> ccm;
   std::vector<KalmanCell> kalman;
   std::vector<OmgCell> omg;
   std::vector<CcmSurface> surface;
@@ -41,16 +43,17 @@ struct Maps {
   double cy(int k) const { return y0 + (k / nx + 0.5) * w; }
 };
 
-Maps build_maps(const std::vector<LocalPoint>& train, double x0, double y0, double ex, double ey, double w,
-                double sigma_m) {
-  Maps m;
+template <typename CcmCellT>
+Maps<CcmCellT> build_maps(const std::vector<LocalPoint>& train, double x0, double y0, double ex, double ey, double w,
+                          double sigma_m) {
+  Maps<CcmCellT> m;
   m.x0 = x0;
   m.y0 = y0;
   m.w = w;
   m.nx = std::max(1, static_cast<int>(std::ceil(ex / w + 1e-9)));
   m.ny = std::max(1, static_cast<int>(std::ceil(ey / w + 1e-9)));
   const std::size_t n = static_cast<std::size_t>(m.nx) * static_cast<std::size_t>(m.ny);
-  m.ccm.assign(n, CcmCell{});
+  m.ccm.assign(n, CcmCellT{});
   m.kalman.assign(n, KalmanCell{});
   m.omg.assign(n, OmgCell{});
   const float var = static_cast<float>(sigma_m * sigma_m);
@@ -107,15 +110,18 @@ std::vector<bool> outlier_mask(const std::vector<LocalPoint>& pts, double block_
   return mask;
 }
 
-bool ccm_known(const Maps& m, std::size_t k, const LidarConfig& cfg) {
+template <typename CcmCellT>
+bool ccm_known(const Maps<CcmCellT>& m, std::size_t k, const LidarConfig& cfg) {
   return ccm_is_covered(m.ccm[k], static_cast<float>(m.w), static_cast<float>(cfg.coverage_tau),
                         static_cast<float>(cfg.min_points));
 }
-bool constant_known(const Maps& m, std::size_t k, const LidarConfig& cfg) {
+template <typename CcmCellT>
+bool constant_known(const Maps<CcmCellT>& m, std::size_t k, const LidarConfig& cfg) {
   return m.omg[k].weight >= static_cast<float>(cfg.min_points);
 }
 
-void evaluate(const Maps& m, const std::vector<LocalPoint>& held, const LidarConfig& cfg, LidarVariant* v) {
+template <typename CcmCellT>
+void evaluate(const Maps<CcmCellT>& m, const std::vector<LocalPoint>& held, const LidarConfig& cfg, LidarVariant* v) {
   Errors common[3], own_const[2];
   std::size_t skip_common = 0, skip_own = 0;
   for (const LocalPoint& p : held) {
@@ -164,7 +170,8 @@ void evaluate(const Maps& m, const std::vector<LocalPoint>& held, const LidarCon
 /// One row of three panels: held-in points (last z per 2.5 cm pixel), CCM sub-cell height,
 /// constant height; viridis over the 2nd..98th percentile of the points, hill-shaded from the
 /// maps' own gradients; black = no data / unknown cell.
-bool write_picture(const std::string& file, const Maps& m, const std::vector<LocalPoint>& train, const LidarConfig& cfg,
+template <typename CcmCellT>
+bool write_picture(const std::string& file, const Maps<CcmCellT>& m, const std::vector<LocalPoint>& train, const LidarConfig& cfg,
                    double ex, double ey, const std::string& title, std::string* error) {
   const double step = std::max(cfg.image_step_m, std::max(ex, ey) / 400.0);  // panels <= ~400 px
   const int w = static_cast<int>(std::ceil(ex / step)), h = static_cast<int>(std::ceil(ey / step));
@@ -404,9 +411,9 @@ bool run_lidar(const LidarConfig& cfg, const std::string& path, const std::strin
     v.train_points = train.size();
     v.held_out_points = test.size();
     for (double w : cfg.cell_widths_m) {
-      const Maps m = build_maps(train, x0, y0, run.extent_x, run.extent_y, w, cfg.sigma_m);
-      evaluate(m, test, cfg, &v);
-      if (variant == 1 && !out_dir.empty()) {
+      const auto evaluate_and_draw = [&](const auto& m) {
+        evaluate(m, test, cfg, &v);
+        if (variant != 1 || out_dir.empty()) return true;
         if (!ensure_directory(out_dir, why)) return false;
         const std::string file = out_dir + "/" + prefix + format("_%02.0fcm.png", 100.0 * w);
         const LidarMethodStats* c = v.find("CCM", w, "common");
@@ -416,7 +423,13 @@ bool run_lidar(const LidarConfig& cfg, const std::string& path, const std::strin
                    name.c_str(), 100.0 * w, 1000.0 * c->rms_m, 1000.0 * o->rms_m);
         if (!write_picture(file, m, train, cfg, run.extent_x, run.extent_y, title, why)) return false;
         if (pictures != nullptr) pictures->push_back(file);
-      }
+        return true;
+      };
+      const bool drawn =
+          cfg.paper_cell
+              ? evaluate_and_draw(build_maps<CcmPaperCell>(train, x0, y0, run.extent_x, run.extent_y, w, cfg.sigma_m))
+              : evaluate_and_draw(build_maps<CcmCell>(train, x0, y0, run.extent_x, run.extent_y, w, cfg.sigma_m));
+      if (!drawn) return false;
     }
     run.variants.push_back(v);
   }

@@ -53,6 +53,7 @@ struct LidarConfig {
   double image_step_m = 0.025;  ///< raster of the height pictures
   std::uint64_t seed = 1;
   GateSetting gate;             ///< the "gate on" stacks of variant "stack"
+  bool paper_cell = false;      ///< CCM maps of CcmPaperCell (the paper's 9 floats) instead of CcmCell
   static LidarConfig quick() {
     LidarConfig c;
     c.include_full_scan = false;

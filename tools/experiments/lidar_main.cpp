@@ -1,6 +1,6 @@
 // ccmap_exp_lidar: CCM vs Kalman vs OMG on the real Lone Star Geyser laser scan, judged by the
 // height error at held-out points (see lidar.hpp). Skipped, saying why, when the data is absent.
-//   ccmap_exp_lidar [--seed N] [--out DIR] [--quick] [--data DIR]
+//   ccmap_exp_lidar [--seed N] [--out DIR] [--quick] [--data DIR] [--paper-cell]
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   LidarConfig cfg = args.quick ? LidarConfig::quick() : LidarConfig{};
   cfg.seed = args.seed;
   cfg.gate = args.gate;
+  cfg.paper_cell = args.paper_cell;
   std::vector<std::string> pictures;
   LidarRun crop;
   std::string why;
@@ -25,9 +26,10 @@ int main(int argc, char** argv) {
     std::printf("ccmap_exp_lidar: skipped: %s\n", why.c_str());
     return 0;
   }
-  std::printf("Real laser scan, %.0f %% of the points held out (seed %llu); CCM predicts the sub-cell height (eq. 10), "
-              "Kalman/OMG the cell height\n\n%s\n",
-              100.0 * cfg.holdout_share, static_cast<unsigned long long>(cfg.seed), lidar_table(crop).c_str());
+  std::printf("Real laser scan, %.0f %% of the points held out (seed %llu); CCM (%s cell) predicts the sub-cell height "
+              "(eq. 10), Kalman/OMG the cell height\n\n%s\n",
+              100.0 * cfg.holdout_share, static_cast<unsigned long long>(cfg.seed), cfg.paper_cell ? "paper" : "full",
+              lidar_table(crop).c_str());
   if (cfg.include_full_scan) {
     LidarRun full;
     if (run_lidar(cfg, lidar_full_path(args.data_dir), "LONE STAR FULL SCAN", args.out_dir, "lidar_full", &full, &why,

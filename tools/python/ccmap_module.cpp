@@ -554,18 +554,37 @@ StackParams build_params(const Preset& preset, py::handle cell_width, const py::
 
 class Map {
  public:
-  Map(const Preset& preset, std::unique_ptr<MapAdapter> map) : preset_(&preset), map_(std::move(map)) {}
+  Map(const Preset& preset, bool paper_cell, std::unique_ptr<MapAdapter> map)
+      : preset_(&preset), paper_cell_(paper_cell), map_(std::move(map)) {}
 
+  /// paper_cell (a keyword): the paper's 9-float CCM cells (the CLI's --paper-cell); the other
+  /// keywords set StackParams.
   static Map create(const std::string& preset_name, py::handle cell_width, const py::kwargs& kwargs) {
     const Preset& preset = preset_arg(preset_name);
-    const StackParams params = build_params(preset, cell_width, kwargs);
-    std::unique_ptr<MapAdapter> map = preset.make();
+    bool paper_cell = false;
+    py::kwargs params_kwargs;
+    for (const auto& item : kwargs) {
+      if (std::string(py::str(item.first)) != "paper_cell") {
+        params_kwargs[item.first] = item.second;
+      } else if (!PyBool_Check(item.second.ptr())) {
+        throw py::type_error("paper_cell must be True or False");
+      } else {
+        paper_cell = item.second.ptr() == Py_True;
+      }
+    }
+    if (paper_cell && preset.make_paper == nullptr) {
+      throw StatusError(Status::kInvalidArgument,
+                        "paper_cell: preset '" + preset_name + "' has no CCM layer (cadre and ccm have)");
+    }
+    const StackParams params = build_params(preset, cell_width, params_kwargs);
+    std::unique_ptr<MapAdapter> map = paper_cell ? preset.make_paper() : preset.make();
     check(map->init(params), "the map refused its parameters");
-    return Map(preset, std::move(map));
+    return Map(preset, paper_cell, std::move(map));
   }
 
   /// Loads a snapshot into a new map of `preset`, or of the first of the four presets that
-  /// accepts it (another preset's snapshot answers kVersionMismatch: try the next).
+  /// accepts it (another preset's snapshot answers kVersionMismatch: try the next), each with
+  /// the full and then the paper CCM cell (the cell kind is part of the snapshot's shape).
   static Map from_snapshot(py::handle data, py::handle preset) {
     PyObject* as_bytes = PyBytes_FromObject(data.ptr());  // bytes, bytearray, memoryview, ...
     if (as_bytes == nullptr) throw py::error_already_set();
@@ -579,10 +598,13 @@ class Map {
     }
     Status refusal = Status::kVersionMismatch;
     for (const Preset* candidate : candidates) {
-      std::unique_ptr<MapAdapter> map = candidate->make();
-      const Status status = map->load(p, bytes.size());
-      if (status == Status::kOk) return Map(*candidate, std::move(map));
-      if (status != Status::kVersionMismatch) refusal = status;  // corrupt for one is corrupt for all
+      for (const bool paper_cell : {false, true}) {
+        if (paper_cell && candidate->make_paper == nullptr) continue;
+        std::unique_ptr<MapAdapter> map = paper_cell ? candidate->make_paper() : candidate->make();
+        const Status status = map->load(p, bytes.size());
+        if (status == Status::kOk) return Map(*candidate, paper_cell, std::move(map));
+        if (status != Status::kVersionMismatch) refusal = status;  // corrupt for one is corrupt for all
+      }
     }
     throw StatusError(refusal, preset.is_none() ? "no preset (" + preset_list() + ") accepts the snapshot"
                                                 : "preset '" + std::string(py::str(preset)) + "' refuses the snapshot");
@@ -692,6 +714,7 @@ class Map {
 
   // ---- properties ----
   const char* preset_name() const { return preset_->name; }
+  bool paper_cell() const { return paper_cell_; }
   int layer_count() const { return map_->layer_count(); }
   template <typename T>
   std::vector<T> per_layer(T (MapAdapter::*get)(int) const) const {
@@ -749,8 +772,8 @@ class Map {
       std::snprintf(text, sizeof text, "%g", static_cast<double>(w));  // float32 shown to 6 digits
       widths += (widths.empty() ? "" : ", ") + std::string(text);
     }
-    return "<ccmap.Map preset='" + std::string(preset_->name) + "' layers=" + std::to_string(layer_count()) +
-           " cell_widths=[" + widths + "]>";
+    return "<ccmap.Map preset='" + std::string(preset_->name) + "'" + (paper_cell_ ? " paper_cell=True" : "") +
+           " layers=" + std::to_string(layer_count()) + " cell_widths=[" + widths + "]>";
   }
 
  private:
@@ -770,6 +793,7 @@ class Map {
   }
 
   const Preset* preset_;
+  bool paper_cell_;
   std::unique_ptr<MapAdapter> map_;
 };
 
@@ -805,14 +829,24 @@ PYBIND11_MODULE(ccmap, m) {
   }
   m.attr("CLASS_NAMES") = py::tuple(class_names);
   m.def(
-      "snapshot_size", [](const std::string& preset) { return cp::preset_arg(preset).snapshot_bytes; },
-      py::arg("preset"), "Bytes of a snapshot of the preset (fixed by its configuration).");
+      "snapshot_size",
+      [](const std::string& preset, bool paper_cell) {
+        const cp::Preset& p = cp::preset_arg(preset);
+        if (paper_cell && p.make_paper == nullptr) {
+          throw cp::StatusError(ccmap::Status::kInvalidArgument, "paper_cell: preset '" + preset + "' has no CCM layer");
+        }
+        return paper_cell ? p.paper_snapshot_bytes : p.snapshot_bytes;
+      },
+      py::arg("preset"), py::arg("paper_cell") = false,
+      "Bytes of a snapshot of the preset (fixed by its configuration and CCM cell kind).");
 
   py::class_<Map>(m, "Map",
                   "A robot-centric multi-resolution terrain map: one of the library's Stack presets.\n\n"
-                  "Map(preset='cadre', cell_width=None, **params)\n"
+                  "Map(preset='cadre', cell_width=None, paper_cell=False, **params)\n"
                   "  preset: 'cadre' (4 cm Kalman + 8..64 cm CCM), 'ccm' (one CCM layer 256x256),\n"
                   "          'kf' (one Kalman layer), 'omg' (one OMG layer); the ccmap CLI's presets.\n"
+                  "  paper_cell: the paper's 9-float CCM cells (no lateral covariance; the CLI's\n"
+                  "          --paper-cell), cadre and ccm only; default: the full cell.\n"
                   "  cell_width: finest cell width (m); None: the preset's default (0.04 / 0.08).\n"
                   "  params: StackParams by name: weight_limit, coverage_tau, min_weight,\n"
                   "          obstacle_fraction, max_inclination, kalman_min_variance,\n"
@@ -858,8 +892,9 @@ PYBIND11_MODULE(ccmap, m) {
            "(x_min, x_max, y_min, y_max) of layer k's window, metres.")
       .def("snapshot", &Map::snapshot, "The library's snapshot (include/ccmap/map/snapshot.hpp) as bytes.")
       .def_static("from_snapshot", &Map::from_snapshot, py::arg("data"), py::arg("preset") = py::none(),
-                  "A map from snapshot bytes. preset=None tries the four presets (a snapshot of another\n"
-                  "preset is refused with 'version_mismatch'); StatusError if none accepts it.")
+                  "A map from snapshot bytes. preset=None tries the four presets, each with the full and\n"
+                  "the paper CCM cell (a snapshot of another preset or cell is refused with 'version_mismatch');\n"
+                  "StatusError if none accepts it.")
       .def(
           "save",
           [](const Map& self, py::object path) {
@@ -892,6 +927,8 @@ PYBIND11_MODULE(ccmap, m) {
           "A map from a file written by save() (or by the C++ save_snapshot). preset=None tries the four\n"
           "presets in turn.")
       .def_property_readonly("preset", &Map::preset_name)
+      .def_property_readonly("paper_cell", &Map::paper_cell,
+                             "True if the CCM layers keep the paper's 9-float cell (no lateral covariance).")
       .def_property_readonly("layer_count", &Map::layer_count)
       .def_property_readonly("cell_widths", &Map::cell_widths, "Cell width of each layer (m), finest first.")
       .def_property_readonly("sides", &Map::sides, "Cells per axis of each layer.")

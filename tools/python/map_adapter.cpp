@@ -63,8 +63,13 @@ std::unique_ptr<MapAdapter> make_adapter() {
 
 template <typename Config>
 Preset preset(const char* name) {
-  return Preset{name, Config::kDefaultFinestCellWidthM, Stack<Config>::kLayerCount, snapshot_size<Config>(),
-                &make_adapter<Config>};
+  if constexpr (Stack<Config>::kCcmLayerCount > 0) {
+    return Preset{name, Config::kDefaultFinestCellWidthM, Stack<Config>::kLayerCount, snapshot_size<Config>(),
+                  &make_adapter<Config>, snapshot_size<PaperCell<Config>>(), &make_adapter<PaperCell<Config>>};
+  } else {
+    return Preset{name, Config::kDefaultFinestCellWidthM, Stack<Config>::kLayerCount, snapshot_size<Config>(),
+                  &make_adapter<Config>, 0U, nullptr};
+  }
 }
 
 }  // namespace

@@ -51,13 +51,17 @@ class MapAdapter {
   [[nodiscard]] virtual std::uint64_t last_update_ns() const = 0;
 };
 
-/// One preset: its CLI name, the library's configuration behind it, a factory.
+/// One preset: its CLI name, the library's configuration behind it, factories for its full-cell
+/// configuration and, for the presets with CCM layers, the paper-cell one (PaperCell<Config>:
+/// the CLI's --paper-cell).
 struct Preset {
   const char* name;                   ///< cadre, ccm, kf, omg
   float default_cell_width_m;         ///< Config::kDefaultFinestCellWidthM
   int layer_count;                    ///< Stack<Config>::kLayerCount
   std::size_t snapshot_bytes;         ///< snapshot_size<Config>()
-  std::unique_ptr<MapAdapter> (*make)();  ///< an uninitialised stack
+  std::unique_ptr<MapAdapter> (*make)();  ///< an uninitialised stack (full CCM cells)
+  std::size_t paper_snapshot_bytes;   ///< snapshot_size<PaperCell<Config>>(); 0 without CCM layers
+  std::unique_ptr<MapAdapter> (*make_paper)();  ///< the paper's 9-float cells; nullptr without CCM layers
 };
 
 /// The four presets, in the CLI's order.

@@ -2,8 +2,8 @@
 // with a 90 deg turn over a generated lunar terrain, maps with Stack<CadreConfig> from a CADRE
 // stereo frame every 0.3 m, and reports hazard detection against ground truth, update times
 // and pictures. See traverse.hpp for the definitions.
-//   ccmap_traverse [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--mismatch P]
-//                  [--gate K] [--change-points M] [--change-share S]
+//   ccmap_traverse [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--paper-cell]
+//                  [--mismatch P] [--gate K] [--change-points M] [--change-share S]
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -14,13 +14,14 @@ namespace {
 
 int usage(const char* argv0, std::FILE* f) {
   std::fprintf(f,
-               "usage: %s [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--mismatch P]\n"
-               "       [--gate K] [--change-points M] [--change-share S]\n"
+               "usage: %s [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--paper-cell]\n"
+               "       [--mismatch P] [--gate K] [--change-points M] [--change-share S]\n"
                "  --seed N    terrain and noise seed (default 1); results are deterministic by seed\n"
                "  --out DIR   pictures (default out/traverse)\n"
                "  --stride K  cast every K-th pixel of the 850 x 650 frame (default 1: full frame)\n"
                "  --frames N  stop after N frames (default: the whole 13.5 m path, 46 frames)\n"
                "  --quick     8 frames at stride 4 (what the CI test runs)\n"
+               "  --paper-cell  the paper's 9-float CCM cell instead of the full cell (lateral covariance)\n"
                "  --mismatch P  stereo mismatches: a share P of the pixels at a random disparity (default 0)\n"
                "  --gate K, --change-points M, --change-share S\n"
                "              the map's outlier gate (K sigma, 0 = off: the paper's update) and change rule\n"
@@ -36,7 +37,7 @@ int main(int argc, char** argv) {
   cfg.out_dir = "out/traverse";
   std::uint64_t seed = 1;
   int stride = 0, frames = -1;
-  bool quick = false;
+  bool quick = false, paper_cell = false;
   double mismatch = 0.0;
   ccmap::experiments::GateSetting gate;
   for (int i = 1; i < argc; ++i) {
@@ -45,6 +46,8 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") return usage(argv[0], stdout);
     if (a == "--quick") {
       quick = true;
+    } else if (a == "--paper-cell") {
+      paper_cell = true;
     } else if (a == "--seed" && v != nullptr) {
       seed = std::strtoull(v, nullptr, 10);
       ++i;
@@ -78,6 +81,7 @@ int main(int argc, char** argv) {
   cfg.seed = seed;
   cfg.mismatch_share = mismatch;
   cfg.gate = gate;
+  cfg.paper_cell = paper_cell;
   if (stride > 0) cfg.pixel_stride = stride;
   if (frames > 0) cfg.max_frames = frames;
   cfg.log = stdout;

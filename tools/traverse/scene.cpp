@@ -70,10 +70,11 @@ const sim::CellHazard* LayerTruth::at(double x, double y) const {
   return &grid.at(ix, iy);
 }
 
-LayerTruth layer_truth(const Map& map, const sim::Terrain& terrain, int layer) {
+template <typename M>
+LayerTruth layer_truth(const M& map, const sim::Terrain& terrain, int layer) {
   LayerTruth t;
   t.width = map.layer_cell_width(layer);
-  t.side = Map::layer_side(layer);
+  t.side = M::layer_side(layer);
   const CellIndex c = map.layer_centre(layer);
   t.min = CellIndex{c.x - t.side / 2, c.y - t.side / 2};
   sim::HazardParams hp;
@@ -84,15 +85,17 @@ LayerTruth layer_truth(const Map& map, const sim::Terrain& terrain, int layer) {
   return t;
 }
 
-int classifying_layer(const Map& map, const QueryResult& q, float x, float y) {
-  if (q.status == Status::kOk && !Map::layer_is_ccm(q.layer) && Map::kCcmLayerCount > 0 &&
-      map.query_layer(Map::kFineLayerCount, x, y).status == Status::kOk) {
-    return Map::kFineLayerCount;
+template <typename M>
+int classifying_layer(const M& map, const QueryResult& q, float x, float y) {
+  if (q.status == Status::kOk && !M::layer_is_ccm(q.layer) && M::kCcmLayerCount > 0 &&
+      map.query_layer(M::kFineLayerCount, x, y).status == Status::kOk) {
+    return M::kFineLayerCount;
   }
   return q.layer;
 }
 
-QueryRaster query_raster(const Map& map, const std::vector<LayerTruth>& truths, double step, DetectionAreas* areas) {
+template <typename M>
+QueryRaster query_raster(const M& map, const std::vector<LayerTruth>& truths, double step, DetectionAreas* areas) {
   const LayerTruth& coarse = truths.back();
   QueryRaster qr;
   qr.step = step;
@@ -120,5 +123,12 @@ QueryRaster query_raster(const Map& map, const std::vector<LayerTruth>& truths, 
   }
   return qr;
 }
+
+template LayerTruth layer_truth<Map>(const Map&, const sim::Terrain&, int);
+template LayerTruth layer_truth<PaperMap>(const PaperMap&, const sim::Terrain&, int);
+template int classifying_layer<Map>(const Map&, const QueryResult&, float, float);
+template int classifying_layer<PaperMap>(const PaperMap&, const QueryResult&, float, float);
+template QueryRaster query_raster<Map>(const Map&, const std::vector<LayerTruth>&, double, DetectionAreas*);
+template QueryRaster query_raster<PaperMap>(const PaperMap&, const std::vector<LayerTruth>&, double, DetectionAreas*);
 
 }  // namespace ccmap::traverse

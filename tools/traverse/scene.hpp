@@ -18,6 +18,9 @@
 namespace ccmap::traverse {
 
 using Map = Stack<CadreConfig>;
+/// The traverse's map with the paper's 9-float CCM cell (TraverseConfig::paper_cell). The
+/// templates below over the map type are instantiated for Map and PaperMap (scene.cpp).
+using PaperMap = Stack<PaperCell<CadreConfig>>;
 
 inline constexpr double kMaxSlopeDeg = 20.0;       ///< steeper ground is a hazard
 inline constexpr double kObstacleFraction = 0.75;  ///< a layer's minimum obstacle: 0.75 x its cell width
@@ -48,11 +51,13 @@ struct LayerTruth {
   /// The truth of the cell holding (x, y); nullptr outside the window.
   const sim::CellHazard* at(double x, double y) const;
 };
-LayerTruth layer_truth(const Map& map, const sim::Terrain& terrain, int layer);
+template <typename M>
+LayerTruth layer_truth(const M& map, const sim::Terrain& terrain, int layer);
 
 /// The layer whose cell gave the class of a stack answer (query() takes the class of a
 /// constant-layer answer from the first CCM layer when that one knows the point).
-int classifying_layer(const Map& map, const QueryResult& q, float x, float y);
+template <typename M>
+int classifying_layer(const M& map, const QueryResult& q, float x, float y);
 
 /// The stack query on a raster of `step` m over the coarsest layer's window (x0, y0: its lower
 /// corner), each point judged against the truth of the layer that classified it.
@@ -62,6 +67,7 @@ struct QueryRaster {
   std::vector<CellClass> map_class;
   std::vector<signed char> truth;  ///< -1 invalid, 0 free, 1 obstacle, 2 steep
 };
-QueryRaster query_raster(const Map& map, const std::vector<LayerTruth>& truths, double step, DetectionAreas* areas);
+template <typename M>
+QueryRaster query_raster(const M& map, const std::vector<LayerTruth>& truths, double step, DetectionAreas* areas);
 
 }  // namespace ccmap::traverse

@@ -105,6 +105,7 @@ void panel_decorations(tools::RgbImage& img, const PanelFrame& f, const std::str
 }
 
 /// Height, normal variance and class of one layer, side by side, with the path and legends.
+template <typename Map>
 bool write_layer_picture(const std::string& path, const Map& map, int layer, const std::vector<sim::PathPose>& route,
                          std::size_t driven, std::string* error) {
   std::vector<CellRecord> records(Map::layer_capacity(layer));
@@ -189,6 +190,7 @@ Rgb truth_rgb(signed char t) {
   return experiments::kBlack;
 }
 
+template <typename Map>
 bool write_hazard_picture(const std::string& path, const QueryRaster& q, const Map& map,
                           const std::vector<sim::PathPose>& route, std::size_t driven,
                           const std::vector<std::pair<sim::Rock, bool>>& large, std::string* error) {
@@ -299,6 +301,7 @@ Rgb cost_rgb(std::uint8_t c) {
 }
 
 /// The cost raster around the final pose, the route, and where the look-ahead saw hazards.
+template <typename Map>
 bool write_costmap_picture(const std::string& path, const Map& map, const std::vector<sim::PathPose>& route,
                            std::size_t driven, const TraverseResult& result, std::string* error) {
   const std::vector<FrameRecord>& frames = result.frames;
@@ -360,9 +363,10 @@ bool write_costmap_picture(const std::string& path, const Map& map, const std::v
   return tools::write_png(path, img, error);
 }
 
-}  // namespace
-
-TraverseResult run_traverse(const TraverseConfig& cfg) {
+/// The traverse with map type Map: Stack<CadreConfig> (full CCM cells) or PaperMap
+/// (TraverseConfig::paper_cell, the paper's 9-float cell).
+template <typename Map>
+TraverseResult traverse_with(const TraverseConfig& cfg) {
   TraverseResult result;
   std::FILE* log = cfg.log;
   // Path: 6 m east, a 90 deg left turn over 3.5 m, 4 m north (13.5 m).
@@ -399,10 +403,11 @@ TraverseResult run_traverse(const TraverseConfig& cfg) {
   if (log != nullptr) {
     std::fprintf(log,
                  "ccmap traverse: seed %llu, terrain 30 x 30 m (%zu rocks, %zu box, raster %.0f cm in %.0f ms CPU), "
-                 "path %.1f m, %zu frames every %.2f m, camera %d x %d px stride %d, %.1f %% mismatched pixels; %s\n",
+                 "path %.1f m, %zu frames every %.2f m, camera %d x %d px stride %d, %s CCM cell, %.1f %% mismatched pixels; %s\n",
                  static_cast<unsigned long long>(cfg.seed), result.rocks, result.boxes, 100.0 * cfg.raster_resolution_m,
                  raster_ms, result.path_length_m, frames, cfg.frame_spacing_m, sp.width_px, sp.height_px, sp.pixel_stride,
-                 100.0 * cfg.mismatch_share, cfg.gate.describe(params).c_str());
+                 cfg.paper_cell ? "paper (9-float)" : "full (10-float)", 100.0 * cfg.mismatch_share,
+                 cfg.gate.describe(params).c_str());
   }
   std::vector<PointXYZ> points;
   for (std::size_t i = 0; i < frames; ++i) {
@@ -590,6 +595,12 @@ TraverseResult run_traverse(const TraverseConfig& cfg) {
     result.pictures.push_back(costmap);
   }
   return result;
+}
+
+}  // namespace
+
+TraverseResult run_traverse(const TraverseConfig& cfg) {
+  return cfg.paper_cell ? traverse_with<PaperMap>(cfg) : traverse_with<Map>(cfg);
 }
 
 std::string traverse_report(const TraverseResult& r) {

@@ -54,6 +54,7 @@ struct TraverseConfig {
   double body_length_m = 0.6;       ///< the rover body swept along it
   double body_width_m = 0.4;
   std::string out_dir;              ///< pictures go here; empty = no pictures
+  bool paper_cell = false;          ///< map with the paper's 9-float CCM cell (PaperCell<CadreConfig>)
   std::FILE* log = nullptr;         ///< progress lines (one per frame) and the report; nullptr = quiet
   double mismatch_share = 0.0;      ///< stereo mismatches: share of pixels at a random disparity (sim/stereo.hpp)
   experiments::GateSetting gate;    ///< the map's outlier gate (default: the library's)

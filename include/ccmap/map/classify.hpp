@@ -22,8 +22,17 @@ namespace ccmap {
 
 /// Class of a (pooled) CCM cell: unknown below min_weight; obstacle if sigma_s^2 > threshold
 /// (even when partly covered: the seen points already prove the step); unknown if not covered
-/// (eq. 12); steep if the inclination exceeds the maximum; else traversable.
+/// (ccm_is_covered: eq. 12 per axis for the paper cell, the smaller eigenvalue for the full
+/// cell); steep if the inclination exceeds the maximum; else traversable.
 [[nodiscard]] CellClass classify_ccm(const CcmCell& cell, float width, const StackParams& params,
                                      float threshold) noexcept;
+[[nodiscard]] CellClass classify_ccm(const CcmPaperCell& cell, float width, const StackParams& params,
+                                     float threshold) noexcept;
+/// The same with the cell's surface already computed (`surface` must be ccm_surface(cell)): a
+/// query needs the surface for its answer anyway, and computes it once.
+[[nodiscard]] CellClass classify_ccm(const CcmCell& cell, const CcmSurface& surface, float width,
+                                     const StackParams& params, float threshold) noexcept;
+[[nodiscard]] CellClass classify_ccm(const CcmPaperCell& cell, const CcmSurface& surface, float width,
+                                     const StackParams& params, float threshold) noexcept;
 
 }  // namespace ccmap

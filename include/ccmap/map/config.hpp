@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <type_traits>
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
@@ -23,7 +24,8 @@ enum class FineKind : std::uint8_t {
   kOmg = 2,     ///< Optimal Mixture of Gaussians update (paper ref. [14])
 };
 
-/// CADRE-like stack: 4 cm Kalman layer, then 8/16/32/64 cm CCM layers (default widths).
+/// CADRE-like stack: 4 cm Kalman layer, then 8/16/32/64 cm CCM layers (default widths), full
+/// CCM cells (docs/design.md, "The CADRE preset", says why the full cell).
 ///   layer 0: 4 cm,  64 x 64  -> +-1.28 m around the robot
 ///   layer 1: 8 cm,  64 x 64  -> +-2.56 m
 ///   layer 2: 16 cm, 64 x 64  -> +-5.12 m
@@ -31,14 +33,16 @@ enum class FineKind : std::uint8_t {
 ///   layer 4: 64 cm, 32 x 32  -> +-10.24 m
 struct CadreConfig {
   static constexpr FineKind kFineKind = FineKind::kKalman;
+  static constexpr CcmCellKind kCcmCell = CcmCellKind::kFull;
   static constexpr std::int32_t kFineSide = 64;
   static constexpr std::array<std::int32_t, 4> kCcmSides{{64, 64, 32, 32}};
   static constexpr float kDefaultFinestCellWidthM = 0.04F;
 };
 
-/// One CCM layer of 256 x 256 cells (8 cm default: +-10.24 m).
+/// One CCM layer of 256 x 256 cells (8 cm default: +-10.24 m), full CCM cells.
 struct SingleCcmConfig {
   static constexpr FineKind kFineKind = FineKind::kNone;
+  static constexpr CcmCellKind kCcmCell = CcmCellKind::kFull;
   static constexpr std::int32_t kFineSide = 0;
   static constexpr std::array<std::int32_t, 1> kCcmSides{{256}};
   static constexpr float kDefaultFinestCellWidthM = 0.08F;
@@ -59,6 +63,33 @@ struct SingleOmgConfig {
   static constexpr std::array<std::int32_t, 0> kCcmSides{};
   static constexpr float kDefaultFinestCellWidthM = 0.08F;
 };
+
+/// A configuration with another CCM cell kind: WithCcmCell<CadreConfig, CcmCellKind::kPaper> is
+/// the CADRE stack with the paper's 9-float cells (PaperCell<Config> below). Everything else of
+/// Base is kept.
+template <typename Base, CcmCellKind Kind>
+struct WithCcmCell : Base {
+  // cppcheck-suppress duplInheritedMember ; hiding Base::kCcmCell is the point of WithCcmCell
+  static constexpr CcmCellKind kCcmCell = Kind;
+};
+template <typename Base>
+using PaperCell = WithCcmCell<Base, CcmCellKind::kPaper>;
+
+namespace detail {
+template <typename Config, typename = void>
+struct ConfigCcmCellKind {
+  static constexpr CcmCellKind value = CcmCellKind::kFull;
+};
+template <typename Config>
+struct ConfigCcmCellKind<Config, std::void_t<decltype(Config::kCcmCell)>> {
+  static constexpr CcmCellKind value = Config::kCcmCell;
+};
+}  // namespace detail
+
+/// The CCM cell kind of a Config: its `kCcmCell` member (CcmCellKind), the full cell if it has
+/// none (so a Config written before the member existed keeps compiling, with full cells).
+template <typename Config>
+inline constexpr CcmCellKind kConfigCcmCell = detail::ConfigCcmCellKind<Config>::value;
 
 /// Largest number of layers a stack may have (bounds the per-layer parameter arrays).
 inline constexpr int kMaxLayers = 8;

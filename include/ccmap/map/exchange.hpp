@@ -50,7 +50,7 @@
 // and stay nested (kMisaligned otherwise). A cell then keeps its mean relative to its centre,
 // and only the heights move by the origins' z offset.
 //
-// Delta format (version 1). Little-endian, field by field (the snapshot's writer and reader),
+// Delta format (version 2). Little-endian, field by field (the snapshot's writer and reader),
 // floats as IEEE-754 binary32 bits; sizes in bytes:
 //   header       4  magic "CCMD" (0x43 0x43 0x4D 0x44)
 //                2  format version (kDeltaFormatVersion), 2 reserved 0
@@ -67,12 +67,15 @@
 //                   n cells in window order (rows of increasing y, x increasing): the gap since
 //                   the previous cell's window position (y - min_y) * side + (x - min_x), minus
 //                   one (the first: its position), as a LEB128 varint (1 byte below 128), then
-//                   the cell in the snapshot's cell codec (snapshot_write_cell: CCM 36 bytes,
-//                   Kalman and OMG 12 bytes)
+//                   the cell in the snapshot's cell codec (snapshot_write_cell: CCM 40 bytes
+//                   for CcmCell with s_xy, 36 for CcmPaperCell; Kalman and OMG 12 bytes)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib) of every byte before it
 // Size: 88 + 12 per layer + 4 bytes of frame (152 for CADRE), and per cell the varint (1 byte for
 // a gap below 128 positions, 2 below 16,384: every gap of a 64 x 64 layer, 3 in a 256 x 256 one)
-// and 36 bytes (CCM) or 12 (Kalman, OMG); docs/integration.md gives typical exchanges.
+// and 40 bytes (CCM, full cell; 36 paper cell) or 12 (Kalman, OMG); docs/integration.md gives
+// typical exchanges. Version history: 1 carried the 9-float CCM cell only; 2 (the cell kinds,
+// as snapshot version 2) is refused by a version-1 reader and refuses version 1 with
+// kVersionMismatch.
 //
 // Statuses of merge_delta, all before anything is written (on any refusal the map and the sent
 // copy are bitwise unchanged; the refusal is counted in counters()):
@@ -110,7 +113,7 @@
 namespace ccmap {
 
 /// Format version written by this library; merge_delta accepts exactly this version.
-inline constexpr std::uint16_t kDeltaFormatVersion = 1U;
+inline constexpr std::uint16_t kDeltaFormatVersion = 2U;
 
 /// Who this map is in the team and where its map frame lies in the team frame.
 struct ExchangeParams {
@@ -214,23 +217,27 @@ enum class GainKind : std::uint8_t {
   kSaturated = 2,  ///< limiter or floor engaged: the whole cell (see the file comment)
 };
 
-// Per cell kind (src/map/exchange.cpp); CcmCell, KalmanCell and OmgCell overloads, named alike
+// Per cell kind (src/map/exchange.cpp); CcmCell, CcmPaperCell, KalmanCell and OmgCell overloads, named alike
 // so that the templates below compile for every cell kind.
 /// The gain of `cell` over `sent` (its last sent state), written to *gain, and its weight.
 [[nodiscard]] GainKind exchange_gain(const CcmCell& cell, const CcmCell& sent, const StackParams& params,
                                      float cell_width_m, CcmCell* gain) noexcept;
+[[nodiscard]] GainKind exchange_gain(const CcmPaperCell& cell, const CcmPaperCell& sent, const StackParams& params,
+                                     float cell_width_m, CcmPaperCell* gain) noexcept;
 [[nodiscard]] GainKind exchange_gain(const KalmanCell& cell, const KalmanCell& sent, const StackParams& params,
                                      float cell_width_m, KalmanCell* gain) noexcept;
 [[nodiscard]] GainKind exchange_gain(const OmgCell& cell, const OmgCell& sent, const StackParams& params,
                                      float cell_width_m, OmgCell* gain) noexcept;
 /// Weight a gain is compared with the export floor by (CCM, OMG: weight; Kalman: measurements).
 [[nodiscard]] float exchange_weight(const CcmCell& c) noexcept;
+[[nodiscard]] float exchange_weight(const CcmPaperCell& c) noexcept;
 [[nodiscard]] float exchange_weight(const KalmanCell& c) noexcept;
 [[nodiscard]] float exchange_weight(const OmgCell& c) noexcept;
 /// True if a received cell is one an export or a save of this library can write: every field
 /// finite, weight > 0, second moments >= 0, |height| <= kMaxAbsCoordinateM, a CCM mean within
-/// one cell width of the centre, a Kalman variance > 0.
+/// one cell width of the centre, a Kalman variance > 0 (the full cell's s_xy: finite, as s_xz).
 [[nodiscard]] bool exchange_cell_valid(const CcmCell& c, float cell_width_m) noexcept;
+[[nodiscard]] bool exchange_cell_valid(const CcmPaperCell& c, float cell_width_m) noexcept;
 [[nodiscard]] bool exchange_cell_valid(const KalmanCell& c, float cell_width_m) noexcept;
 [[nodiscard]] bool exchange_cell_valid(const OmgCell& c, float cell_width_m) noexcept;
 /// Merges a received cell, its height moved by dz_m into this map's frame, into `cell` with
@@ -238,6 +245,8 @@ enum class GainKind : std::uint8_t {
 /// merge is refused or its result is not a valid cell (exchange_cell_valid).
 [[nodiscard]] bool exchange_merge(CcmCell& cell, const CcmCell& received, float dz_m, const StackParams& params,
                                   float cell_width_m) noexcept;
+[[nodiscard]] bool exchange_merge(CcmPaperCell& cell, const CcmPaperCell& received, float dz_m,
+                                  const StackParams& params, float cell_width_m) noexcept;
 [[nodiscard]] bool exchange_merge(KalmanCell& cell, const KalmanCell& received, float dz_m, const StackParams& params,
                                   float cell_width_m) noexcept;
 [[nodiscard]] bool exchange_merge(OmgCell& cell, const OmgCell& received, float dz_m, const StackParams& params,
@@ -291,7 +300,7 @@ struct ExchangeAccess {
   /// The sent copies, in the stack's slot layout (slot of global index i: buffer_offset(i, side)).
   struct SentCells {
     FineCell fine[Layers::kFineCellCount];
-    CcmCell ccm[Layers::kCcmCellCount];
+    typename Layers::CcmCellType ccm[Layers::kCcmCellCount];
   };
 
   [[nodiscard]] static std::uint32_t next_generation(StackType& stack) noexcept { return ++stack.generation_; }
@@ -322,8 +331,8 @@ struct ExchangeAccess {
     for (FineCell& c : sent.fine) {
       c = FineCell{};
     }
-    for (CcmCell& c : sent.ccm) {
-      c = CcmCell{};
+    for (typename Layers::CcmCellType& c : sent.ccm) {
+      c = typename Layers::CcmCellType{};
     }
   }
 
@@ -571,6 +580,8 @@ class MapExchange {
   static_assert(kMaxPeers >= 1U && kMaxPeers <= 255U, "1..255 peers");
   using StackType = Stack<Config>;
   static constexpr int kLayerCount = StackType::kLayerCount;
+  /// Bytes of one CCM cell on the wire (40 full cell, 36 paper cell).
+  static constexpr std::size_t kCcmCellBytes = detail::kSnapshotCcmCellBytes<typename StackType::CcmCellType>;
 
   MapExchange() noexcept = default;
   MapExchange(const MapExchange&) = delete;
@@ -582,12 +593,12 @@ class MapExchange {
   /// Largest delta of this configuration (every cell of every layer) and the smallest (no cell).
   [[nodiscard]] static constexpr std::size_t max_delta_size() noexcept {
     // Every cell written: each gap is 0, one varint byte per cell. Leaving a cell out saves its
-    // 13 or 37 bytes and lengthens one gap's varint by less than a byte per skipped position
+    // 13, 37 or 41 bytes and lengthens one gap's varint by less than a byte per skipped position
     // (a varint grows by a byte per factor 128), so no subset is larger.
     std::size_t total = min_delta_size();
     for (int layer = 0; layer < kLayerCount; ++layer) {
       const std::size_t cell_bytes =
-          StackType::layer_is_ccm(layer) ? detail::kSnapshotCcmCellBytes : detail::kSnapshotFineCellBytes;
+          StackType::layer_is_ccm(layer) ? kCcmCellBytes : detail::kSnapshotFineCellBytes;
       total += StackType::layer_capacity(layer) * (cell_bytes + 1U);
     }
     return total;
@@ -722,7 +733,7 @@ class MapExchange {
         (void)detail::delta_read_varint(r, &skip);
         // The cell bytes of the layer written (layers run coarsest first).
         const int stack_layer = kLayerCount - 1 - layer;
-        r.seek(r.position() + (StackType::layer_is_ccm(stack_layer) ? detail::kSnapshotCcmCellBytes
+        r.seek(r.position() + (StackType::layer_is_ccm(stack_layer) ? kCcmCellBytes
                                                                     : detail::kSnapshotFineCellBytes));
       }
     }

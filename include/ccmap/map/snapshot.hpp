@@ -15,7 +15,7 @@
 // the outlier gate's held points awaiting the change rule (map/detail/held_pool.hpp: at most
 // kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
 //
-// Format (version 2). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 3: version 2 with the outlier gate's parameters and counters). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -24,7 +24,8 @@
 //                4  total size of the snapshot, trailer included
 //   fingerprint  1  fine kind (FineKind), 1 layer count, 2 reserved 0,
 //               32  side of each layer, finest first (uint32 x kMaxLayers, 0 past the last layer)
-//                2  bytes per fine cell on the wire (12), 2 bytes per CCM cell (36)
+//                2  bytes per fine cell on the wire (12), 2 bytes per CCM cell (40 for CcmCell,
+//                   36 for CcmPaperCell: the cell kind is part of the shape)
 //   params      60  StackParams floats: finest_cell_width_m, weight_limit, coverage_tau,
 //                   min_weight, obstacle_fraction, max_inclination, kalman_min_variance,
 //                   normal_variance_threshold[0..7]
@@ -36,19 +37,24 @@
 //                   side*side cells in window order: rows of increasing global y from the
 //                   window's lowest y, x increasing inside a row (RingGrid::for_each order).
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
-//                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz.
+//                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
+//                   s_xy for CcmCell (CcmPaperCell has none).
 //   counters    60  total FrameCounters (15 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
 //
+// Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
+// (CcmCell with s_xy). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
+// hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
+//
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
 //   kInvalidArgument  data == nullptr
 //   kCorrupt          shorter than the header, wrong magic, a non-zero reserved header field
-//   kVersionMismatch  another format version
+//   kVersionMismatch  another format version (also version 1, before the cell kinds)
 //   kCorrupt          size field != size (truncated or trailing bytes), CRC mismatch
-//   kVersionMismatch  fingerprint of another stack configuration (another preset): the data is
-//                     intact but describes another map shape
+//   kVersionMismatch  fingerprint of another stack configuration (another preset or another CCM
+//                     cell kind): the data is intact but describes another map shape
 //   kCorrupt          anything inside that a save could not have written: parameters that
 //                     init() would refuse, a non-finite float (weight_limit may be +inf, the
 //                     "no limit" value), a negative cell weight, an odd or out-of-range window
@@ -68,7 +74,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 2U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 3U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -78,7 +84,7 @@ inline constexpr std::uint16_t kSnapshotFormatVersion = 2U;
 
 namespace detail {
 
-static_assert(kMaxLayers == 8, "snapshot format version 2 stores 8 sides and 8 thresholds");
+static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 thresholds");
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
@@ -87,7 +93,11 @@ inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
 inline constexpr std::size_t kSnapshotCountersBytes = 15U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
-inline constexpr std::size_t kSnapshotCcmCellBytes = std::size_t{9} * 4U;
+/// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
+template <typename Cell>
+inline constexpr std::size_t kSnapshotCcmCellBytes = sizeof(Cell) / sizeof(float) * 4U;
+static_assert(kSnapshotCcmCellBytes<CcmCell> == 40U && kSnapshotCcmCellBytes<CcmPaperCell> == 36U,
+              "CCM cells on the wire: 10 and 9 floats");
 
 /// What a snapshot says about the shape of the stack it came from.
 struct SnapshotFingerprint {
@@ -170,10 +180,12 @@ void snapshot_write_centre(SnapshotWriter& w, CellIndex centre) noexcept;
 /// False for an odd or out-of-range centre (windows always start on even indices).
 [[nodiscard]] bool snapshot_read_centre(SnapshotReader& r, CellIndex* out) noexcept;
 void snapshot_write_cell(SnapshotWriter& w, const CcmCell& c) noexcept;
+void snapshot_write_cell(SnapshotWriter& w, const CcmPaperCell& c) noexcept;
 void snapshot_write_cell(SnapshotWriter& w, const KalmanCell& c) noexcept;
 void snapshot_write_cell(SnapshotWriter& w, const OmgCell& c) noexcept;
 /// False for a non-finite field or a negative weight (*out is written either way).
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, CcmCell* out) noexcept;
+[[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, CcmPaperCell* out) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, KalmanCell* out) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, OmgCell* out) noexcept;
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& totals, std::uint32_t rejected_moves,
@@ -187,13 +199,15 @@ void snapshot_write_trailer(SnapshotWriter& w) noexcept;
 template <typename Config>
 struct SnapshotAccess {
   using StackType = Stack<Config>;
+  using CcmCellType = typename StackType::CcmCellType;
   static constexpr int kLayers = StackType::kLayerCount;
+  static constexpr std::size_t kCcmCellBytes = kSnapshotCcmCellBytes<CcmCellType>;
 
   [[nodiscard]] static constexpr std::size_t size() noexcept {
     std::size_t total = kSnapshotHeaderBytes + kSnapshotFingerprintBytes + kSnapshotParamsBytes +
                         kSnapshotCountersBytes + kSnapshotTrailerBytes;
     for (int layer = 0; layer < kLayers; ++layer) {
-      const std::size_t cell_bytes = StackType::layer_is_ccm(layer) ? kSnapshotCcmCellBytes : kSnapshotFineCellBytes;
+      const std::size_t cell_bytes = StackType::layer_is_ccm(layer) ? kCcmCellBytes : kSnapshotFineCellBytes;
       total += kSnapshotLayerHeaderBytes + StackType::layer_capacity(layer) * cell_bytes;
     }
     return total;
@@ -207,7 +221,7 @@ struct SnapshotAccess {
       f.sides[layer] = static_cast<std::uint32_t>(StackType::layer_side(layer));
     }
     f.fine_cell_bytes = static_cast<std::uint16_t>(kSnapshotFineCellBytes);
-    f.ccm_cell_bytes = static_cast<std::uint16_t>(kSnapshotCcmCellBytes);
+    f.ccm_cell_bytes = static_cast<std::uint16_t>(kCcmCellBytes);
     return f;
   }
 
@@ -230,9 +244,9 @@ struct SnapshotAccess {
     snapshot_write_params(w, stack.params_);
     for (int layer = 0; layer < kLayers; ++layer) {
       if (StackType::layer_is_ccm(layer)) {
-        const RingGrid<CcmCell>& grid = stack.layers_.ccm_grid(layer);
+        const RingGrid<CcmCellType>& grid = stack.layers_.ccm_grid(layer);
         snapshot_write_centre(w, grid.centre());
-        grid.for_each([&w](CellIndex, const CcmCell& cell) { snapshot_write_cell(w, cell); });
+        grid.for_each([&w](CellIndex, const CcmCellType& cell) { snapshot_write_cell(w, cell); });
       } else {
         snapshot_write_centre(w, stack.layers_.fine.centre());
         stack.layers_.fine.for_each([&w](CellIndex, const typename StackType::FineCell& cell) { snapshot_write_cell(w, cell); });
@@ -283,7 +297,7 @@ struct SnapshotAccess {
       const std::size_t cells = StackType::layer_capacity(layer);
       for (std::size_t i = 0; i < cells && valid; ++i) {
         if (StackType::layer_is_ccm(layer)) {
-          CcmCell cell{};
+          CcmCellType cell{};
           valid = snapshot_read_cell(r, &cell);
         } else {
           typename StackType::FineCell cell{};
@@ -303,7 +317,7 @@ struct SnapshotAccess {
   }
 
   /// Calls fn(layer, CellIndex global_index, const Cell& cell) for every stored cell of a
-  /// snapshot that validate() accepted (Cell: CcmCell for CCM layers, the fine cell type for the
+  /// snapshot that validate() accepted (Cell: CcmCellType for CCM layers, the fine cell type for the
   /// finest layer), layer by layer, in window order.
   template <typename Fn>
   static void for_each_stored_cell(const std::uint8_t* data, std::size_t data_size, std::size_t layers_begin,
@@ -319,7 +333,7 @@ struct SnapshotAccess {
         for (std::int32_t col = 0; col < side; ++col) {
           const CellIndex index{min.x + col, min.y + row};
           if (StackType::layer_is_ccm(layer)) {
-            CcmCell cell{};
+            CcmCellType cell{};
             (void)snapshot_read_cell(r, &cell);
             fn(layer, index, cell);
           } else {
@@ -351,9 +365,9 @@ struct SnapshotAccess {
       CellIndex centre{};
       (void)snapshot_read_centre(r, &centre);
       if (StackType::layer_is_ccm(layer)) {
-        RingGrid<CcmCell>& grid = stack.layers_.ccm_grid(layer);
+        RingGrid<CcmCellType>& grid = stack.layers_.ccm_grid(layer);
         (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);
-        grid.for_each([&r](CellIndex, CcmCell& cell) { (void)snapshot_read_cell(r, &cell); });
+        grid.for_each([&r](CellIndex, CcmCellType& cell) { (void)snapshot_read_cell(r, &cell); });
       } else {
         auto& grid = stack.layers_.fine;
         (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);
@@ -369,7 +383,7 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 418,060 bytes (docs/integration.md lists every preset).
+/// CadreConfig: 459,020 bytes (PaperCell<CadreConfig>: 418,060; docs/integration.md lists every preset).
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();

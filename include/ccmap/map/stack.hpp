@@ -68,6 +68,11 @@ class Stack {
   static constexpr int kCcmLayerCount = Layers::kCcmLayerCount;
   static constexpr int kLayerCount = Layers::kLayerCount;
   using FineCell = typename Layers::FineCell;
+  /// The CCM cell of this stack's CCM layers: CcmCell (10 floats, the full lateral covariance)
+  /// or CcmPaperCell (the paper's 9), chosen by Config::kCcmCell (map/config.hpp). Every cell
+  /// function (ccm_surface, ccm_merge, ccm_pool4, ccm_is_covered, ...) takes both.
+  using CcmCellType = typename Layers::CcmCellType;
+  static constexpr CcmCellKind kCcmCellKind = kConfigCcmCell<Config>;
 
   Stack() noexcept = default;
   Stack(const Stack&) = delete;
@@ -232,7 +237,7 @@ class Stack {
   // -------------------------------------------------------------------------------------------
 
   /// Answer from the finest layer that knows the cell at (x, y): a piece-wise constant cell
-  /// with at least min_weight, or a (pooled) CCM cell that passes the coverage test (eq. 12)
+  /// with at least min_weight, or a (pooled) CCM cell that passes the coverage test (ccm_is_covered)
   /// or is an obstacle (see classify_ccm).
   /// For an answer from the piece-wise constant layer, height and elevation variance come from
   /// it and slope, normal variance and class from the first CCM layer's pooled cell there when
@@ -264,11 +269,11 @@ class Stack {
   /// The CCM statistics of a CCM layer's cell as a query sees them: the cell's own points
   /// merged with the pooled finer layers (Section IV-F), recursively. The zero cell for a bad
   /// layer, an index outside the layer's window, or before init.
-  [[nodiscard]] CcmCell pooled_cell(int layer, CellIndex index) const noexcept {
+  [[nodiscard]] CcmCellType pooled_cell(int layer, CellIndex index) const noexcept {
     // Outside the window: the zero cell, before pooled() forms the child index 2 * index (an
     // arbitrary index would overflow int32 and alias cells near the origin).
     if (!initialised_ || !layer_is_ccm(layer) || !layers_.contains(layer, index)) {
-      return CcmCell{};
+      return CcmCellType{};
     }
     return detail::pooled(layers_, params_.weight_limit, layer, index);
   }
@@ -303,7 +308,7 @@ class Stack {
       }
     };
     if (layer_is_ccm(layer)) {
-      layers_.ccm_grid(layer).for_each([&](CellIndex index, const CcmCell&) { emit(index); });
+      layers_.ccm_grid(layer).for_each([&](CellIndex index, const CcmCellType&) { emit(index); });
     } else {
       layers_.fine.for_each([&](CellIndex index, const FineCell&) { emit(index); });
     }
@@ -353,7 +358,7 @@ class Stack {
   /// Raw CCM layer `ccm_index` (0 = first CCM layer), read-only, for serialisation, pictures and
   /// tests. Contract: 0 <= ccm_index < kCcmLayerCount; a violation is reported to the assert
   /// hook and answered with an empty, uninitialised grid (every accessor safe, no cells).
-  [[nodiscard]] const RingGrid<CcmCell>& ccm_layer(int ccm_index) const noexcept {
+  [[nodiscard]] const RingGrid<CcmCellType>& ccm_layer(int ccm_index) const noexcept {
     CCMAP_ASSERT_OR_RETURN(ccm_index >= 0 && ccm_index < kCcmLayerCount, no_grid_);
     return layers_.ccm[ccm_index];
   }
@@ -439,7 +444,7 @@ class Stack {
   /// generation refuses to run (its record of what was sent no longer describes these cells).
   std::uint32_t generation_ = 0U;
   bool initialised_ = false;
-  RingGrid<CcmCell> no_grid_{};  ///< the safe answer of ccm_layer() to a bad index
+  RingGrid<CcmCellType> no_grid_{};  ///< the safe answer of ccm_layer() to a bad index
   // ---- update-path scratch and derived constants (not map state: not in snapshots) ----
   detail::UpdatePath<Config> update_{};
 };

@@ -50,10 +50,10 @@ struct QueryResult {
   std::int32_t layer;          ///< layer that answered (0 = finest)
   float cell_width_m;          ///< cell width of that layer
   float height_m;              ///< height at the query point (sub-cell for CCM, eq. 10)
-  float slope_x;               ///< a = dz/dx (eq. 9); 0 for piece-wise constant cells
+  float slope_x;               ///< a = dz/dx (ccm_surface); 0 for piece-wise constant cells
   float slope_y;               ///< b = dz/dy
   float inclination;           ///< sqrt(a^2 + b^2)
-  float normal_variance;       ///< sigma_s^2 (eq. 11), m^2; constant cells: their own variance
+  float normal_variance;       ///< sigma_s^2 (eq. 11 / the plane's residual), m^2; constant cells: their own variance
   float elevation_variance;    ///< m^2, variance of the height at the point
   float weight;                ///< accumulated weight of the answering (pooled) cell
   CellClass cell_class;

@@ -256,6 +256,39 @@ class BadValuesInsideGoodArrays(unittest.TestCase):
         self.assertNotEqual(state(c)[0], state(b)[0])
 
 
+class PaperCell(unittest.TestCase):
+    def test_paper_cell_keyword_selects_the_nine_float_cell(self):
+        # A 16 cm cell of a 12 deg plane along y seen on one diagonal half (x + y < 0 about the
+        # centre): the paper cell's eq. (9) gives slope_x = -b/2 and calls it covered; the full
+        # cell gives the least-squares plane (slope_x = 0) and calls it unknown (issue 11).
+        b = math.tan(math.radians(12.0))
+        g = (np.arange(32) + 0.5) * 0.005 - 0.08
+        x, y = np.meshgrid(g, g)
+        keep = x + y < 0.0
+        pts = np.column_stack([x[keep] + 0.08, y[keep] + 0.08, b * y[keep]])
+        full, paper = ccmap.Map("ccm", cell_width=0.16), ccmap.Map("ccm", cell_width=0.16, paper_cell=True)
+        self.assertFalse(full.paper_cell)
+        self.assertTrue(paper.paper_cell)
+        self.assertIn("paper_cell=True", repr(paper))
+        for m in (full, paper):
+            m.update(pts, (0.0, 0.0, 0.5))
+        cf, cp = full.layer(0), paper.layer(0)
+        self.assertEqual((len(cf), len(cp)), (1, 1))
+        self.assertAlmostEqual(float(cf["slope_x"][0]), 0.0, delta=2e-3)
+        self.assertAlmostEqual(float(cp["slope_x"][0]), -0.5 * b, delta=0.01)
+        self.assertEqual((cf["class"][0], cp["class"][0]), ("unknown", "traversable"))
+        self.assertEqual(ccmap.snapshot_size("ccm", paper_cell=True), ccmap.snapshot_size("ccm") - 65536 * 4)
+        loaded = ccmap.Map.from_snapshot(paper.snapshot())
+        self.assertTrue(loaded.paper_cell)
+        self.assertEqual(state(loaded), state(paper))
+        with self.assertRaisesRegex(ccmap.StatusError, "version_mismatch"):
+            ccmap.Map.from_snapshot(paper.snapshot(), preset="kf")
+        with self.assertRaisesRegex(ccmap.StatusError, "no CCM layer"):
+            ccmap.Map("omg", paper_cell=True)
+        with self.assertRaises(TypeError):
+            ccmap.Map("ccm", paper_cell=1)
+
+
 class SaveLoad(unittest.TestCase):
     def test_round_trip_for_every_preset(self):
         xy = np.column_stack([np.linspace(-0.5, 3.0, 300), np.linspace(-1.5, 1.5, 300)])

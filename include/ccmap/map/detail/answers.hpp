@@ -60,15 +60,15 @@ class QueryView {
     QueryResult out = empty_result(Status::kOk, layer);
     out.cell_width_m = width;
     if (Layers::is_ccm(layer)) {
-      const CcmCell cell = pooled(layers_, params_.weight_limit, layer, index);
-      // Known: covered (eq. 12), or an obstacle already (classify_ccm: obstacle evidence wins).
-      const CellClass cell_class = classify_ccm(cell, width, params_, thresholds_[layer]);
+      const typename Layers::CcmCellType cell = pooled(layers_, params_.weight_limit, layer, index);
+      const CcmSurface surface = ccm_surface(cell);
+      // Known: covered (ccm_is_covered), or an obstacle already (classify_ccm: obstacle evidence wins).
+      const CellClass cell_class = classify_ccm(cell, surface, width, params_, thresholds_[layer]);
       if (require_known && cell_class == CellClass::kUnknown) {
         return empty_result(Status::kUnknown, layer);
       }
       const float qx = x - grid::cell_centre(index.x, width);
       const float qy = y - grid::cell_centre(index.y, width);
-      const CcmSurface surface = ccm_surface(cell);
       out.weight = cell.weight;
       out.height_m = ccm_height_at(cell, surface, qx, qy);
       out.slope_x = surface.slope_x;
@@ -101,10 +101,12 @@ class QueryView {
     CcmSurface surface;
     CellClass cell_class;
   };
-  [[nodiscard]] CcmAnswer ccm_answer(int layer, const CcmCell& cell) const noexcept {
-    CcmAnswer a{CcmSurface{0.0F, 0.0F, 0.0F}, classify_ccm(cell, layers_.widths[layer], params_, thresholds_[layer])};
+  [[nodiscard]] CcmAnswer ccm_answer(int layer, const typename Layers::CcmCellType& cell) const noexcept {
+    const CcmSurface surface = ccm_surface(cell);
+    CcmAnswer a{CcmSurface{0.0F, 0.0F, 0.0F},
+                classify_ccm(cell, surface, layers_.widths[layer], params_, thresholds_[layer])};
     if (a.cell_class != CellClass::kUnknown) {
-      a.surface = ccm_surface(cell);
+      a.surface = surface;
     }
     return a;
   }

@@ -75,6 +75,8 @@ struct LayerSet {
   static constexpr int kCcmLayerCount = static_cast<int>(Config::kCcmSides.size());
   static constexpr int kLayerCount = kFineLayerCount + kCcmLayerCount;
   using FineCell = std::conditional_t<Config::kFineKind == FineKind::kOmg, OmgCell, KalmanCell>;
+  /// CcmCell (full) or CcmPaperCell, by the Config's kCcmCell (map/config.hpp).
+  using CcmCellType = CcmCellOf<kConfigCcmCell<Config>>;
 
   static_assert(kLayerCount >= 1 && kLayerCount <= kMaxLayers, "1..kMaxLayers layers");
   static_assert(!kHasFine || (grid::is_power_of_two(Config::kFineSide) && Config::kFineSide >= 4),
@@ -133,8 +135,8 @@ struct LayerSet {
   }
 
   /// The CCM grid of stack layer `layer`. Precondition: is_ccm(layer).
-  [[nodiscard]] RingGrid<CcmCell>& ccm_grid(int layer) noexcept { return ccm[layer - kFineLayerCount]; }
-  [[nodiscard]] const RingGrid<CcmCell>& ccm_grid(int layer) const noexcept { return ccm[layer - kFineLayerCount]; }
+  [[nodiscard]] RingGrid<CcmCellType>& ccm_grid(int layer) noexcept { return ccm[layer - kFineLayerCount]; }
+  [[nodiscard]] const RingGrid<CcmCellType>& ccm_grid(int layer) const noexcept { return ccm[layer - kFineLayerCount]; }
 
   /// Global index of (x, y) in `layer` if its window holds it.
   [[nodiscard]] bool locate(int layer, float x, float y, CellIndex* index) const noexcept {
@@ -198,9 +200,9 @@ struct LayerSet {
 
   // ---- state (zero-initialised: a static LayerSet lives in .bss) ----
   FineCell fine_storage[kFineCellCount]{};
-  CcmCell ccm_storage[kCcmCellCount]{};
+  CcmCellType ccm_storage[kCcmCellCount]{};
   RingGrid<FineCell> fine{};
-  RingGrid<CcmCell> ccm[kCcmSlots]{};
+  RingGrid<CcmCellType> ccm[kCcmSlots]{};
   float widths[kLayerSlots]{};
   /// Per layer, the cells no move has cleared since the last mark (KeptWindow); marked by init
   /// and by map exchange. Not map state: not in snapshots.

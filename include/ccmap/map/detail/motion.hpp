@@ -36,6 +36,7 @@ inline constexpr float kMaxHeightVariance = 1.0e4F;
 
 /// The CCM rule above for one cell; sigma_sq = sigma^2 (m^2) > 0.
 void ccm_forget_for_motion(CcmCell& cell, float sigma_sq, float min_weight) noexcept;
+void ccm_forget_for_motion(CcmPaperCell& cell, float sigma_sq, float min_weight) noexcept;
 
 /// Grown height variance of a constant cell with gradient (gx, gy): variance + (gx^2 + gy^2) sigma^2,
 /// at most kMaxHeightVariance.
@@ -50,7 +51,7 @@ template <typename Config>
 void forget_for_motion(LayerSet<Config>& layers, const StackParams& params, float sigma_sq) noexcept {
   using Layers = LayerSet<Config>;
   for (int c = 0; c < Layers::kCcmLayerCount; ++c) {
-    layers.ccm[c].for_each([&](CellIndex, CcmCell& cell) {
+    layers.ccm[c].for_each([&](CellIndex, typename Layers::CcmCellType& cell) {
       if (cell.weight > 0.0F) {
         ccm_forget_for_motion(cell, sigma_sq, params.min_weight);
       }

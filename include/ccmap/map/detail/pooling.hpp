@@ -37,12 +37,13 @@ struct ReadCount {
 /// Preconditions: LayerSet<Config>::is_ccm(layer) and the layer's window contains `index`
 /// (so 2 * index fits int32: windows stay within +-2^30). `count` is told every cell read.
 template <typename Config, typename Count>
-[[nodiscard]] CcmCell pooled(const LayerSet<Config>& layers, float weight_limit, int layer, CellIndex index,
-                             Count& count) noexcept {
+[[nodiscard]] typename LayerSet<Config>::CcmCellType pooled(const LayerSet<Config>& layers, float weight_limit,
+                                                            int layer, CellIndex index, Count& count) noexcept {
   using Layers = LayerSet<Config>;
-  const CcmCell* own = layers.ccm_grid(layer).cell(index);
+  using Cell = typename Layers::CcmCellType;
+  const Cell* own = layers.ccm_grid(layer).cell(index);
   count.add(1U);
-  CcmCell result = own != nullptr ? *own : CcmCell{};
+  Cell result = own != nullptr ? *own : Cell{};
   if (layer == 0) {
     return result;
   }
@@ -53,7 +54,7 @@ template <typename Config, typename Count>
   if (!layers.contains(child_layer, first)) {
     return result;
   }
-  CcmCell children[4] = {};
+  Cell children[4] = {};
   bool any = false;
   for (int i = 0; i < 4; ++i) {
     const CellIndex child{first.x + (i & 1), first.y + (i >> 1)};
@@ -63,7 +64,7 @@ template <typename Config, typename Count>
       if constexpr (Layers::kHasFine) {
         const typename Layers::FineCell& c = layers.fine.cell_unchecked(child);
         count.add(1U);
-        children[i] = ccm_from_constant(fine_height(c), fine_variance(c), c.weight, layers.widths[child_layer]);
+        children[i] = ccm_from_constant<Cell>(fine_height(c), fine_variance(c), c.weight, layers.widths[child_layer]);
       }
     }
     any = any || children[i].weight > 0.0F;
@@ -71,7 +72,7 @@ template <typename Config, typename Count>
   if (!any) {
     return result;
   }
-  CcmCell merged = ccm_pool4(children, layers.widths[child_layer], weight_limit);
+  Cell merged = ccm_pool4(children, layers.widths[child_layer], weight_limit);
   if (result.weight > 0.0F) {
     (void)ccm_merge(merged, result, weight_limit);
   }
@@ -80,7 +81,8 @@ template <typename Config, typename Count>
 
 /// The same without counting (point queries, pooled_cell, export).
 template <typename Config>
-[[nodiscard]] CcmCell pooled(const LayerSet<Config>& layers, float weight_limit, int layer, CellIndex index) noexcept {
+[[nodiscard]] typename LayerSet<Config>::CcmCellType pooled(const LayerSet<Config>& layers, float weight_limit,
+                                                            int layer, CellIndex index) noexcept {
   NoReadCount none;
   return pooled(layers, weight_limit, layer, index, none);
 }

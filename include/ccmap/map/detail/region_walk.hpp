@@ -191,7 +191,7 @@ class RegionWalk {
   /// True if the window of some layer finer than k overlaps layer-k cell c.
   [[nodiscard]] bool finer_window_overlaps(int k, CellIndex c) const noexcept {
     for (int j = 0; j < k; ++j) {
-      const RingGrid<CcmCell>* ccm = Layers::is_ccm(j) ? &layers_.ccm_grid(j) : nullptr;
+      const RingGrid<typename Layers::CcmCellType>* ccm = Layers::is_ccm(j) ? &layers_.ccm_grid(j) : nullptr;
       CellIndex lo{};
       CellIndex hi{};
       if (ccm != nullptr) {
@@ -257,7 +257,7 @@ class RegionWalk {
     a.centre_x = grid::cell_centre(c.x, layers_.widths[j]);
     a.centre_y = grid::cell_centre(c.y, layers_.widths[j]);
     if (Layers::is_ccm(j)) {
-      const CcmCell cell = pooled(layers_, view_.params().weight_limit, j, c, reads_);
+      const typename Layers::CcmCellType cell = pooled(layers_, view_.params().weight_limit, j, c, reads_);
       const typename View::CcmAnswer ccm = view_.ccm_answer(j, cell);
       if (ccm.cell_class == CellClass::kUnknown) {
         return a;

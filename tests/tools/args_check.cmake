@@ -1,0 +1,20 @@
+# cmake -DEXE=<program> -DARGS=<a|b|c> -DRC=<exit code> -DSTDERR=<regex> [-DSTDOUT=<regex>] -P args_check.cmake
+# (tests/tools/args.cmake). Runs the program with ARGS ('|'-separated) and checks its exit code,
+# that stderr matches STDERR and holds at most one line, and that stdout matches STDOUT if given.
+cmake_minimum_required(VERSION 3.25)
+string(REPLACE "|" ";" args "${ARGS}")
+execute_process(COMMAND "${EXE}" ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc STREQUAL RC)
+  message(FATAL_ERROR "${EXE} ${ARGS}: exit ${rc}, expected ${RC}\nstdout: ${out}\nstderr: ${err}")
+endif()
+if(NOT err MATCHES "${STDERR}")
+  message(FATAL_ERROR "${EXE} ${ARGS}: stderr does not match '${STDERR}': ${err}")
+endif()
+string(REGEX MATCHALL "\n" lines "${err}")
+list(LENGTH lines n)
+if(n GREATER 1)
+  message(FATAL_ERROR "${EXE} ${ARGS}: more than one line on stderr: ${err}")
+endif()
+if(DEFINED STDOUT AND NOT out MATCHES "${STDOUT}")
+  message(FATAL_ERROR "${EXE} ${ARGS}: stdout does not match '${STDOUT}': ${out}")
+endif()
