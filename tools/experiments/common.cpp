@@ -2,57 +2,38 @@
 
 #include <algorithm>
 #include <cstdarg>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
 
+#include "number_options.hpp"
+#include "parse_args.hpp"
 #include "sim/data_dir.hpp"
 
 namespace ccmap::experiments {
 
-int parse_experiment_args(int argc, char** argv, const std::string& description, ExperimentArgs* args) {
-  std::string data_flag;
-  const char* prog = argc > 0 ? argv[0] : "experiment";
-  auto usage = [&](FILE* f) {
-    std::fprintf(f,
-                 "%s\n\nusage: %s [--seed N] [--out DIR] [--quick] [--data DIR] [--paper-cell]\n"
-                 "  --seed N    random seed (default 1); results are deterministic by seed\n"
-                 "  --out DIR   output directory for figures (default out/experiments)\n"
-                 "  --quick     reduced size (what the CI test runs)\n"
-                 "  --paper-cell  the paper's 9-float CCM cell (no lateral covariance) instead of the full cell\n"
-                 "  --data DIR  real-data directory (default $CCMAP_DATA_DIR, else the shared data next to the "
-                 "source tree)\n",
-                 description.c_str(), prog);
-  };
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (a == "--help" || a == "-h") {
-      usage(stdout);
-      return 0;
-    } else if (a == "--quick") {
-      args->quick = true;
-    } else if (a == "--paper-cell") {
-      args->paper_cell = true;
-    } else if (a == "--seed" && has_value) {
-      char* end = nullptr;
-      args->seed = std::strtoull(argv[++i], &end, 10);
-      if (end == nullptr || *end != '\0') {
-        std::fprintf(stderr, "bad --seed value %s\n", argv[i]);
-        return 2;
-      }
-    } else if (a == "--out" && has_value) {
-      args->out_dir = argv[++i];
-    } else if (a == "--data" && has_value) {
-      data_flag = argv[++i];
-    } else {
-      std::fprintf(stderr, "unknown or incomplete argument: %s\n", a.c_str());
-      usage(stderr);
-      return 2;
-    }
-  }
-  args->data_dir = sim::resolve_data_dir(data_flag);
+std::unique_ptr<CLI::App> make_experiment_app(const std::string& program, const std::string& description,
+                                              ExperimentArgs* args) {
+  auto app = std::make_unique<CLI::App>(description, program);
+  app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  tools::add_whole<std::uint64_t>(*app, "--seed", &args->seed, 0, UINT64_MAX, "N",
+                                  "random seed; results are deterministic by seed");
+  app->add_option("--out", args->out_dir, "output directory for figures")->type_name("DIR")->capture_default_str();
+  app->add_flag("--quick", args->quick, "reduced size (what the CI test runs)");
+  app->add_flag("--paper-cell", args->paper_cell,
+                "the paper's 9-float CCM cell (no lateral covariance) instead of the full cell");
+  app->add_option("--data", args->data_dir,
+                  "real-data directory (default $CCMAP_DATA_DIR, else the shared data next to the source tree)")
+      ->type_name("DIR");
+  return app;
+}
+
+int parse_experiment_args(CLI::App& app, int argc, char** argv, ExperimentArgs* args) {
+  const int code = tools::parse_args(app, argc, argv);
+  if (code >= 0) return code;
+  args->data_dir = sim::resolve_data_dir(args->data_dir);
   return -1;
 }
 
