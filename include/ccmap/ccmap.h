@@ -70,10 +70,10 @@ typedef enum ccmap_preset {
  * versions (the library checks at build time that its map fits); ccmap_storage_size() gives
  * the exact figure. The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
-#define CCMAP_CADRE_STORAGE_SIZE 614400u          /* 600 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2686976u    /* 2624 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3211264u /* 3136 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 851968u     /* 832 KiB */
+#define CCMAP_CADRE_STORAGE_SIZE 720896u          /* 704 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2818048u    /* 2752 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3342336u /* 3264 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 983040u     /* 960 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \
@@ -95,10 +95,10 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 458976u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621632u
-#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786624u
-#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786624u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 459020u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621676u
+#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786668u
+#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786668u
 
 /* ---- the map handle ------------------------------------------------------------------------- */
 typedef struct ccmap_map ccmap_map; /* opaque: lives at the start of the caller's storage */
@@ -142,6 +142,10 @@ typedef struct ccmap_params {
   float finest_max_sigma_m;   /* largest range sigma the constant finest layer takes (m);
                                  derived from the width: use ccmap_default_params_for_width
                                  when changing finest_cell_width_m */
+  float outlier_gate_sigma;   /* outlier gate, standard deviations (1..100); 0 = off: every
+                                 point trusted, the paper's update (docs/design.md) */
+  float change_min_points;    /* change rule: held points (and those inside the gate) are a surface */
+  float change_share;         /* of their own with this many points and this share of the cell's */
   ccmap_noise_params noise;
 } ccmap_params;
 
@@ -165,6 +169,14 @@ typedef struct ccmap_frame_counters {
   uint32_t rejected_weight;
   uint32_t outside_map;
   uint32_t too_noisy;
+  uint32_t gated_finer;      /* outside the gate of the next finer layer's cell there: dropped */
+  uint32_t gated_occluded;   /* stereo: its line of sight passes under known ground: dropped */
+  uint32_t gated_held;       /* outside its cell's outlier gate: held for the change rule */
+  uint32_t gated_pool_full;  /* outside the gate while every held-point slot was taken: dropped */
+  uint32_t gated_admitted;   /* held points the change rule admitted (re-seed or merge) */
+  uint32_t gated_dropped;    /* held points it dropped as outliers (or whose cell left the map) */
+  uint32_t reseeded_cells;   /* cells replaced by their held points */
+  uint32_t merged_cells;     /* cells that took their held points in beside their own */
 } ccmap_frame_counters;
 
 /* Re-centres every layer on the robot at (x, y) (m). Refused (counted): non-finite or

@@ -291,6 +291,9 @@ void params_to_c(const StackParams& p, ccmap_params* out) noexcept {
     out->normal_variance_threshold[i] = p.normal_variance_threshold[i];
   }
   out->finest_max_sigma_m = p.finest_max_sigma_m;
+  out->outlier_gate_sigma = p.outlier_gate_sigma;
+  out->change_min_points = p.change_min_points;
+  out->change_share = p.change_share;
   // default_stack_params uses the CADRE stereo model (sensor::cadre_stereo()).
   out->noise.sensor = CCMAP_SENSOR_STEREO;
   out->noise.stereo_focal_px = sensor::kCadreStereoParams.focal_px;
@@ -315,6 +318,9 @@ Status params_from_c(const ccmap_params& c, StackParams* out) noexcept {
     p.normal_variance_threshold[i] = c.normal_variance_threshold[i];
   }
   p.finest_max_sigma_m = c.finest_max_sigma_m;
+  p.outlier_gate_sigma = c.outlier_gate_sigma;
+  p.change_min_points = c.change_min_points;
+  p.change_share = c.change_share;
   if (c.noise.sensor == CCMAP_SENSOR_STEREO) {
     p.noise = sensor::NoiseModel::stereo(sensor::StereoParams{
         c.noise.stereo_focal_px, c.noise.stereo_baseline_m, c.noise.stereo_disparity_sigma_px});
@@ -402,8 +408,11 @@ PathSweep sweep_from_c(const ccmap_path_sweep& s) noexcept {
 }
 
 void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
-  *out = ccmap_frame_counters{f.received, f.used, f.rejected_non_finite, f.rejected_out_of_range,
-                              f.rejected_weight, f.outside_map, f.too_noisy};
+  *out = ccmap_frame_counters{f.received,      f.used,          f.rejected_non_finite,
+                              f.rejected_out_of_range, f.rejected_weight, f.outside_map,
+                              f.too_noisy,     f.gated_finer,   f.gated_occluded,
+                              f.gated_held,    f.gated_pool_full, f.gated_admitted,
+                              f.gated_dropped, f.reseeded_cells, f.merged_cells};
 }
 
 }  // namespace

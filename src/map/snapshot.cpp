@@ -29,11 +29,11 @@ constexpr std::array<std::uint32_t, 256> kCrcTable = make_crc_table();
 
 // The format (snapshot.hpp) lists every field of these types; a new field needs a new format
 // version, not a silent omission.
-static_assert(sizeof(FrameCounters) == 7U * sizeof(std::uint32_t),
+static_assert(sizeof(FrameCounters) == 15U * sizeof(std::uint32_t),
               "FrameCounters changed: update the snapshot format and kSnapshotFormatVersion");
 static_assert(sizeof(sensor::NoiseModel) == 4U + 5U * sizeof(float),
               "NoiseModel changed: update the snapshot format and kSnapshotFormatVersion");
-static_assert(sizeof(StackParams) == (7U + static_cast<std::size_t>(kMaxLayers) + 1U) * sizeof(float) +
+static_assert(sizeof(StackParams) == (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U) * sizeof(float) +
                                          sizeof(sensor::NoiseModel),
               "StackParams changed: update the snapshot format and kSnapshotFormatVersion");
 
@@ -229,6 +229,9 @@ void snapshot_write_params(SnapshotWriter& w, const StackParams& p) noexcept {
     w.f32(t);
   }
   w.f32(p.finest_max_sigma_m);
+  w.f32(p.outlier_gate_sigma);
+  w.f32(p.change_min_points);
+  w.f32(p.change_share);
   w.u8(static_cast<std::uint8_t>(p.noise.kind()));
   w.u8(static_cast<std::uint8_t>(p.noise.weight_mode()));
   w.u16(0U);
@@ -263,6 +266,9 @@ Status snapshot_read_params(SnapshotReader& r, int layer_count, bool has_fine, S
     t = finite_f32();
   }
   p.finest_max_sigma_m = finite_f32();
+  p.outlier_gate_sigma = finite_f32();
+  p.change_min_points = finite_f32();
+  p.change_share = finite_f32();
   const std::uint8_t kind = r.u8();
   const std::uint8_t mode = r.u8();
   const std::uint16_t reserved = r.u16();
@@ -403,8 +409,12 @@ bool snapshot_read_cell(SnapshotReader& r, OmgCell* out) noexcept {
 // ---- counters, trailer ----
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uint32_t rejected_moves,
                              std::uint32_t rejected_frames, std::uint64_t last_update_ns) noexcept {
-  const std::uint32_t values[] = {t.received, t.used, t.rejected_non_finite, t.rejected_out_of_range,
-                                  t.rejected_weight, t.outside_map, t.too_noisy, rejected_moves, rejected_frames};
+  const std::uint32_t values[] = {t.received,        t.used,           t.rejected_non_finite,
+                                  t.rejected_out_of_range, t.rejected_weight, t.outside_map,
+                                  t.too_noisy,       t.gated_finer,    t.gated_occluded,
+                                  t.gated_held,      t.gated_pool_full, t.gated_admitted,
+                                  t.gated_dropped,   t.reseeded_cells, t.merged_cells,
+                                  rejected_moves,    rejected_frames};
   for (const std::uint32_t v : values) {
     w.u32(v);
   }
@@ -420,6 +430,14 @@ void snapshot_read_counters(SnapshotReader& r, FrameCounters* t, std::uint32_t* 
   t->rejected_weight = r.u32();
   t->outside_map = r.u32();
   t->too_noisy = r.u32();
+  t->gated_finer = r.u32();
+  t->gated_occluded = r.u32();
+  t->gated_held = r.u32();
+  t->gated_pool_full = r.u32();
+  t->gated_admitted = r.u32();
+  t->gated_dropped = r.u32();
+  t->reseeded_cells = r.u32();
+  t->merged_cells = r.u32();
   *rejected_moves = r.u32();
   *rejected_frames = r.u32();
   *last_update_ns = r.u64();

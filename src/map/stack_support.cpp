@@ -31,6 +31,14 @@ void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept {
   total.rejected_weight = saturating_add(total.rejected_weight, frame.rejected_weight);
   total.outside_map = saturating_add(total.outside_map, frame.outside_map);
   total.too_noisy = saturating_add(total.too_noisy, frame.too_noisy);
+  total.gated_finer = saturating_add(total.gated_finer, frame.gated_finer);
+  total.gated_occluded = saturating_add(total.gated_occluded, frame.gated_occluded);
+  total.gated_held = saturating_add(total.gated_held, frame.gated_held);
+  total.gated_pool_full = saturating_add(total.gated_pool_full, frame.gated_pool_full);
+  total.gated_admitted = saturating_add(total.gated_admitted, frame.gated_admitted);
+  total.gated_dropped = saturating_add(total.gated_dropped, frame.gated_dropped);
+  total.reseeded_cells = saturating_add(total.reseeded_cells, frame.reseeded_cells);
+  total.merged_cells = saturating_add(total.merged_cells, frame.merged_cells);
 }
 }  // namespace detail
 
@@ -49,13 +57,20 @@ StackParams default_stack_params(float finest_cell_width_m) noexcept {
   // The constant finest layer takes points while sigma_m <= its own IV-G bound
   // (sensor/noise_model.hpp, constant_layer_max_sigma, argues why).
   p.finest_max_sigma_m = sensor::constant_layer_max_sigma(finest_cell_width_m);
+  // The outlier gate and change rule, chosen by measurement (docs/design.md, "Outlier gate
+  // and change"; docs/evaluation.md, "Outliers").
+  p.outlier_gate_sigma = 3.0F;
+  p.change_min_points = 3.0F;
+  p.change_share = 0.08F;
   p.noise = sensor::cadre_stereo();
   return p;
 }
 
 Status validate_stack_params(const StackParams& p, int layer_count) noexcept {
-  const float values[] = {p.finest_cell_width_m, p.coverage_tau, p.min_weight, p.obstacle_fraction,
-                          p.max_inclination, p.kalman_min_variance, p.finest_max_sigma_m};
+  const float values[] = {p.finest_cell_width_m, p.coverage_tau,         p.min_weight,
+                          p.obstacle_fraction,   p.max_inclination,      p.kalman_min_variance,
+                          p.finest_max_sigma_m,  p.outlier_gate_sigma,   p.change_min_points,
+                          p.change_share};
   for (const float v : values) {
     if (!std::isfinite(v)) {
       return Status::kNonFiniteInput;
@@ -81,6 +96,16 @@ Status validate_stack_params(const StackParams& p, int layer_count) noexcept {
   if (ccm_check_weight_limit(p.weight_limit) != Status::kOk || !(p.coverage_tau > 0.0F) ||
       p.coverage_tau > 1.0F || p.min_weight < 0.0F || !(p.obstacle_fraction > 0.0F) ||
       p.obstacle_fraction > 4.0F || !(p.max_inclination > 0.0F) || !(p.kalman_min_variance > 0.0F)) {
+    return Status::kInvalidArgument;
+  }
+  // The gate: off (0) or 1 .. 100 standard deviations (below 1 it would hold most good points,
+  // above 100 it gates nothing a float cell can tell apart). The change rule: at least one
+  // point, a share in (0, 0.5] (above one half no two sides could both be surfaces). Checked
+  // with the gate off too, so that switching it on never meets an invalid rule.
+  const bool gate_off = p.outlier_gate_sigma >= 0.0F && p.outlier_gate_sigma <= 0.0F;  // 0 (no float ==)
+  const bool gate_valid = gate_off || (p.outlier_gate_sigma >= 1.0F && p.outlier_gate_sigma <= 100.0F);
+  if (!gate_valid || !(p.change_min_points >= 1.0F) || p.change_min_points > 65535.0F ||
+      !(p.change_share > 0.0F) || p.change_share > 0.5F) {
     return Status::kInvalidArgument;
   }
   return p.noise.validate();

@@ -55,6 +55,14 @@ struct Result {
   std::vector<unsigned char> raw;
 };
 
+void print_gate_counters(const char* name, const ccmap::FrameCounters& c) {
+  std::fprintf(stderr,
+               "%s: outlier gate: finer %u, occluded %u, held %u (pool full %u), admitted %u, dropped %u; cells "
+               "re-seeded %u, merged %u\n",
+               name, c.gated_finer, c.gated_occluded, c.gated_held, c.gated_pool_full, c.gated_admitted, c.gated_dropped,
+               c.reseeded_cells, c.merged_cells);
+}
+
 template <typename StackT>
 Result run_traverse(const char* name) {
   auto stack = std::make_unique<StackT>();
@@ -98,6 +106,7 @@ Result run_traverse(const char* name) {
   if (!scenario::hash_stack(*stack, records.data(), records.size(), h)) std::exit(5);
   std::fprintf(stderr, "%s: received %u used %u non-finite %u out-of-range %u outside %u too-noisy %u\n", name,
                c.received, c.used, c.rejected_non_finite, c.rejected_out_of_range, c.outside_map, c.too_noisy);
+  print_gate_counters(name, c);
   return Result{h.hash, ccmap::test::raw_map_state(*stack)};
 }
 
@@ -116,6 +125,7 @@ std::uint64_t run_board() {
                "board_scenario: received %u used %u non-finite %u out-of-range %u weight %u outside %u too-noisy %u\n",
                c.received, c.used, c.rejected_non_finite, c.rejected_out_of_range, c.rejected_weight, c.outside_map,
                c.too_noisy);
+  print_gate_counters("board_scenario", c);
   return r.hash;
 }
 

@@ -152,7 +152,9 @@ TEST(StackHostile, DenormalCoordinatesAreUsedAndTheMapStaysFinite) {
   FrameCounters c{};
   // Sensor 0.5 m above, so the range is never 0.
   ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0.0F, 0.0F, 0.5F}, &c), Status::kOk);
-  EXPECT_EQ(c.used, pts.size()) << "denormal coordinates are valid input";
+  // Taken, or judged by the outlier gate against the filled map (held or dropped by the finer
+  // layer): none refused.
+  EXPECT_EQ(c.used + c.gated_held + c.gated_finer, pts.size()) << "denormal coordinates are valid input";
   EXPECT_TRUE(test::all_stored_finite(*stack)) << "denormal input produced NaN/Inf in the map";
   for (const PointXYZ& p : pts) {
     const QueryResult q = stack->query(p.x, p.y);
@@ -160,7 +162,7 @@ TEST(StackHostile, DenormalCoordinatesAreUsedAndTheMapStaysFinite) {
   }
   // A denormal sensor origin is valid too.
   ASSERT_EQ(stack->update_frame(pts.data(), 1U, PointXYZ{kDenormMin, -kDenormMin, 0.5F}, &c), Status::kOk);
-  EXPECT_EQ(c.used, 1U);
+  EXPECT_EQ(c.used + c.gated_held + c.gated_finer, 1U);
   EXPECT_TRUE(test::all_stored_finite(*stack));
 }
 
@@ -274,8 +276,14 @@ TEST(StackHostile, EmptyFramesAreAcceptedAndChangeNothing) {
   EXPECT_TRUE(raw_map_state(*stack) == before);
 }
 
-TEST(StackHostile, MillionPointsInOneCellSaturateAtTheWeightLimitAndTouchNothingElse) {
-  auto stack = filled_stack();
+/// 10^6 points 7 cm below the filled ground in one cell. Gate off: every point is folded in.
+/// Gate on: every point is held (outside the cell's gate) and the frame re-seeds the cell from
+/// them (the held statistics are built by the same update, limiter included). Either way the
+/// cell ends at W_l with the points' statistics and no other byte of the map changes.
+void million_points_in_one_cell(bool gate) {
+  StackParams params = default_stack_params(0.04F);
+  if (!gate) params.outlier_gate_sigma = 0.0F;
+  auto stack = filled_stack(params);
   // One 8 cm cell of layer 1, 1.5 m from the sensor: the default stereo model routes it there
   // (layer 0 takes r <= 1.32 m, layer 1 r <= 1.86 m).
   const int layer = 1;
@@ -294,7 +302,14 @@ TEST(StackHostile, MillionPointsInOneCellSaturateAtTheWeightLimitAndTouchNothing
   auto expected = raw_map_state(*stack);
   FrameCounters c{};
   ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), PointXYZ{0.0F, 0.0F, 0.0F}, &c), Status::kOk);
-  ASSERT_EQ(c.used, kPoints) << "every point should land in the one cell";
+  if (gate) {
+    ASSERT_EQ(c.gated_held, kPoints) << "every point should be held: 7 cm below a cell of a few mm";
+    ASSERT_EQ(c.gated_admitted, kPoints) << "all of them should re-seed the cell";
+    ASSERT_EQ(c.reseeded_cells, 1U);
+    ASSERT_EQ(stack->held_cells(), 0U);
+  } else {
+    ASSERT_EQ(c.used, kPoints) << "every point should land in the one cell";
+  }
   const CcmCell* cell = stack->ccm_layer(layer - 1).cell(index);
   ASSERT_NE(cell, nullptr);
   EXPECT_EQ(cell->weight, stack->params().weight_limit) << "the limiter should hold W at W_l";
@@ -313,6 +328,11 @@ TEST(StackHostile, MillionPointsInOneCellSaturateAtTheWeightLimitAndTouchNothing
                              grid::buffer_offset(index, S::layer_side(layer)) * sizeof(CcmCell);
   std::memcpy(expected.data() + offset, cell, sizeof(CcmCell));
   EXPECT_TRUE(raw_map_state(*stack) == expected) << "10^6 points in one cell changed another cell";
+}
+
+TEST(StackHostile, MillionPointsInOneCellSaturateAtTheWeightLimitAndTouchNothingElse) {
+  million_points_in_one_cell(false);
+  million_points_in_one_cell(true);
 }
 
 // ---------------------------------------------------------------------------------------------

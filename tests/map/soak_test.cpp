@@ -71,12 +71,13 @@ TEST(StackSoak, TenThousandFrameTraverseMatchesABruteForceRebuild) {
       const double dx = double{x_safe} - origin.x, dy = double{y_safe} - origin.y, dz = double{z} - origin.z;
       if (model.safe_point(x_safe, y_safe, dx * dx + dy * dy + dz * dz, 0.1 * w0)) pts.push_back(PointXYZ{x_safe, y_safe, z});
     }
+    pts = model.without_gate_ambiguity(std::move(pts), nullptr, origin);
     FrameCounters c{};
     ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), origin, &c), Status::kOk);
     const auto m = model.frame_map(pts, nullptr, origin);
     model_used += m.used;
     ASSERT_EQ(c.used + c.rejected_non_finite + c.rejected_out_of_range + c.rejected_weight + c.outside_map +
-                  c.too_noisy,
+                  c.too_noisy + c.gated_finer + c.gated_occluded + c.gated_held + c.gated_pool_full,
               c.received)
         << "frame counters do not add up at frame " << f;
     detail::accumulate(totals, c);

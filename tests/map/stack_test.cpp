@@ -171,6 +171,7 @@ TEST(StackMove, MovingAwayAndBackForgetsOnlyWhatLeft) {
 TEST(StackPooling, QueryPoolsFinerLayersLikePoolingByHand) {
   StackParams params = default_stack_params(0.04F);
   params.noise = precise_lidar();
+  params.outlier_gate_sigma = 0.0F;  // every point in its cell: pooling is what is compared here
   auto stack = make_stack<CadreConfig>(params);
   using S = Stack<CadreConfig>;
   Rng rng(5);

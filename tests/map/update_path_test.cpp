@@ -84,6 +84,7 @@ void map_frame_matches_the_model(const StackParams& params, bool with_weights) {
         weights.push_back(i % 101U == 3U ? bad[(i / 101U) % 5U] : 0.5F + static_cast<float>(i % 7U) * 0.25F);
       }
     }
+    pts = model.without_gate_ambiguity(std::move(pts), &weights, o);
     FrameCounters c{};
     ASSERT_EQ(stack->update_frame(pts.data(), with_weights ? weights.data() : nullptr, pts.size(), o, &c),
               Status::kOk);
@@ -134,6 +135,7 @@ void sensor_frame_matches_the_model(const StackParams& params) {
     }
     mix_in(pts, {{kNan, 0.5F, 0.0F}, {0.5F, -kInf, 0.0F}, {2048.0F, 0.0F, 0.0F}, {0.0F, 0.0F, -3.0e4F},
                  {0.0F, 0.0F, 0.0F}, {7.05F, 0.01F, 0.0F}});
+    pts = model.without_gate_ambiguity(std::move(pts), pose);
     FrameCounters c{};
     ASSERT_EQ(stack->update_frame_sensor(pts.data(), pts.size(), pose, &c), Status::kOk);
     const auto m = model.frame_sensor(pts, pose);
@@ -152,6 +154,100 @@ StackParams inverse_variance_params(float width) {
   StackParams p = default_stack_params(width);
   p.noise.set_weight_mode(sensor::WeightMode::kInverseVariance, 1.0F);
   return p;
+}
+
+/// The outlier gate and the change rule against the model: drive frames with 3 % of their points
+/// thrown 0.2 .. 1 m up (held and dropped; some cells merge or re-seed) and 2 % pushed along their
+/// ray to 1.5 .. 3 times their range (stereo mismatches: underground, judged by the finer layer
+/// and the line of sight), then a frame whose
+/// every point is 15 cm higher (a pose jump: held, re-seeded, the pools overflow), then a
+/// normal frame again, in the map frame or the sensor frame. Every path of the gate must run
+/// (the pool overflow where the jump moves more cells than a pool has slots: CADRE's 4 cm layer).
+template <typename Config>
+void gated_frames_match_the_model(const StackParams& params, bool sensor_frame, bool pool_overflows, bool stereo) {
+  auto stack = make_stack<Config>(params);
+  test::ModelStack<Config> model(*stack);
+  auto frames = drive_frames();
+  frames.push_back(frames.back());
+  frames.push_back(frames.back());
+  frames.push_back(frames.back());
+  FrameCounters totals{};
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const test::CadreFrame& frame = frames[f];
+    ASSERT_EQ(stack->move_to(frame.sensor_origin.x, frame.sensor_origin.y), Status::kOk);
+    model.move_to(frame.sensor_origin.x, frame.sensor_origin.y);
+    const float jump = f == 4U ? 0.15F : 0.0F;
+    std::vector<PointXYZ> pts;
+    for (std::size_t i = 0; i < frame.map_points.size(); ++i) {
+      PointXYZ p = sensor_frame ? frame.sensor_points[i] : frame.map_points[i];
+      // Outliers in frames 1 .. 3: z up, in either frame (the sensor's z is the map's z up to
+      // the translation: the CADRE frames' rotation is a yaw).
+      const std::uint32_t h = static_cast<std::uint32_t>(i) * 2654435761U + static_cast<std::uint32_t>(f) * 40503U;
+      if (f >= 1U && f <= 3U && (h >> 8) % 100U < 3U) p.z += 0.2F + 0.8F * static_cast<float>((h >> 16) % 1000U) / 1000.0F;
+      if (f >= 1U && f <= 3U && (h >> 8) % 100U >= 97U) {
+        // Along the ray from the sensor: sensor-frame coordinates scale, map-frame ones about
+        // the sensor origin.
+        const float stretch = 1.5F + 1.5F * static_cast<float>((h >> 16) % 1000U) / 1000.0F;
+        const PointXYZ o = sensor_frame ? PointXYZ{0.0F, 0.0F, 0.0F} : frame.sensor_origin;
+        p = PointXYZ{o.x + stretch * (p.x - o.x), o.y + stretch * (p.y - o.y), o.z + stretch * (p.z - o.z)};
+      }
+      p.z += jump;
+      double m[3] = {p.x, p.y, p.z};
+      double r2 = 0.0;
+      if (sensor_frame) {
+        test::ModelStack<Config>::transform(frame.pose, p, m);
+        r2 = double{p.x} * p.x + double{p.y} * p.y + double{p.z} * p.z;
+      } else {
+        const PointXYZ o = frame.sensor_origin;
+        r2 = (m[0] - o.x) * (m[0] - o.x) + (m[1] - o.y) * (m[1] - o.y) + (m[2] - o.z) * (m[2] - o.z);
+      }
+      if (model.safe_point(m[0], m[1], r2, sensor_frame ? 2e-5 : 1e-5)) pts.push_back(p);
+    }
+    FrameCounters c{};
+    typename test::ModelStack<Config>::Counts expected;
+    if (sensor_frame) {
+      pts = model.without_gate_ambiguity(std::move(pts), frame.pose);
+      ASSERT_EQ(stack->update_frame_sensor(pts.data(), pts.size(), frame.pose, &c), Status::kOk);
+      expected = model.frame_sensor(pts, frame.pose);
+    } else {
+      pts = model.without_gate_ambiguity(std::move(pts), nullptr, frame.sensor_origin);
+      ASSERT_EQ(stack->update_frame(pts.data(), pts.size(), frame.sensor_origin, &c), Status::kOk);
+      expected = model.frame_map(pts, nullptr, frame.sensor_origin);
+    }
+    model.expect_matches(c, expected, std::string(sensor_frame ? "sensor" : "map") + " frame " + std::to_string(f),
+                         sensor_frame ? 8e-6 : 1e-6);
+    ASSERT_FALSE(::testing::Test::HasFailure());
+    detail::accumulate(totals, c);
+  }
+  EXPECT_GT(totals.gated_held, 0U) << "no point was held";
+  EXPECT_GT(totals.gated_dropped, 0U) << "no held point was dropped";
+  EXPECT_GT(totals.gated_admitted, 0U) << "no held point was admitted";
+  EXPECT_GT(totals.reseeded_cells, 0U) << "no cell was re-seeded";
+  EXPECT_GT(totals.merged_cells, 0U) << "no cell was merged";
+  if (pool_overflows) {
+    EXPECT_GT(totals.gated_pool_full, 0U) << "the pose jump should overflow a pool";
+  }
+  if (stereo && Stack<Config>::kLayerCount > 1) {
+    EXPECT_GT(totals.gated_finer, 0U) << "no mismatch was judged by the finer layer";
+    EXPECT_GT(totals.gated_occluded, 0U) << "no mismatch was found behind known ground";
+  }
+}
+
+TEST(UpdatePath, CadreGateMatchesTheModel) {
+  gated_frames_match_the_model<CadreConfig>(default_stack_params(0.04F), false, true, true);
+  gated_frames_match_the_model<CadreConfig>(default_stack_params(0.04F), true, true, true);
+  gated_frames_match_the_model<CadreConfig>(lidar_params(0.04F), false, true, false);
+}
+TEST(UpdatePath, SingleLayerGatesMatchTheModel) {
+  gated_frames_match_the_model<SingleCcmConfig>(default_stack_params(0.08F), false, false, true);
+  gated_frames_match_the_model<SingleKalmanConfig>(default_stack_params(0.08F), true, false, true);
+  gated_frames_match_the_model<SingleOmgConfig>(default_stack_params(0.08F), false, false, true);
+}
+TEST(UpdatePath, GateOffMatchesTheModel) {
+  StackParams off = default_stack_params(0.04F);
+  off.outlier_gate_sigma = 0.0F;
+  map_frame_matches_the_model<CadreConfig>(off, true);
+  sensor_frame_matches_the_model<CadreConfig>(off);
 }
 
 TEST(UpdatePath, CadreMapFrameMatchesTheModel) { map_frame_matches_the_model<CadreConfig>(default_stack_params(0.04F), false); }

@@ -27,14 +27,17 @@ ccmap_tools_gtest(ccmap_test_tools_number_options 60)
 
 # The experiments (tools/experiments: the options of every experiment come from common.cpp)
 # and the traverse programs (tools/traverse).
-foreach(fig fig4 fig5 lidar lateral fig6 fig10)
-  ccmap_args_test(exp_${fig}_help ccmap_exp_${fig} 0 "^$" "Usage: ccmap_exp_${fig}.*--seed N=1.*--out DIR=out/experiments.*--quick.*--paper-cell.*--data DIR" --help)
+foreach(fig fig4 fig5 lidar lateral fig6 fig10 outliers)
+  ccmap_args_test(exp_${fig}_help ccmap_exp_${fig} 0 "^$" "Usage: ccmap_exp_${fig}.*--seed N=1.*--out DIR=out/experiments.*--quick.*--paper-cell.*--data DIR.*--gate K.*--change-points M.*--change-share S" --help)
   ccmap_args_test(exp_${fig}_seed_not_whole ccmap_exp_${fig} 2 "^ccmap_exp_${fig}: error: --seed: '1.5' is not a whole number" "^$" --seed 1.5)
   ccmap_args_test(exp_${fig}_unknown ccmap_exp_${fig} 2 "^ccmap_exp_${fig}: error: .*not expected: --bogus" "^$" --bogus)
 endforeach()
 ccmap_args_test(exp_fig4_stray_argument ccmap_exp_fig4 2 "^ccmap_exp_fig4: error: .*not expected: stray" "^$" --quick stray)
 ccmap_args_test(exp_fig5_seed_negative ccmap_exp_fig5 2 "^ccmap_exp_fig5: error: --seed: -1 is out of range" "^$" --seed -1)
 ccmap_args_test(exp_lidar_seed_missing ccmap_exp_lidar 2 "^ccmap_exp_lidar: error: --seed: 1 required N missing" "^$" --seed)
+ccmap_args_test(exp_fig6_gate_negative ccmap_exp_fig6 2 "^ccmap_exp_fig6: error: --gate: -1 is out of range" "^$" --gate -1)
+ccmap_args_test(exp_outliers_change_share_nan ccmap_exp_outliers 2 "^ccmap_exp_outliers: error: --change-share: nan is out of range" "^$" --change-share nan)
+ccmap_args_test(exp_lidar_change_points_not_a_number ccmap_exp_lidar 2 "^ccmap_exp_lidar: error: --change-points: '3p' is not a number" "^$" --change-points 3p)
 ccmap_args_test(exp_fig6_help_own ccmap_exp_fig6 0 "^$" "--seeds A:B.*--merge SHARD.csv \\.\\.\\..*fig6_shard_<A>_<B>.csv" --help)
 ccmap_args_test(exp_fig6_seeds_reversed ccmap_exp_fig6 2 "^ccmap_exp_fig6: error: --seeds: '5:3' is not A:B with B > A" "^$" --seeds 5:3)
 ccmap_args_test(exp_fig6_seeds_no_colon ccmap_exp_fig6 2 "^ccmap_exp_fig6: error: --seeds: '3' is not A:B" "^$" --seeds 3)
@@ -48,7 +51,11 @@ ccmap_args_test(exp_fig10_sigma_above_one ccmap_exp_fig10 2 "^ccmap_exp_fig10: e
 ccmap_args_test(exp_fig10_sigma_nan ccmap_exp_fig10 2 "^ccmap_exp_fig10: error: --odometry-sigma: nan is out of range" "^$" --odometry-sigma nan)
 ccmap_args_test(exp_fig10_sigma_not_a_number ccmap_exp_fig10 2 "^ccmap_exp_fig10: error: --odometry-sigma: '5%' is not a number" "^$" --odometry-sigma 5%)
 
-ccmap_args_test(traverse_help ccmap_traverse 0 "^$" "Usage: ccmap_traverse.*--seed N=1.*--out DIR=out/traverse.*--stride K.*--frames N.*--quick.*--paper-cell" --help)
+ccmap_args_test(traverse_help ccmap_traverse 0 "^$" "Usage: ccmap_traverse.*--seed N=1.*--out DIR=out/traverse.*--stride K.*--frames N.*--quick.*--paper-cell.*--mismatch P=0.*--gate K.*--change-points M.*--change-share S" --help)
+# Before CLI11 "--mismatch 0.1x" was read as 0.1 (strtod without an end check).
+ccmap_args_test(traverse_mismatch_not_a_number ccmap_traverse 2 "^ccmap_traverse: error: --mismatch: '0.1x' is not a number" "^$" --mismatch 0.1x)
+ccmap_args_test(traverse_mismatch_above_one ccmap_traverse 2 "^ccmap_traverse: error: --mismatch: 2 is out of range \\(expected a number in \\[0, 1\\]\\)" "^$" --mismatch 2)
+ccmap_args_test(traverse_gate_negative ccmap_traverse 2 "^ccmap_traverse: error: --gate: -3 is out of range" "^$" --gate -3)
 ccmap_args_test(traverse_stride_zero ccmap_traverse 2 "^ccmap_traverse: error: --stride: 0 is out of range" "^$" --stride 0)
 ccmap_args_test(traverse_frames_not_whole ccmap_traverse 2 "^ccmap_traverse: error: --frames: '2x' is not a whole number" "^$" --frames 2x)
 # Before CLI11 a seed that is not a number silently became seed 0.

@@ -251,6 +251,7 @@ std::vector<std::map<Cell, RefRow>> one_window_map(const std::vector<XyzPoint>& 
   auto stack = std::make_unique<ccmap::Stack<Config>>();
   ccmap::StackParams params = ccmap::default_stack_params(finest);
   params.noise = ccmap::sensor::NoiseModel::lidar(ccmap::sensor::LidarParams{0.005F, 0.0F});
+  params.outlier_gate_sigma = 0.0F;  // as the CLI maps by default (tools/cli/map_runner.hpp)
   EXPECT_EQ(stack->init(params), ccmap::Status::kOk);
   EXPECT_EQ(stack->move_to(0.0F, 0.0F), ccmap::Status::kOk);
   std::vector<ccmap::PointXYZ> local;

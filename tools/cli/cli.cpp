@@ -103,6 +103,7 @@ struct Options {
   std::string preset;
   double res = 0.0;
   double wl = 0.0;
+  double gate = 0.0;  ///< outlier gate, standard deviations; 0 = off
   std::vector<std::string> clouds;  ///< the frames in order: cloud files and --dem rasters
   std::vector<bool> dem;             ///< per frame: a raster DEM (--dem), else a cloud file
   std::string poses;
@@ -264,6 +265,18 @@ void add_mapping_options(CLI::App* app, Options& o) {
             [&o](const std::string& v) { o.res = parse_positive("--res", v, 100.0); });
   add_value(app, "--wl", "W_L", "weight limit W_l of CCM and OMG cells (default 1000)",
             [&o](const std::string& v) { o.wl = parse_positive("--wl", v, 1e30, /*allow_inf=*/true); });
+  add_value(app, "--gate", "K",
+            "the library's outlier gate at K standard deviations (1..100) with its change\n"
+            "rule (docs/design.md section 9); default 0: off, every point trusted. Each\n"
+            "file is one frame and a frame judges at most 512 cells per pool: held points\n"
+            "beyond that are dropped (counted)",
+            [&o](const std::string& v) {
+              o.gate = parse_number("--gate", v);
+              const bool off = o.gate >= 0.0 && o.gate <= 0.0;  // exactly 0 (no float ==)
+              if (!off && !(o.gate >= 1.0 && o.gate <= 100.0)) {
+                fail("--gate: " + v + " is out of range (expected 0 or a number in 1..100)", 2);
+              }
+            });
   add_frame_option(app, o, "--cloud", false,
             "one frame, map-frame coordinates: .ply (ascii/binary), .las (1.0-1.4,\n"
             "uncompressed) or text 'x y z [w]' per line; repeat for more frames,\n"
@@ -495,7 +508,10 @@ std::string counts_text(const FrameStats& s) {
   return "used " + std::to_string(s.used) + ", rejected: non-finite " + std::to_string(s.rejected_non_finite) +
          ", out of range " + std::to_string(s.rejected_out_of_range) + ", bad weight " +
          std::to_string(s.rejected_weight) + ", outside map " + std::to_string(s.outside_map) + ", too noisy " +
-         std::to_string(s.too_noisy);
+         std::to_string(s.too_noisy) +
+         (s.gated > 0 ? ", outlier gate " + std::to_string(s.gated) + " (admitted later " +
+                            std::to_string(s.gated_admitted) + ")"
+                      : std::string());
 }
 
 void print_frame(const std::string& path, const Cloud& cloud, std::size_t f, const FrameStats& stats, double ms,
@@ -664,6 +680,7 @@ MappedClouds build_map(const Options& o, std::ostream& out, bool verbose) {
   ro.preset = o.preset;
   ro.finest_cell_width_m = finest;
   ro.weight_limit = o.wl;
+  ro.outlier_gate_sigma = o.gate;
   ro.sensor = o.sensor;
   ro.lidar_sigma_m = o.sigma;
   if (!m.runner->init(ro, &error)) fail(error);

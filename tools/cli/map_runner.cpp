@@ -22,6 +22,8 @@ FrameStats to_stats(const FrameCounters& c) {
   s.rejected_weight = c.rejected_weight;
   s.outside_map = c.outside_map;
   s.too_noisy = c.too_noisy;
+  s.gated = std::uint64_t{c.gated_finer} + c.gated_occluded + c.gated_held + c.gated_pool_full;
+  s.gated_admitted = c.gated_admitted;
   return s;
 }
 
@@ -35,6 +37,7 @@ class StackRunner final : public MapRunner {
                                                           : Config::kDefaultFinestCellWidthM;
     StackParams params = default_stack_params(width);
     if (options.weight_limit > 0.0) params.weight_limit = static_cast<float>(options.weight_limit);
+    params.outlier_gate_sigma = static_cast<float>(options.outlier_gate_sigma);
     if (options.sensor == SensorChoice::kLidar) {
       params.noise = sensor::NoiseModel::lidar(sensor::LidarParams{static_cast<float>(options.lidar_sigma_m), 0.0F});
     }

@@ -22,16 +22,25 @@ struct RunnerOptions {
   double weight_limit = 0.0;              ///< <= 0: the library default
   SensorChoice sensor = SensorChoice::kLidar;
   double lidar_sigma_m = 0.005;           ///< range noise of the lidar model (m)
+  /// The library's outlier gate in standard deviations (docs/design.md, "Outlier gate and
+  /// change"); 0: off, the paper's update. Off by default here: a file is one frame, and the
+  /// gate judges at most detail::kHeldSlots cells per frame (the rest of a whole scan's held
+  /// points would be dropped as "pool full").
+  double outlier_gate_sigma = 0.0;
 };
 
 /// Per-frame point accounting (the library's FrameCounters).
 struct FrameStats {
   std::uint64_t received = 0, used = 0, rejected_non_finite = 0, rejected_out_of_range = 0,
                 rejected_weight = 0, outside_map = 0, too_noisy = 0;
+  /// Outlier gate: points it judged (dropped by the finer layer or the line of sight, held, or
+  /// dropped with the held-point pool full), and held points the change rule admitted later.
+  std::uint64_t gated = 0, gated_admitted = 0;
   void add(const FrameStats& o) {
     received += o.received; used += o.used; rejected_non_finite += o.rejected_non_finite;
     rejected_out_of_range += o.rejected_out_of_range; rejected_weight += o.rejected_weight;
     outside_map += o.outside_map; too_noisy += o.too_noisy;
+    gated += o.gated; gated_admitted += o.gated_admitted;
   }
 };
 

@@ -5,13 +5,29 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
+#include "ccmap/map/config.hpp"
 #include "number_options.hpp"
 #include "parse_args.hpp"
 #include "sim/data_dir.hpp"
 
 namespace ccmap::experiments {
+
+void GateSetting::apply(StackParams* params) const {
+  if (sigma >= 0.0) params->outlier_gate_sigma = static_cast<float>(sigma);
+  if (min_points >= 0.0) params->change_min_points = static_cast<float>(min_points);
+  if (share >= 0.0) params->change_share = static_cast<float>(share);
+}
+
+std::string GateSetting::describe(const StackParams& defaults) const {
+  StackParams p = defaults;
+  apply(&p);
+  if (!(p.outlier_gate_sigma > 0.0F)) return "gate off (the paper's update)";
+  return format("gate %.3g sigma, change rule %.3g points / %.3g %%", static_cast<double>(p.outlier_gate_sigma),
+                static_cast<double>(p.change_min_points), 100.0 * static_cast<double>(p.change_share));
+}
 
 std::unique_ptr<CLI::App> make_experiment_app(const std::string& program, const std::string& description,
                                               ExperimentArgs* args) {
@@ -26,7 +42,22 @@ std::unique_ptr<CLI::App> make_experiment_app(const std::string& program, const 
   app->add_option("--data", args->data_dir,
                   "real-data directory (default $CCMAP_DATA_DIR, else the shared data next to the source tree)")
       ->type_name("DIR");
+  add_gate_options(*app, &args->gate);
   return app;
+}
+
+void add_gate_options(CLI::App& app, GateSetting* gate) {
+  const double most = std::numeric_limits<float>::max();  // StackParams holds them as floats
+  tools::add_real(app, "--gate", &gate->sigma, 0.0, most, false, "K",
+                  "the outlier gate at K sigma (0 = off: the paper's update; docs/design.md);\n"
+                  "default: the library's")
+      ->default_str("");
+  tools::add_real(app, "--change-points", &gate->min_points, 0.0, most, false, "M",
+                  "the change rule's point count (default: the library's)")
+      ->default_str("");
+  tools::add_real(app, "--change-share", &gate->share, 0.0, most, false, "S",
+                  "the change rule's share (default: the library's)")
+      ->default_str("");
 }
 
 int parse_experiment_args(CLI::App& app, int argc, char** argv, ExperimentArgs* args) {

@@ -10,11 +10,28 @@ namespace CLI {
 class App;
 }
 
+namespace ccmap {
+struct StackParams;
+}
+
 namespace ccmap::experiments {
+
+/// The outlier gate and change rule of a run (docs/design.md, "Outlier gate and change"):
+/// negative fields keep the library's default_stack_params value; sigma 0 switches the gate off.
+struct GateSetting {
+  double sigma = -1.0;
+  double min_points = -1.0;
+  double share = -1.0;
+  /// Writes the non-negative fields into *params.
+  void apply(StackParams* params) const;
+  /// "library default", "off", or e.g. "3 sigma, 3 points, 8 %".
+  std::string describe(const StackParams& defaults) const;
+};
 
 /// Options every experiment accepts (make_experiment_app):
 ///   --seed N   (default 1)  --out DIR (default out/experiments)  --quick (reduced size)
 ///   --data DIR (real data; default $CCMAP_DATA_DIR, else <source>/../shared/data)
+///   --gate K, --change-points M, --change-share S   (the outlier gate: GateSetting)
 ///   --paper-cell (the paper's 9-float CCM cell, CcmPaperCell, instead of the full CcmCell)
 struct ExperimentArgs {
   std::uint64_t seed = 1;
@@ -22,6 +39,7 @@ struct ExperimentArgs {
   bool quick = false;
   bool paper_cell = false;
   std::string data_dir;  ///< the --data text until parse_experiment_args resolves it (never empty after)
+  GateSetting gate;
 };
 
 /// A CLI11 parser named `program` whose --help starts with `description`, holding the options
@@ -30,6 +48,11 @@ struct ExperimentArgs {
 /// the last of a repeated option counts.
 std::unique_ptr<CLI::App> make_experiment_app(const std::string& program, const std::string& description,
                                               ExperimentArgs* args);
+
+/// Adds --gate K, --change-points M, --change-share S (each a number >= 0 that a float holds) bound to
+/// *gate, which must outlive `app`: the experiments' options (make_experiment_app) and the
+/// traverse's. Values the library refuses (StackParams, docs/design.md) are refused by its init.
+void add_gate_options(CLI::App& app, GateSetting* gate);
 
 /// Parses argv with `app` (tools/args/parse_args.hpp), then resolves args->data_dir. Returns -1
 /// to go on, otherwise the exit code to return right away (0 after --help; 2 after a refused

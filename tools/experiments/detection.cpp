@@ -44,10 +44,12 @@ double rect_coverage(const sim::Rect& r, double x0, double y0, double w) {
 template <typename CcmConfig>
 struct MapPair {
   double width_m = 0.0;
+  GateSetting gate;
   std::unique_ptr<Stack<CcmConfig>> ccm = std::make_unique<Stack<CcmConfig>>();
   std::unique_ptr<Stack<SingleOmgConfig>> omg = std::make_unique<Stack<SingleOmgConfig>>();
   bool reset() {
-    const StackParams params = default_stack_params(static_cast<float>(width_m));
+    StackParams params = default_stack_params(static_cast<float>(width_m));
+    gate.apply(&params);
     return ccm->init(params) == Status::kOk && omg->init(params) == Status::kOk;
   }
 };
@@ -274,6 +276,7 @@ DetectionResult run_trials(const DetectionConfig& cfg) {
   DetectionResult result;
   result.paper_cell = cfg.paper_cell;
   result.first_seed = cfg.first_seed;
+  result.maps = cfg.gate.describe(default_stack_params(0.08F));
   result.end_seed = cfg.first_seed + cfg.trials;
   for (DetectionMethod m : kDetectionMethods)
     for (double w : cfg.cell_widths_m)
@@ -302,7 +305,10 @@ DetectionResult run_trials(const DetectionConfig& cfg) {
   const double half_width = max_range * 0.5 * sp.width_px / sp.focal_px + 0.2;
 
   std::vector<MapPair<CcmConfig>> maps(cfg.cell_widths_m.size());
-  for (std::size_t k = 0; k < maps.size(); ++k) maps[k].width_m = cfg.cell_widths_m[k];
+  for (std::size_t k = 0; k < maps.size(); ++k) {
+    maps[k].width_m = cfg.cell_widths_m[k];
+    maps[k].gate = cfg.gate;
+  }
 
   const auto t_start = std::chrono::steady_clock::now();
   double capture_s = 0.0;
@@ -416,7 +422,8 @@ bool write_detection_csv(const std::string& path, const DetectionResult& result,
   std::ofstream out(path);
   out << "# ccmap fig6/fig7 detection shard: integer cell-frame counts (see tools/experiments/detection.hpp)\n";
   out << "# seeds " << result.first_seed << ":" << result.end_seed << "\n";
-  out << "# ccm cell " << (result.paper_cell ? "paper" : "full") << "\n" << kCsvHeader << "\n";
+  out << "# ccm cell " << (result.paper_cell ? "paper" : "full") << "\n";
+  out << "# maps " << result.maps << "\n" << kCsvHeader << "\n";
   for (const DetectionRow& r : result.rows) {
     const DetectionCounts& c = r.counts;
     out << detection_method_name(r.method) << ',' << to_um(r.cell_width_m) << ',' << format("%.4f", r.size_ratio) << ','
@@ -449,6 +456,8 @@ bool read_detection_csv(const std::string& path, DetectionResult* out, std::stri
         r.first_seed = a;
         r.end_seed = b;
         seeds = true;
+      } else if (line.rfind("# maps ", 0) == 0) {
+        r.maps = line.substr(7);
       }
       if (line == "# ccm cell full") r.paper_cell = false;
       continue;
@@ -495,9 +504,14 @@ bool merge_detection_results(const std::vector<DetectionResult>& shards, Detecti
   DetectionResult merged;
   merged.paper_cell = !shards.empty() && shards.front().paper_cell;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges;
+  if (!shards.empty()) merged.maps = shards.front().maps;
   for (const DetectionResult& s : shards) {
     if (s.paper_cell != merged.paper_cell) {
       if (error != nullptr) *error = "shards of the paper cell and of the full cell cannot be merged";
+      return false;
+    }
+    if (s.maps != merged.maps) {
+      if (error != nullptr) *error = "shards of different maps: '" + merged.maps + "' and '" + s.maps + "'";
       return false;
     }
     for (const auto& [a, b] : ranges) {

@@ -65,6 +65,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/common.hpp"
 #include "sim/stereo.hpp"
 #include "sim/terrain.hpp"
 #include "sim/types.hpp"
@@ -84,6 +85,7 @@ struct DetectionConfig {
   double start_margin_m = 0.3;   ///< start this far beyond the largest IV-G range
   double lateral_offset_max_m = 0.2;
   double border_streak_probability = 0.0;  ///< sim streaks (Section V-E); 0 = off
+  GateSetting gate;              ///< both maps' outlier gate (default: the library's)
   bool paper_cell = false;       ///< CCM map of the paper's 9-float cell (PaperCell<SingleCcmConfig>)
   bool progress = false;         ///< one line per trial on stderr
   static DetectionConfig quick() {
@@ -145,6 +147,7 @@ struct DetectionRow {
 
 struct DetectionResult {
   std::uint64_t first_seed = 0, end_seed = 0;  ///< seeds [first, end) (one shard)
+  std::string maps;                            ///< the maps' gate (GateSetting::describe); shards of different maps do not merge
   bool paper_cell = false;                     ///< the CCM map's cell (CSV line "# ccm cell paper|full")
   std::vector<DetectionRow> rows;              ///< method-major, then width, then ratio
   const DetectionRow* find(DetectionMethod method, double cell_width_m, double size_ratio) const;
@@ -154,12 +157,12 @@ struct DetectionResult {
 /// Runs trials [config.first_seed, config.first_seed + config.trials).
 DetectionResult run_detection(const DetectionConfig& config);
 
-/// Shard file (CSV with a "# seeds A:B" line); false with a reason.
+/// Shard file (CSV with a "# seeds A:B" line and a "# maps ..." line); false with a reason.
 bool write_detection_csv(const std::string& path, const DetectionResult& result, std::string* error);
 bool read_detection_csv(const std::string& path, DetectionResult* out, std::string* error);
 /// Sums shards (rows matched by method, width, ratio). Refused: overlapping seed ranges, shards of
-/// different CCM cells. A shard without the "# ccm cell" line (written before the full cell) is
-/// read as the paper cell's.
+/// different CCM cells, shards of different maps (their "# maps" lines differ). A shard without
+/// the "# ccm cell" line (written before the full cell) is read as the paper cell's.
 bool merge_detection_results(const std::vector<DetectionResult>& shards, DetectionResult* out, std::string* error);
 
 /// Table with areas (m^2 x frames), shares and the paper's expectation beside.

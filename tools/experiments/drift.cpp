@@ -93,6 +93,7 @@ DriftResult drift_runs(const DriftConfig& cfg) {
   for (std::size_t k = 0; k < maps.size(); ++k) {
     maps[k].row = k;
     StackParams params = default_stack_params(static_cast<float>(result.rows[k].cell_width_m));
+    cfg.gate.apply(&params);
     params.weight_limit = static_cast<float>(result.rows[k].weight_limit);
     if (maps[k].stack->init(params) != Status::kOk) {
       std::fprintf(stderr, "drift: map init failed\n");

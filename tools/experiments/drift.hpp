@@ -38,6 +38,8 @@
 #include <string>
 #include <vector>
 
+#include "experiments/common.hpp"
+
 namespace ccmap::experiments {
 
 struct DriftConfig {
@@ -56,6 +58,7 @@ struct DriftConfig {
   std::uint64_t seed = 1;
   bool paper_cell = false;  ///< CCM maps of the paper's 9-float cell (PaperCell<SingleCcmConfig>)
   bool progress = false;
+  GateSetting gate;                     ///< the maps' outlier gate (default: the library's)
   bool compare_uncertain_moves = true;  ///< also run every map with uncertain moves
   double odometry_sigma_fraction = -1.0;  ///< sigma per metre moved; < 0: the run's drift fraction
   static DriftConfig quick() {

@@ -1,6 +1,7 @@
 // ccmap_exp_fig10: drift resilience of CCM on wave terrain (paper Fig. 10, Section V-D), each map
 // also with uncertain moves (Stack::move_to(x, y, sigma)).
 //   ccmap_exp_fig10 [--seed N] [--out DIR] [--quick] [--paper-cell] [--data DIR] [--odometry-sigma F]
+//                   [--gate K] [--change-points M] [--change-share S]
 //   --odometry-sigma F   sigma of the uncertain moves = F x the distance moved, F in [0, 1]
 //                        (default: each run's own drift fraction)
 // (ccmap_exp_fig10 --help lists the options.)
@@ -26,6 +27,7 @@ int main(int argc, char** argv) {
   DriftConfig cfg = args.quick ? DriftConfig::quick() : DriftConfig{};
   cfg.odometry_sigma_fraction = odometry_sigma;
   cfg.seed = args.seed;
+  cfg.gate = args.gate;
   cfg.paper_cell = args.paper_cell;
   cfg.progress = true;
   const DriftResult r = run_drift(cfg);

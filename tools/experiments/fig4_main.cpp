@@ -1,5 +1,6 @@
 // ccmap_exp_fig4: CCM normal variance vs obstacle coverage (paper Fig. 4).
 //   ccmap_exp_fig4 [--seed N] [--out DIR] [--quick] [--paper-cell] [--data DIR]
+//                  [--gate K] [--change-points M] [--change-share S]
 // (the options of every experiment, common.hpp; ccmap_exp_fig4 --help lists them).
 #include <cstdio>
 #include <string>
@@ -11,7 +12,10 @@
 int main(int argc, char** argv) {
   using namespace ccmap::experiments;
   ExperimentArgs args;
-  const auto app = make_experiment_app("ccmap_exp_fig4", "Fig. 4: CCM surface-normal variance vs obstacle coverage", &args);
+  const auto app = make_experiment_app("ccmap_exp_fig4",
+                                       "Fig. 4: CCM surface-normal variance vs obstacle coverage (single cells: --data\n"
+                                       "and the gate options are accepted and unused)",
+                                       &args);
   if (const int rc = parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   Fig4Config cfg = args.quick ? Fig4Config::quick() : Fig4Config{};
   cfg.seed = args.seed;

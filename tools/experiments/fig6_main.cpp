@@ -8,7 +8,7 @@
 //   ccmap_exp_fig6 --seeds 1:21 & ccmap_exp_fig6 --seeds 21:41 & wait
 //   ccmap_exp_fig6 --merge out/experiments/fig6_shard_1_21.csv out/experiments/fig6_shard_21_41.csv
 // Without --seeds the trials are [seed, seed + default count). (ccmap_exp_fig6 --help lists the
-// options: those of every experiment, common.hpp, and --seeds, --merge.)
+// options: those of every experiment, common.hpp, the outlier gate's among them, and --seeds, --merge.)
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
   } else {
     DetectionConfig cfg = args.quick ? DetectionConfig::quick() : DetectionConfig{};
     cfg.first_seed = have_range ? seed_a : args.seed;
+    cfg.gate = args.gate;
     cfg.paper_cell = args.paper_cell;
     if (have_range) cfg.trials = seed_b - seed_a;
     cfg.progress = true;

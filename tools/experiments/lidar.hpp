@@ -23,12 +23,21 @@
 //       raw  - every point, in training and in the held-out set;
 //       cut  - points more than robust_cut_m above the median height of their 1 x 1 m block
 //              are removed from both (the count is reported).
+//  6. The library's maps (issue 12): single-layer stacks (Stack<SingleCcmConfig>,
+//     <SingleKalmanConfig>, <SingleOmgConfig>, default_stack_params with a constant lidar noise
+//     of sigma_m), every raw training point in one frame (as `ccmap map` maps one cloud), the
+//     outlier gate off (the paper's update) and on (GateSetting); the held-out points that are
+//     not outliers by the cut above (the ground) are predicted by query_layer (CCM: the sub-cell
+//     plane), over the points every one of the six maps knows. Variant "stack" (widths whose
+//     256-cell window holds the cloud).
 // Errors are map minus held-out z (m): RMS, median |e|, 95th percentile |e|.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "experiments/common.hpp"
 
 namespace ccmap::experiments {
 
@@ -43,6 +52,7 @@ struct LidarConfig {
   bool include_full_scan = true;
   double image_step_m = 0.025;  ///< raster of the height pictures
   std::uint64_t seed = 1;
+  GateSetting gate;             ///< the "gate on" stacks of variant "stack"
   bool paper_cell = false;      ///< CCM maps of CcmPaperCell (the paper's 9 floats) instead of CcmCell
   static LidarConfig quick() {
     LidarConfig c;
@@ -65,7 +75,7 @@ struct LidarMethodStats {
 };
 
 struct LidarVariant {
-  std::string name;             ///< "raw" or "cut"
+  std::string name;             ///< "raw", "cut" or "stack"
   std::size_t train_points = 0, held_out_points = 0, removed_outliers = 0;
   std::vector<LidarMethodStats> stats;
   const LidarMethodStats* find(const std::string& method, double cell_width_m, const std::string& point_set) const;
@@ -78,7 +88,8 @@ struct LidarRun {
   double origin_x = 0.0, origin_y = 0.0, origin_z = 0.0;  ///< subtracted (double)
   double extent_x = 0.0, extent_y = 0.0;                   ///< bounding box (m)
   double z_p50 = 0.0, z_max_above_p50 = 0.0;               ///< local z
-  std::vector<LidarVariant> variants;  ///< raw, cut
+  std::vector<LidarVariant> variants;  ///< raw, cut, stack
+  std::string gate;                    ///< the "gate on" stacks' gate (GateSetting::describe)
 };
 
 /// The crop's path inside a data directory.

@@ -1,6 +1,7 @@
 // ccmap_exp_lidar: CCM vs Kalman vs OMG on the real Lone Star Geyser laser scan, judged by the
 // height error at held-out points (see lidar.hpp). Skipped, saying why, when the data is absent.
 //   ccmap_exp_lidar [--seed N] [--out DIR] [--quick] [--paper-cell] [--data DIR]
+//                   [--gate K] [--change-points M] [--change-share S]
 // (the options of every experiment, common.hpp; ccmap_exp_lidar --help lists them).
 #include <cstdio>
 #include <string>
@@ -19,6 +20,7 @@ int main(int argc, char** argv) {
   if (const int rc = parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   LidarConfig cfg = args.quick ? LidarConfig::quick() : LidarConfig{};
   cfg.seed = args.seed;
+  cfg.gate = args.gate;
   cfg.paper_cell = args.paper_cell;
   std::vector<std::string> pictures;
   LidarRun crop;

@@ -95,6 +95,14 @@ constexpr CounterField kCounterFields[] = {
     {"rejected_weight", &FrameCounters::rejected_weight},
     {"outside_map", &FrameCounters::outside_map},
     {"too_noisy", &FrameCounters::too_noisy},
+    {"gated_finer", &FrameCounters::gated_finer},
+    {"gated_occluded", &FrameCounters::gated_occluded},
+    {"gated_held", &FrameCounters::gated_held},
+    {"gated_pool_full", &FrameCounters::gated_pool_full},
+    {"gated_admitted", &FrameCounters::gated_admitted},
+    {"gated_dropped", &FrameCounters::gated_dropped},
+    {"reseeded_cells", &FrameCounters::reseeded_cells},
+    {"merged_cells", &FrameCounters::merged_cells},
 };
 static_assert(sizeof(FrameCounters) == std::size(kCounterFields) * sizeof(std::uint32_t),
               "FrameCounters gained a member: add it to kCounterFields");
@@ -118,6 +126,9 @@ constexpr ParamField kParamFields[] = {
     {"max_inclination", &StackParams::max_inclination},
     {"kalman_min_variance", &StackParams::kalman_min_variance},
     {"finest_max_sigma_m", &StackParams::finest_max_sigma_m},
+    {"outlier_gate_sigma", &StackParams::outlier_gate_sigma},
+    {"change_min_points", &StackParams::change_min_points},
+    {"change_share", &StackParams::change_share},
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -839,7 +850,8 @@ PYBIND11_MODULE(ccmap, m) {
                   "  cell_width: finest cell width (m); None: the preset's default (0.04 / 0.08).\n"
                   "  params: StackParams by name: weight_limit, coverage_tau, min_weight,\n"
                   "          obstacle_fraction, max_inclination, kalman_min_variance,\n"
-                  "          finest_max_sigma_m, normal_variance_threshold (sequence, <= 0 calibrates);\n"
+                  "          finest_max_sigma_m, outlier_gate_sigma (0 = off), change_min_points,\n"
+                  "          change_share, normal_variance_threshold (sequence, <= 0 calibrates);\n"
                   "          sensor='stereo' (default: CADRE stereo; focal_px, baseline_m,\n"
                   "          disparity_sigma_px) or 'lidar' (lidar_sigma_m = 0.005, lidar_sigma_per_m = 0);\n"
                   "          weight_mode='constant' | 'inverse_variance', reference_range_m.\n"

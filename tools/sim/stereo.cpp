@@ -190,6 +190,11 @@ StereoFrame StereoCamera::capture(const HeightRaster& terrain, const Pose2& true
       if (!std::isfinite(depth)) continue;
       double disparity = fb / depth + rng.normal(0.0, p_.disparity_sigma_px);
       if (p_.disparity_step_px > 0.0) disparity = std::round(disparity / p_.disparity_step_px) * p_.disparity_step_px;
+      const bool mismatch = p_.mismatch_probability > 0.0 && rng.uniform() < p_.mismatch_probability;
+      if (mismatch) {
+        disparity = rng.uniform(p_.mismatch_disparity_min_px, p_.mismatch_disparity_max_px);
+        ++frame.mismatch_pixels;
+      }
       if (!(disparity > 0.0)) continue;
       const double z = fb / disparity;
       const double xn = (c * img.stride + 0.5 - cx) / p_.focal_px;
@@ -205,6 +210,7 @@ StereoFrame StereoCamera::capture(const HeightRaster& terrain, const Pose2& true
       px.true_depth_m = true_depth;
       px.depth_m = static_cast<float>(z);
       px.streak = streak;
+      px.mismatch = mismatch;
       frame.pixels.push_back(px);
     }
   }

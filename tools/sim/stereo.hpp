@@ -21,6 +21,11 @@
 //    nothing), with probability border_streak_probability the pixel takes the foreground depth
 //    (or, with border_streak_interpolate, a depth uniform between Z_fg and Z): the obstacle's
 //    top rim smears over the background behind it. Applied before the disparity noise.
+//  - Mismatches (a block matcher's wrong matches): with probability mismatch_probability a pixel
+//    that sees a surface gets a disparity uniform in [mismatch_disparity_min_px,
+//    mismatch_disparity_max_px] instead of its own (no noise, no quantisation): a point anywhere
+//    along its ray, most of them near the camera (uniform in disparity, not in depth). Off by
+//    default; when off, no random number is drawn for it (frames stay as they were).
 // Determinism: one Rng(seed) stream in pixel order; identical inputs give identical frames.
 // Performance: a full 850 x 650 frame on a 1 cm raster of lunar-like terrain (horizon in view)
 // takes ~0.45 s CPU on one core of the team's x86-64 build host; pixel_stride 2 about a
@@ -52,6 +57,9 @@ struct StereoParams {
   int border_streak_radius_px = 3;
   double border_streak_jump_ratio = 0.15;
   bool border_streak_interpolate = false;
+  double mismatch_probability = 0.0;
+  double mismatch_disparity_min_px = 1.0;    ///< 30 m depth with f b = 30 px m (CADRE)
+  double mismatch_disparity_max_px = 100.0;  ///< 0.3 m
 };
 
 /// Per-point pixel record (parallel to the point vectors).
@@ -60,6 +68,7 @@ struct PixelSample {
   float true_depth_m = 0.0F;      ///< ray-cast depth before streaks and noise (NaN for a streak into sky)
   float depth_m = 0.0F;           ///< measured depth
   bool streak = false;            ///< depth replaced by a border streak
+  bool mismatch = false;          ///< disparity replaced by a mismatch
 };
 
 struct StereoFrame {
@@ -73,6 +82,7 @@ struct StereoFrame {
   std::size_t rays_cast = 0;
   std::size_t rays_hit = 0;
   std::size_t streak_pixels = 0;
+  std::size_t mismatch_pixels = 0;
 };
 
 /// Depth image on the strided pixel grid (cols x rows), NaN = no surface within range.

@@ -3,6 +3,7 @@
 // stereo frame every 0.3 m, and reports hazard detection against ground truth, update times
 // and pictures. See traverse.hpp for the definitions.
 //   ccmap_traverse [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--paper-cell]
+//                  [--mismatch P] [--gate K] [--change-points M] [--change-share S]
 // (ccmap_traverse --help lists them; a refused command line is one line on stderr and exit 2).
 #include <cstdint>
 #include <cstdio>
@@ -18,6 +19,8 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1;
   int stride = 0, frames = -1;  // 0, -1: the configuration's own (full frame, whole path; --quick: its values)
   bool quick = false, paper_cell = false;
+  double mismatch = 0.0;
+  ccmap::experiments::GateSetting gate;
   CLI::App app("The simulated CADRE traverse: a rover drives 13.5 m with a 90 deg turn over generated lunar\n"
                "terrain, maps with a CADRE stereo frame every 0.3 m and reports hazard detection against\n"
                "ground truth, update times and pictures.",
@@ -35,6 +38,9 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "8 frames at stride 4 (what the CI test runs)");
   app.add_flag("--paper-cell", paper_cell,
                "the paper's 9-float CCM cell instead of the full cell (lateral covariance)");
+  ccmap::tools::add_real(app, "--mismatch", &mismatch, 0.0, 1.0, false, "P",
+                         "stereo mismatches: a share P of the pixels at a random disparity");
+  ccmap::experiments::add_gate_options(app, &gate);
   if (const int code = ccmap::tools::parse_args(app, argc, argv); code >= 0) return code;
   if (quick) {
     const std::string out = cfg.out_dir;
@@ -42,6 +48,8 @@ int main(int argc, char** argv) {
     cfg.out_dir = out;
   }
   cfg.seed = seed;
+  cfg.mismatch_share = mismatch;
+  cfg.gate = gate;
   cfg.paper_cell = paper_cell;
   if (stride > 0) cfg.pixel_stride = stride;
   if (frames > 0) cfg.max_frames = frames;

@@ -388,10 +388,13 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
 
   sim::StereoParams sp;  // CADRE: 850 x 650, f 600 px, b 5 cm, 17.5 cm above ground
   sp.pixel_stride = cfg.pixel_stride;
+  sp.mismatch_probability = cfg.mismatch_share;
   const sim::StereoCamera camera(sp);
 
   auto map = std::make_unique<Map>();
-  if (map->init(default_stack_params(CadreConfig::kDefaultFinestCellWidthM)) != Status::kOk) {
+  StackParams params = default_stack_params(CadreConfig::kDefaultFinestCellWidthM);
+  cfg.gate.apply(&params);
+  if (map->init(params) != Status::kOk) {
     result.error = "stack init failed";
     return result;
   }
@@ -400,10 +403,11 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
   if (log != nullptr) {
     std::fprintf(log,
                  "ccmap traverse: seed %llu, terrain 30 x 30 m (%zu rocks, %zu box, raster %.0f cm in %.0f ms CPU), "
-                 "path %.1f m, %zu frames every %.2f m, camera %d x %d px stride %d, %s CCM cell\n",
+                 "path %.1f m, %zu frames every %.2f m, camera %d x %d px stride %d, %s CCM cell, %.1f %% mismatched pixels; %s\n",
                  static_cast<unsigned long long>(cfg.seed), result.rocks, result.boxes, 100.0 * cfg.raster_resolution_m,
                  raster_ms, result.path_length_m, frames, cfg.frame_spacing_m, sp.width_px, sp.height_px, sp.pixel_stride,
-                 cfg.paper_cell ? "paper (9-float)" : "full (10-float)");
+                 cfg.paper_cell ? "paper (9-float)" : "full (10-float)", 100.0 * cfg.mismatch_share,
+                 cfg.gate.describe(params).c_str());
   }
   std::vector<PointXYZ> points;
   for (std::size_t i = 0; i < frames; ++i) {
@@ -419,6 +423,7 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
       points.push_back(PointXYZ{static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
     }
     rec.points = points.size();
+    rec.mismatches = frame.mismatch_pixels;
     const Status moved = map->move_to(static_cast<float>(pose.x), static_cast<float>(pose.y));
     const Pose sensor = camera_pose(camera, frame.sensor_position_map, pose.yaw);
     const Status updated =
@@ -453,10 +458,12 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
       const std::string unknown = rec.ahead_unknown ? format("from %.2f m", rec.ahead_unknown_m) : std::string("none");
       std::fprintf(log,
                    "frame %2zu/%zu  x %5.2f y %5.2f yaw %4.0f deg  points %6zu  used %6u  too noisy %6u  outside %5u  "
-                   "update %6.2f ms%s  (capture %4.0f ms)  ahead %.1f m: %s, unknown %s\n",
+                   "held %5u (dropped %5u, admitted %5u, pool full %5u, slots %4u)  update %6.2f ms%s  (capture %4.0f ms)  "
+                   "ahead %.1f m: %s, unknown %s\n",
                    i + 1, frames, pose.x, pose.y, pose.yaw * 180.0 / sim::kPi, rec.points, rec.counters.used,
-                   rec.counters.too_noisy, rec.counters.outside_map, rec.update_ms, rec.updated ? "" : " REFUSED",
-                   rec.capture_ms, cfg.lookahead_m, hazard.c_str(), unknown.c_str());
+                   rec.counters.too_noisy, rec.counters.outside_map, rec.counters.gated_held, rec.counters.gated_dropped,
+                   rec.counters.gated_admitted, rec.counters.gated_pool_full, map->last_frame_held_cells(), rec.update_ms,
+                   rec.updated ? "" : " REFUSED", rec.capture_ms, cfg.lookahead_m, hazard.c_str(), unknown.c_str());
       std::fflush(log);
     }
   }

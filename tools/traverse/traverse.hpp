@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "ccmap/map/types.hpp"
+#include "experiments/common.hpp"
 #include "sim/types.hpp"
 
 namespace ccmap::traverse {
@@ -55,6 +56,8 @@ struct TraverseConfig {
   std::string out_dir;              ///< pictures go here; empty = no pictures
   bool paper_cell = false;          ///< map with the paper's 9-float CCM cell (PaperCell<CadreConfig>)
   std::FILE* log = nullptr;         ///< progress lines (one per frame) and the report; nullptr = quiet
+  double mismatch_share = 0.0;      ///< stereo mismatches: share of pixels at a random disparity (sim/stereo.hpp)
+  experiments::GateSetting gate;    ///< the map's outlier gate (default: the library's)
   /// A short run: 8 frames at pixel stride 4.
   static TraverseConfig quick() {
     TraverseConfig c;
@@ -68,6 +71,7 @@ struct FrameRecord {
   int index = 0;
   sim::Pose2 pose;
   std::size_t points = 0;          ///< points the camera delivered
+  std::size_t mismatches = 0;      ///< of which stereo mismatches
   FrameCounters counters{};        ///< what the stack did with them
   double update_ms = 0.0;          ///< Stack::last_update_ns() of this frame
   double capture_ms = 0.0;         ///< simulator CPU time (ray casting), not part of the map

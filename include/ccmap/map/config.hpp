@@ -111,12 +111,28 @@ struct StackParams {
   /// constrains CCM layers only; the default is the layer's own IV-G bound
   /// (sensor::constant_layer_max_sigma). Must stay below layer 1's IV-G bound.
   float finest_max_sigma_m = 0.0F;
+  /// Outlier gate (docs/design.md, "Outlier gate and change"): a point farther from its cell
+  /// than this many standard deviations of what the cell and the sensor model predict is held
+  /// back until the end of its frame, which drops it as an outlier or admits it as a change.
+  /// 0 switches the gate off: every point is trusted, the paper's update, bitwise.
+  float outlier_gate_sigma = 0.0F;
+  /// Change rule (cell/outlier_gate.hpp, change_verdict): the points of a cell inside and
+  /// outside its gate are each a surface of their own when they number at least
+  /// change_min_points (point counts, whatever their weights) and at least change_share of the
+  /// cell's points. Held points that are a surface are merged into the cell beside the points
+  /// inside (a rock or box covering part of it) or, when those are none, replace them (re-seed:
+  /// the ground after a pose jump, a cell first seeded by outliers, a rock covering it); held
+  /// points that are no surface are dropped as outliers.
+  float change_min_points = 0.0F;
+  float change_share = 0.0F;
   sensor::NoiseModel noise;           ///< routes points and gives their weight and variance
 };
 
 /// CADRE defaults: W_l = 1000, tau = 0.8, min weight 5, obstacles at 75 % of a cell,
 /// 20 deg maximum inclination (tan 20 deg = 0.364), the CADRE stereo model, calibrated
-/// thresholds.
+/// thresholds; the outlier gate at 3 sigma with the change rule 3 points / 8 % (docs/design.md,
+/// "Outlier gate and change", says how they were chosen). Set outlier_gate_sigma = 0 for the
+/// paper's update.
 [[nodiscard]] StackParams default_stack_params(float finest_cell_width_m) noexcept;
 
 }  // namespace ccmap

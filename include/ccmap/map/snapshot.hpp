@@ -11,9 +11,11 @@
 // windows and cells, so the loaded stack answers every query and export bitwise identically to
 // the saved one (routing table and thresholds are recomputed by init(), deterministically).
 // Not stored: RingGrid::cells_cleared_by_moves() and Stack::accepted_frames() (restart at 0 on
-// load) and map exchange's bookkeeping (a load retires a bound MapExchange, map/exchange.hpp).
+// load), map exchange's bookkeeping (a load retires a bound MapExchange, map/exchange.hpp) and
+// the outlier gate's held points awaiting the change rule (map/detail/held_pool.hpp: at most
+// kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
 //
-// Format (version 2). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 3: version 2 with the outlier gate's parameters and counters). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -28,6 +30,7 @@
 //                   min_weight, obstacle_fraction, max_inclination, kalman_min_variance,
 //                   normal_variance_threshold[0..7]
 //                4  finest_max_sigma_m
+//               12  outlier_gate_sigma, change_min_points, change_share
 //               20  noise model: kind (u8), weight mode (u8), 2 reserved 0, stereo k = sigma_d/(f b)
 //                   (1/m), lidar sigma0 (m), lidar sigma per m, reference range (m)
 //   per layer    8  window centre (int32 x, int32 y; global cell indices), then
@@ -36,7 +39,7 @@
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
 //                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
 //                   s_xy for CcmCell (CcmPaperCell has none).
-//   counters    28  total FrameCounters (7 x uint32, in declaration order)
+//   counters    60  total FrameCounters (15 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
@@ -71,7 +74,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 2U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 3U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -81,13 +84,13 @@ inline constexpr std::uint16_t kSnapshotFormatVersion = 2U;
 
 namespace detail {
 
-static_assert(kMaxLayers == 8, "snapshot format version 2 stores 8 sides and 8 thresholds");
+static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 thresholds");
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
-inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U) + 20U;
+inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
-inline constexpr std::size_t kSnapshotCountersBytes = 7U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotCountersBytes = 15U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
 /// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
@@ -380,7 +383,7 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 458,976 bytes (PaperCell<CadreConfig>: 418,016; docs/integration.md lists every preset).
+/// CadreConfig: 459,020 bytes (PaperCell<CadreConfig>: 418,060; docs/integration.md lists every preset).
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();

@@ -344,6 +344,14 @@ class Stack {
   [[nodiscard]] std::uint32_t rejected_frames() const noexcept { return rejected_frames_; }
   /// Duration of the last accepted frame update (platform monotonic clock, ns).
   [[nodiscard]] std::uint64_t last_update_ns() const noexcept { return last_update_ns_; }
+  /// Cells whose points outside the outlier gate await the change rule (docs/design.md,
+  /// "Outlier gate and change"); 0 with the gate off. Not map state: not in snapshots.
+  [[nodiscard]] std::uint32_t held_cells() const noexcept {
+    return update_.pending_ccm_cells() + update_.pending_fine_cells();
+  }
+  /// Cells with held points at the end of the last frame, before the change rule decided (the
+  /// held-point slots it took; at most detail::kHeldSlots per pool: CCM layers, finest layer).
+  [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
   /// Frame updates accepted since init (wraps at 2^32): the sequence number that map exchange
   /// (map/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().
   [[nodiscard]] std::uint32_t accepted_frames() const noexcept { return accepted_frames_; }

@@ -74,14 +74,27 @@ struct CellRecord {
 };
 
 /// What happened to the points of one frame (also accumulated over the life of a stack).
+/// Every received point is counted once, in the frame that received it: received = used +
+/// rejected_non_finite + rejected_out_of_range + rejected_weight + outside_map + too_noisy +
+/// gated_finer + gated_occluded + gated_held + gated_pool_full. A held point is counted again when the change rule decides it
+/// (gated_admitted or gated_dropped, in that frame or a later one: docs/design.md, "Outlier gate
+/// and change"). The gate counters are 0 with the outlier gate off.
 struct FrameCounters {
   std::uint32_t received;
-  std::uint32_t used;
+  std::uint32_t used;                   ///< folded into a cell
   std::uint32_t rejected_non_finite;    ///< NaN/Inf coordinate
   std::uint32_t rejected_out_of_range;  ///< |coordinate| > kMaxAbsCoordinateM
   std::uint32_t rejected_weight;        ///< weight from the model out of range
   std::uint32_t outside_map;            ///< no layer window holds the point
   std::uint32_t too_noisy;              ///< sigma_m too large for every layer (Section IV-G)
+  std::uint32_t gated_finer;            ///< outside the gate of the next finer layer's cell there: dropped
+  std::uint32_t gated_occluded;         ///< stereo: its line of sight passes under known ground: dropped
+  std::uint32_t gated_held;             ///< outside its cell's outlier gate: held for the change rule
+  std::uint32_t gated_pool_full;        ///< outside the gate while every held-point slot was taken: dropped
+  std::uint32_t gated_admitted;         ///< held points the change rule admitted (re-seed or merge)
+  std::uint32_t gated_dropped;          ///< held points it dropped as outliers (or whose cell left the map)
+  std::uint32_t reseeded_cells;         ///< cells replaced by their held points
+  std::uint32_t merged_cells;           ///< cells that took their held points in beside their own
 };
 
 }  // namespace ccmap
