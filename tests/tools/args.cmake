@@ -38,6 +38,10 @@ ccmap_args_test(exp_lidar_seed_missing ccmap_exp_lidar 2 "^ccmap_exp_lidar: erro
 ccmap_args_test(exp_fig6_gate_negative ccmap_exp_fig6 2 "^ccmap_exp_fig6: error: --gate: -1 is out of range" "^$" --gate -1)
 ccmap_args_test(exp_outliers_change_share_nan ccmap_exp_outliers 2 "^ccmap_exp_outliers: error: --change-share: nan is out of range" "^$" --change-share nan)
 ccmap_args_test(exp_lidar_change_points_not_a_number ccmap_exp_lidar 2 "^ccmap_exp_lidar: error: --change-points: '3p' is not a number" "^$" --change-points 3p)
+# Gate values the library refuses are refused before the run (before: ccmap_exp_lidar --gate 0.5
+# printed empty stack tables and exited 0; ccmap_traverse said "stack init failed", exit 1).
+ccmap_args_test(exp_lidar_gate_below_one ccmap_exp_lidar 2 "^ccmap_exp_lidar: error: --gate: 0.5 is refused by the library's validate_stack_params" "^$" --gate 0.5)
+ccmap_args_test(exp_outliers_change_share_above_half ccmap_exp_outliers 2 "^ccmap_exp_outliers: error: --change-share: 0.6 is refused by the library" "^$" --change-share 0.6)
 ccmap_args_test(exp_fig6_help_own ccmap_exp_fig6 0 "^$" "--seeds A:B.*--merge SHARD.csv \\.\\.\\..*fig6_shard_<A>_<B>.csv" --help)
 ccmap_args_test(exp_fig6_seeds_reversed ccmap_exp_fig6 2 "^ccmap_exp_fig6: error: --seeds: '5:3' is not A:B with B > A" "^$" --seeds 5:3)
 ccmap_args_test(exp_fig6_seeds_no_colon ccmap_exp_fig6 2 "^ccmap_exp_fig6: error: --seeds: '3' is not A:B" "^$" --seeds 3)
@@ -55,6 +59,7 @@ ccmap_args_test(traverse_help ccmap_traverse 0 "^$" "Usage: ccmap_traverse.*--se
 # Before CLI11 "--mismatch 0.1x" was read as 0.1 (strtod without an end check).
 ccmap_args_test(traverse_mismatch_not_a_number ccmap_traverse 2 "^ccmap_traverse: error: --mismatch: '0.1x' is not a number" "^$" --mismatch 0.1x)
 ccmap_args_test(traverse_mismatch_above_one ccmap_traverse 2 "^ccmap_traverse: error: --mismatch: 2 is out of range \\(expected a number in \\[0, 1\\]\\)" "^$" --mismatch 2)
+ccmap_args_test(traverse_change_points_below_one ccmap_traverse 2 "^ccmap_traverse: error: --change-points: 0.5 is refused by the library" "^$" --change-points 0.5)
 ccmap_args_test(traverse_gate_negative ccmap_traverse 2 "^ccmap_traverse: error: --gate: -3 is out of range" "^$" --gate -3)
 ccmap_args_test(traverse_stride_zero ccmap_traverse 2 "^ccmap_traverse: error: --stride: 0 is out of range" "^$" --stride 0)
 ccmap_args_test(traverse_frames_not_whole ccmap_traverse 2 "^ccmap_traverse: error: --frames: '2x' is not a whole number" "^$" --frames 2x)

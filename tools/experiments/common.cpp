@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 
+#include "ccmap/map/classify.hpp"
 #include "ccmap/map/config.hpp"
 #include "number_options.hpp"
 #include "parse_args.hpp"
@@ -47,17 +48,30 @@ std::unique_ptr<CLI::App> make_experiment_app(const std::string& program, const 
 }
 
 void add_gate_options(CLI::App& app, GateSetting* gate) {
-  const double most = std::numeric_limits<float>::max();  // StackParams holds them as floats
-  tools::add_real(app, "--gate", &gate->sigma, 0.0, most, false, "K",
-                  "the outlier gate at K sigma (0 = off: the paper's update; docs/design.md);\n"
-                  "default: the library's")
-      ->default_str("");
-  tools::add_real(app, "--change-points", &gate->min_points, 0.0, most, false, "M",
-                  "the change rule's point count (default: the library's)")
-      ->default_str("");
-  tools::add_real(app, "--change-share", &gate->share, 0.0, most, false, "S",
-                  "the change rule's share (default: the library's)")
-      ->default_str("");
+  // One field of the setting, checked alone: the library's defaults are valid, so a setting is
+  // valid exactly when each of its fields is valid beside them.
+  auto add = [&app](const std::string& name, const std::string& type, const std::string& help,
+                    double GateSetting::*field, GateSetting* target) {
+    app.add_option_function<std::string>(
+           name,
+           [name, field, target](const std::string& v) {
+             const double most = std::numeric_limits<float>::max();  // StackParams holds them as floats
+             GateSetting one;
+             one.*field = tools::parse_real(name, v, 0.0, most);
+             StackParams p = default_stack_params(0.08F);
+             one.apply(&p);
+             if (validate_stack_params(p, 1) != Status::kOk) {
+               throw CLI::ValidationError(name, v + " is refused by the library's validate_stack_params (docs/design.md section 9)");
+             }
+             target->*field = one.*field;
+           },
+           help)
+        ->type_name(type);
+  };
+  add("--gate", "K", "the outlier gate at K sigma, 0 = off: the paper's update (docs/design.md\nsection 9); default: the library's",
+      &GateSetting::sigma, gate);
+  add("--change-points", "M", "the change rule's point count (default: the library's)", &GateSetting::min_points, gate);
+  add("--change-share", "S", "the change rule's share (default: the library's)", &GateSetting::share, gate);
 }
 
 int parse_experiment_args(CLI::App& app, int argc, char** argv, ExperimentArgs* args) {

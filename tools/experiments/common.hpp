@@ -49,9 +49,10 @@ struct ExperimentArgs {
 std::unique_ptr<CLI::App> make_experiment_app(const std::string& program, const std::string& description,
                                               ExperimentArgs* args);
 
-/// Adds --gate K, --change-points M, --change-share S (each a number >= 0 that a float holds) bound to
-/// *gate, which must outlive `app`: the experiments' options (make_experiment_app) and the
-/// traverse's. Values the library refuses (StackParams, docs/design.md) are refused by its init.
+/// Adds --gate K, --change-points M, --change-share S bound to *gate, which must outlive `app`:
+/// the experiments' options (make_experiment_app) and the traverse's. A value is refused unless
+/// validate_stack_params accepts it (docs/design.md section 9), so that no run starts with a
+/// stack whose init would fail.
 void add_gate_options(CLI::App& app, GateSetting* gate);
 
 /// Parses argv with `app` (tools/args/parse_args.hpp), then resolves args->data_dir. Returns -1
