@@ -2,12 +2,16 @@
 
 #include <algorithm>
 #include <cstdarg>
+#include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
+#include "ccmap/map/classify.hpp"
 #include "ccmap/map/config.hpp"
+#include "number_options.hpp"
+#include "parse_args.hpp"
 #include "sim/data_dir.hpp"
 
 namespace ccmap::experiments {
@@ -26,60 +30,54 @@ std::string GateSetting::describe(const StackParams& defaults) const {
                 static_cast<double>(p.change_min_points), 100.0 * static_cast<double>(p.change_share));
 }
 
-int parse_experiment_args(int argc, char** argv, const std::string& description, ExperimentArgs* args) {
-  std::string data_flag;
-  const char* prog = argc > 0 ? argv[0] : "experiment";
-  auto usage = [&](FILE* f) {
-    std::fprintf(f,
-                 "%s\n\nusage: %s [--seed N] [--out DIR] [--quick] [--data DIR] [--paper-cell] [--gate K]\n"
-                 "       [--change-points M] [--change-share S]\n"
-                 "  --seed N    random seed (default 1); results are deterministic by seed\n"
-                 "  --out DIR   output directory for figures (default out/experiments)\n"
-                 "  --quick     reduced size (what the CI test runs)\n"
-                 "  --paper-cell  the paper's 9-float CCM cell (no lateral covariance) instead of the full cell\n"
-                 "  --data DIR  real-data directory (default $CCMAP_DATA_DIR, else the shared data next to the "
-                 "source tree)\n"
-                 "  --gate K, --change-points M, --change-share S\n"
-                 "              the maps' outlier gate (K sigma, 0 = off: the paper's update) and change rule\n"
-                 "              (docs/design.md); default: the library's\n",
-                 description.c_str(), prog);
+std::unique_ptr<CLI::App> make_experiment_app(const std::string& program, const std::string& description,
+                                              ExperimentArgs* args) {
+  auto app = std::make_unique<CLI::App>(description, program);
+  app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  tools::add_whole<std::uint64_t>(*app, "--seed", &args->seed, 0, UINT64_MAX, "N",
+                                  "random seed; results are deterministic by seed");
+  app->add_option("--out", args->out_dir, "output directory for figures")->type_name("DIR")->capture_default_str();
+  app->add_flag("--quick", args->quick, "reduced size (what the CI test runs)");
+  app->add_flag("--paper-cell", args->paper_cell,
+                "the paper's 9-float CCM cell (no lateral covariance) instead of the full cell");
+  app->add_option("--data", args->data_dir,
+                  "real-data directory (default $CCMAP_DATA_DIR, else the shared data next to the source tree)")
+      ->type_name("DIR");
+  add_gate_options(*app, &args->gate);
+  return app;
+}
+
+void add_gate_options(CLI::App& app, GateSetting* gate) {
+  // One field of the setting, checked alone: the library's defaults are valid, so a setting is
+  // valid exactly when each of its fields is valid beside them.
+  auto add = [&app](const std::string& name, const std::string& type, const std::string& help,
+                    double GateSetting::*field, GateSetting* target) {
+    app.add_option_function<std::string>(
+           name,
+           [name, field, target](const std::string& v) {
+             const double most = std::numeric_limits<float>::max();  // StackParams holds them as floats
+             GateSetting one;
+             one.*field = tools::parse_real(name, v, 0.0, most);
+             StackParams p = default_stack_params(0.08F);
+             one.apply(&p);
+             if (validate_stack_params(p, 1) != Status::kOk) {
+               throw CLI::ValidationError(name, v + " is refused by the library's validate_stack_params (docs/design.md section 9)");
+             }
+             target->*field = one.*field;
+           },
+           help)
+        ->type_name(type);
   };
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (a == "--help" || a == "-h") {
-      usage(stdout);
-      return 0;
-    } else if (a == "--quick") {
-      args->quick = true;
-    } else if (a == "--paper-cell") {
-      args->paper_cell = true;
-    } else if (a == "--seed" && has_value) {
-      char* end = nullptr;
-      args->seed = std::strtoull(argv[++i], &end, 10);
-      if (end == nullptr || *end != '\0') {
-        std::fprintf(stderr, "bad --seed value %s\n", argv[i]);
-        return 2;
-      }
-    } else if (a == "--out" && has_value) {
-      args->out_dir = argv[++i];
-    } else if (a == "--data" && has_value) {
-      data_flag = argv[++i];
-    } else if ((a == "--gate" || a == "--change-points" || a == "--change-share") && has_value) {
-      char* end = nullptr;
-      const double v = std::strtod(argv[++i], &end);
-      if (end == nullptr || *end != '\0' || !(v >= 0.0)) {
-        std::fprintf(stderr, "bad %s value %s\n", a.c_str(), argv[i]);
-        return 2;
-      }
-      (a == "--gate" ? args->gate.sigma : a == "--change-points" ? args->gate.min_points : args->gate.share) = v;
-    } else {
-      std::fprintf(stderr, "unknown or incomplete argument: %s\n", a.c_str());
-      usage(stderr);
-      return 2;
-    }
-  }
-  args->data_dir = sim::resolve_data_dir(data_flag);
+  add("--gate", "K", "the outlier gate at K sigma, 0 = off: the paper's update (docs/design.md\nsection 9); default: the library's",
+      &GateSetting::sigma, gate);
+  add("--change-points", "M", "the change rule's point count (default: the library's)", &GateSetting::min_points, gate);
+  add("--change-share", "S", "the change rule's share (default: the library's)", &GateSetting::share, gate);
+}
+
+int parse_experiment_args(CLI::App& app, int argc, char** argv, ExperimentArgs* args) {
+  const int code = tools::parse_args(app, argc, argv);
+  if (code >= 0) return code;
+  args->data_dir = sim::resolve_data_dir(args->data_dir);
   return -1;
 }
 

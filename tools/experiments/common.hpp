@@ -1,9 +1,14 @@
-// Shared plumbing of the experiment programs: command-line flags, output directory, tables.
+// Shared plumbing of the experiment programs: command-line options (CLI11), output directory, tables.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
+
+namespace CLI {
+class App;
+}
 
 namespace ccmap {
 struct StackParams;
@@ -23,7 +28,7 @@ struct GateSetting {
   std::string describe(const StackParams& defaults) const;
 };
 
-/// Flags every experiment accepts:
+/// Options every experiment accepts (make_experiment_app):
 ///   --seed N   (default 1)  --out DIR (default out/experiments)  --quick (reduced size)
 ///   --data DIR (real data; default $CCMAP_DATA_DIR, else <source>/../shared/data)
 ///   --gate K, --change-points M, --change-share S   (the outlier gate: GateSetting)
@@ -33,13 +38,27 @@ struct ExperimentArgs {
   std::string out_dir = "out/experiments";
   bool quick = false;
   bool paper_cell = false;
-  std::string data_dir;  ///< resolved (never empty after parse_experiment_args)
+  std::string data_dir;  ///< the --data text until parse_experiment_args resolves it (never empty after)
   GateSetting gate;
 };
 
-/// Parses argv into *args. Returns -1 to go on, otherwise the exit code to return right away
-/// (0 after --help, 2 after a usage error; the message is printed).
-int parse_experiment_args(int argc, char** argv, const std::string& description, ExperimentArgs* args);
+/// A CLI11 parser named `program` whose --help starts with `description`, holding the options
+/// every experiment accepts, bound to *args (which must outlive it). The program adds its own
+/// options to it, then calls parse_experiment_args. As in the hand-written parsers before it,
+/// the last of a repeated option counts.
+std::unique_ptr<CLI::App> make_experiment_app(const std::string& program, const std::string& description,
+                                              ExperimentArgs* args);
+
+/// Adds --gate K, --change-points M, --change-share S bound to *gate, which must outlive `app`:
+/// the experiments' options (make_experiment_app) and the traverse's. A value is refused unless
+/// validate_stack_params accepts it (docs/design.md section 9), so that no run starts with a
+/// stack whose init would fail.
+void add_gate_options(CLI::App& app, GateSetting* gate);
+
+/// Parses argv with `app` (tools/args/parse_args.hpp), then resolves args->data_dir. Returns -1
+/// to go on, otherwise the exit code to return right away (0 after --help; 2 after a refused
+/// command line, said in one line on stderr).
+int parse_experiment_args(CLI::App& app, int argc, char** argv, ExperimentArgs* args);
 
 /// Creates `dir` (and parents) if needed; false with a reason in *error.
 bool ensure_directory(const std::string& dir, std::string* error);

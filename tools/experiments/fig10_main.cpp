@@ -1,39 +1,29 @@
 // ccmap_exp_fig10: drift resilience of CCM on wave terrain (paper Fig. 10, Section V-D), each map
 // also with uncertain moves (Stack::move_to(x, y, sigma)).
-//   ccmap_exp_fig10 [--seed N] [--out DIR] [--quick] [--paper-cell] [--odometry-sigma F]
-//   --odometry-sigma F   sigma of the uncertain moves = F x the distance moved (default: each
-//                        run's own drift fraction)
+//   ccmap_exp_fig10 [--seed N] [--out DIR] [--quick] [--paper-cell] [--data DIR] [--odometry-sigma F]
+//                   [--gate K] [--change-points M] [--change-share S]
+//   --odometry-sigma F   sigma of the uncertain moves = F x the distance moved, F in [0, 1]
+//                        (default: each run's own drift fraction)
+// (ccmap_exp_fig10 --help lists the options.)
 #include <cstdio>
-#include <cstdlib>
 #include <string>
-#include <vector>
 
 #include "experiments/common.hpp"
 #include "experiments/drift.hpp"
+#include "number_options.hpp"
+#include "parse_args.hpp"
 
 int main(int argc, char** argv) {
   using namespace ccmap::experiments;
-  // --odometry-sigma is this program's own; the rest goes to the common parser.
-  double odometry_sigma = -1.0;
-  std::vector<char*> rest;
-  for (int i = 0; i < argc; ++i) {
-    if (std::string(argv[i]) == "--odometry-sigma" && i + 1 < argc) {
-      char* end = nullptr;
-      odometry_sigma = std::strtod(argv[++i], &end);
-      if (end == argv[i] || *end != '\0' || !(odometry_sigma >= 0.0) || odometry_sigma > 1.0) {
-        std::fprintf(stderr, "--odometry-sigma: expected a fraction in [0, 1], got %s\n", argv[i]);
-        return 2;
-      }
-      continue;
-    }
-    rest.push_back(argv[i]);
-  }
   ExperimentArgs args;
-  const int rc = parse_experiment_args(static_cast<int>(rest.size()), rest.data(),
-                                       "Fig. 10: CCM false obstacles vs pose drift on wave terrain "
-                                       "(also: --odometry-sigma F, sigma of the uncertain moves per metre moved)",
-                                       &args);
-  if (rc >= 0) return rc;
+  const auto app =
+      make_experiment_app("ccmap_exp_fig10", "Fig. 10: CCM false obstacles vs pose drift on wave terrain", &args);
+  double odometry_sigma = -1.0;  // < 0: each run's own drift fraction (DriftConfig::odometry_sigma_fraction)
+  ccmap::tools::add_real(*app, "--odometry-sigma", &odometry_sigma, 0.0, 1.0, false, "F",
+                         "sigma of the uncertain moves = F x the distance moved, F in [0, 1]\n"
+                         "(default: each run's own drift fraction)")
+      ->default_str("");
+  if (const int rc = parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   DriftConfig cfg = args.quick ? DriftConfig::quick() : DriftConfig{};
   cfg.odometry_sigma_fraction = odometry_sigma;
   cfg.seed = args.seed;

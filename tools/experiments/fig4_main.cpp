@@ -1,16 +1,22 @@
 // ccmap_exp_fig4: CCM normal variance vs obstacle coverage (paper Fig. 4).
-//   ccmap_exp_fig4 [--seed N] [--out DIR] [--quick] [--paper-cell]
+//   ccmap_exp_fig4 [--seed N] [--out DIR] [--quick] [--paper-cell] [--data DIR]
+//                  [--gate K] [--change-points M] [--change-share S]
+// (the options of every experiment, common.hpp; ccmap_exp_fig4 --help lists them).
 #include <cstdio>
 #include <string>
 
 #include "experiments/common.hpp"
+#include "parse_args.hpp"
 #include "experiments/fig4.hpp"
 
 int main(int argc, char** argv) {
   using namespace ccmap::experiments;
   ExperimentArgs args;
-  const int rc = parse_experiment_args(argc, argv, "Fig. 4: CCM surface-normal variance vs obstacle coverage", &args);
-  if (rc >= 0) return rc;
+  const auto app = make_experiment_app("ccmap_exp_fig4",
+                                       "Fig. 4: CCM surface-normal variance vs obstacle coverage (single cells: --data\n"
+                                       "and the gate options are accepted and unused)",
+                                       &args);
+  if (const int rc = parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   Fig4Config cfg = args.quick ? Fig4Config::quick() : Fig4Config{};
   cfg.seed = args.seed;
   cfg.paper_cell = args.paper_cell;

@@ -1,10 +1,13 @@
 // ccmap_exp_fig5: CCM vs Kalman vs OMG precision and 3-sigma consistency (paper Fig. 5), on a
 // simulated 20 x 20 m terrain and on the HiRISE Mars DTM (skipped when the data is absent).
-//   ccmap_exp_fig5 [--seed N] [--out DIR] [--quick] [--data DIR] [--paper-cell]
+//   ccmap_exp_fig5 [--seed N] [--out DIR] [--quick] [--paper-cell] [--data DIR]
+//                  [--gate K] [--change-points M] [--change-share S]
+// (the options of every experiment, common.hpp; ccmap_exp_fig5 --help lists them).
 #include <cstdio>
 #include <string>
 
 #include "experiments/common.hpp"
+#include "parse_args.hpp"
 #include "experiments/fig5.hpp"
 #include "sim/data_dir.hpp"
 #include "sim/terrain.hpp"
@@ -12,8 +15,10 @@
 int main(int argc, char** argv) {
   using namespace ccmap::experiments;
   ExperimentArgs args;
-  const int rc = parse_experiment_args(argc, argv, "Fig. 5: CCM vs Kalman vs OMG reconstruction precision and variance", &args);
-  if (rc >= 0) return rc;
+  const auto app = make_experiment_app(
+      "ccmap_exp_fig5", "Fig. 5: CCM vs Kalman vs OMG reconstruction precision and variance (single-layer maps\n"
+      "of cells: the gate options are accepted and unused)", &args);
+  if (const int rc = parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   Fig5Config cfg = args.quick ? Fig5Config::quick() : Fig5Config{};
   cfg.seed = args.seed;
   cfg.paper_cell = args.paper_cell;

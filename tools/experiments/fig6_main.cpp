@@ -7,59 +7,69 @@
 // spread over processes or machines:
 //   ccmap_exp_fig6 --seeds 1:21 & ccmap_exp_fig6 --seeds 21:41 & wait
 //   ccmap_exp_fig6 --merge out/experiments/fig6_shard_1_21.csv out/experiments/fig6_shard_21_41.csv
-// Without --seeds the trials are [seed, seed + default count).
+// Without --seeds the trials are [seed, seed + default count). (ccmap_exp_fig6 --help lists the
+// options: those of every experiment, common.hpp, the outlier gate's among them, and --seeds, --merge.)
+#include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "experiments/common.hpp"
 #include "experiments/detection.hpp"
+#include "number_options.hpp"
+#include "parse_args.hpp"
 
 namespace {
 
-bool parse_range(const std::string& s, std::uint64_t* a, std::uint64_t* b) {
+/// "A:B" (base-10 whole numbers, B > A) into *a, *b; throws CLI::ValidationError otherwise.
+void parse_seed_range(const std::string& s, std::uint64_t* a, std::uint64_t* b) {
   const std::size_t colon = s.find(':');
-  if (colon == std::string::npos) return false;
-  // Named strings: `end` points into them, so they must outlive the checks of *end.
-  const std::string first = s.substr(0, colon), second = s.substr(colon + 1);
-  char* end = nullptr;
-  *a = std::strtoull(first.c_str(), &end, 10);
-  if (first.empty() || end == nullptr || *end != '\0') return false;
-  *b = std::strtoull(second.c_str(), &end, 10);
-  return !second.empty() && end != nullptr && *end == '\0' && *b > *a;
+  const std::string why = "'" + s + "' is not A:B with B > A";
+  if (colon == std::string::npos) throw CLI::ValidationError("--seeds", why);
+  try {
+    *a = ccmap::tools::parse_whole<std::uint64_t>("--seeds", s.substr(0, colon), 0, UINT64_MAX);
+    *b = ccmap::tools::parse_whole<std::uint64_t>("--seeds", s.substr(colon + 1), 0, UINT64_MAX);
+  } catch (const CLI::ValidationError&) {
+    throw CLI::ValidationError("--seeds", why);
+  }
+  if (!(*b > *a)) throw CLI::ValidationError("--seeds", why);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace ccmap::experiments;
-  // --seeds and --merge are this program's own flags; the rest goes to the common parser.
-  std::vector<char*> rest{argv[0]};
-  std::vector<std::string> merge_files;
-  bool merge = false, have_range = false;
-  std::uint64_t seed_a = 0, seed_b = 0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--seeds" && i + 1 < argc) {
-      if (!parse_range(argv[++i], &seed_a, &seed_b)) {
-        std::fprintf(stderr, "bad --seeds value %s (want A:B with B > A)\n", argv[i]);
-        return 2;
-      }
-      have_range = true;
-    } else if (a == "--merge") {
-      merge = true;
-      while (i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0) merge_files.push_back(argv[++i]);
-    } else {
-      rest.push_back(argv[i]);
-    }
-  }
   ExperimentArgs args;
-  const int rc = parse_experiment_args(static_cast<int>(rest.size()), rest.data(),
-                                       "Figs. 6/7: obstacle detection vs obstacle size, CCM vs OMG + roughness filter\n"
-                                       "extra flags: --seeds A:B (trials with seeds A..B-1), --merge SHARD.csv...",
-                                       &args);
-  if (rc >= 0) return rc;
+  const auto app = make_experiment_app(
+      "ccmap_exp_fig6", "Figs. 6/7: obstacle detection vs obstacle size, CCM vs OMG + roughness filter", &args);
+  bool have_range = false;
+  std::uint64_t seed_a = 0, seed_b = 0;
+  app->add_option_function<std::string>(
+         "--seeds",
+         [&](const std::string& v) {
+           parse_seed_range(v, &seed_a, &seed_b);
+           have_range = true;
+         },
+         "the trials with seeds A .. B-1 (instead of --seed and the default count)")
+      ->type_name("A:B");
+  std::vector<std::string> merge_files;
+  app->add_option("--merge", merge_files,
+                  "sum these shards (written by runs) into <out>/fig6_merged.csv, with the\n"
+                  "table and plots; runs no trials")
+      ->type_name("SHARD.csv")
+      ->expected(1, -1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+      // CLI11 takes the first value whatever it looks like: "--merge --out DIR" would merge a
+      // file named "--out". As before CLI11, a shard file does not start with "--".
+      ->check(CLI::Validator(
+          [](std::string& v) { return v.rfind("--", 0) == 0 ? "'" + v + "' is not a shard file" : std::string(); },
+          ""));
+  app->footer(
+      "A run writes <out>/fig6_shard_<A>_<B>.csv (integer counts) plus the table and plots of its own\n"
+      "trials; --merge sums shards exactly (refusing overlapping seed ranges), so a campaign can be\n"
+      "spread over processes or machines (tools/campaign).");
+  if (const int rc = parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
+  const bool merge = !merge_files.empty();
   std::string error;
   if (!ensure_directory(args.out_dir, &error)) {
     std::fprintf(stderr, "error: %s\n", error.c_str());
@@ -68,10 +78,6 @@ int main(int argc, char** argv) {
 
   DetectionResult result;
   if (merge) {
-    if (merge_files.empty()) {
-      std::fprintf(stderr, "--merge needs shard files\n");
-      return 2;
-    }
     std::vector<DetectionResult> shards;
     for (const std::string& f : merge_files) {
       DetectionResult s;

@@ -1,19 +1,23 @@
 // ccmap_exp_lidar: CCM vs Kalman vs OMG on the real Lone Star Geyser laser scan, judged by the
 // height error at held-out points (see lidar.hpp). Skipped, saying why, when the data is absent.
-//   ccmap_exp_lidar [--seed N] [--out DIR] [--quick] [--data DIR] [--paper-cell]
+//   ccmap_exp_lidar [--seed N] [--out DIR] [--quick] [--paper-cell] [--data DIR]
+//                   [--gate K] [--change-points M] [--change-share S]
+// (the options of every experiment, common.hpp; ccmap_exp_lidar --help lists them).
 #include <cstdio>
 #include <string>
 #include <vector>
 
 #include "experiments/common.hpp"
+#include "parse_args.hpp"
 #include "experiments/lidar.hpp"
 
 int main(int argc, char** argv) {
   using namespace ccmap::experiments;
   ExperimentArgs args;
-  const int rc = parse_experiment_args(
-      argc, argv, "Real laser scan: CCM vs Kalman vs OMG height error at held-out points (Lone Star Geyser TLS)", &args);
-  if (rc >= 0) return rc;
+  const auto app = make_experiment_app(
+      "ccmap_exp_lidar", "Real laser scan: CCM vs Kalman vs OMG height error at held-out points (Lone Star Geyser TLS)",
+      &args);
+  if (const int rc = parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   LidarConfig cfg = args.quick ? LidarConfig::quick() : LidarConfig{};
   cfg.seed = args.seed;
   cfg.gate = args.gate;

@@ -4,91 +4,45 @@
 // See team.hpp for the definitions.
 //   ccmap_team [--rovers 2|3] [--seed N] [--stride K] [--spacing M] [--every N] [--floor W]
 //              [--finest LAYER] [--packet BYTES] [--out DIR] [--quick]
+// (ccmap_team --help lists them; a refused command line is one line on stderr and exit 2).
+#include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 
+#include "number_options.hpp"
+#include "parse_args.hpp"
 #include "traverse/team.hpp"
 
-namespace {
-
-int usage(const char* argv0, std::FILE* f) {
-  std::fprintf(f,
-               "usage: %s [--rovers 2|3] [--seed N] [--stride K] [--spacing M] [--every N] [--floor W]\n"
-               "          [--finest LAYER] [--packet BYTES] [--out DIR] [--quick]\n"
-               "  --rovers N    2 or 3 rovers (default 3)\n"
-               "  --seed N      terrain and noise seed (default 1); deterministic by seed\n"
-               "  --stride K    cast every K-th pixel of the 850 x 650 frame (default 2)\n"
-               "  --spacing M   metres driven between frames (default 0.3)\n"
-               "  --every N     frames between exchanges (default 5)\n"
-               "  --floor W     cells whose gain weighs less wait for a later delta (default 0)\n"
-               "  --finest L    send layers L (0 = 4 cm) .. 4 (64 cm) only (default 0: all)\n"
-               "  --packet B    largest delta in bytes (default: no limit); the rest waits\n"
-               "  --out DIR     the picture (default out/team)\n"
-               "  --quick       2 rovers, stride 8, a frame every 0.6 m, an exchange every 3 (the CI test)\n",
-               argv0);
-  return f == stdout ? 0 : 2;
-}
-
-bool positive(const char* v, double* out) {
-  char* end = nullptr;
-  const double d = std::strtod(v, &end);
-  if (end == v || *end != '\0' || !(d > 0.0) || d > 1e9) return false;
-  *out = d;
-  return true;
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
+  using ccmap::tools::add_real;
+  using ccmap::tools::add_whole;
   ccmap::traverse::TeamConfig cfg;
   std::string out_dir = "out/team";
   bool quick = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
-    double d = 0.0;
-    if (a == "--help" || a == "-h") return usage(argv[0], stdout);
-    if (a == "--quick") {
-      quick = true;
-      continue;
-    }
-    if (v == nullptr) {
-      std::fprintf(stderr, "incomplete argument: %s\n", a.c_str());
-      return usage(argv[0], stderr);
-    }
-    ++i;
-    if (a == "--out") {
-      out_dir = v;
-    } else if (a == "--finest") {
-      const int layer = std::atoi(v);
-      if (layer < 0 || layer > 4 || std::string(v) != std::to_string(layer)) return usage(argv[0], stderr);
-      cfg.finest_layer = layer;
-    } else if (a == "--floor") {
-      char* end = nullptr;
-      const double w = std::strtod(v, &end);
-      if (end == v || *end != '\0' || !(w >= 0.0) || w > 1e6) return usage(argv[0], stderr);
-      cfg.weight_floor = static_cast<float>(w);
-    } else if (!positive(v, &d)) {
-      std::fprintf(stderr, "%s: '%s' is not a positive number\n", a.c_str(), v);
-      return usage(argv[0], stderr);
-    } else if (a == "--rovers") {
-      cfg.rovers = static_cast<int>(d);
-    } else if (a == "--seed") {
-      cfg.seed = static_cast<std::uint64_t>(d);
-    } else if (a == "--stride") {
-      cfg.pixel_stride = static_cast<int>(d);
-    } else if (a == "--spacing") {
-      cfg.frame_spacing_m = d;
-    } else if (a == "--every") {
-      cfg.exchange_every = static_cast<int>(d);
-    } else if (a == "--packet") {
-      cfg.packet_bytes = static_cast<std::size_t>(d);
-    } else {
-      std::fprintf(stderr, "unknown argument: %s\n", a.c_str());
-      return usage(argv[0], stderr);
-    }
-  }
+  constexpr double kMax = 1e9;  // the largest count or length any option takes
+  double weight_floor = cfg.weight_floor;
+  CLI::App app("Two or three simulated CADRE rovers map the traverse terrain along different paths and\n"
+               "exchange deltas; prints, per rover, the area its final map knows and the hazard area it\n"
+               "finds, alone and with the team, and what it sent.",
+               "ccmap_team");
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // as before: the last counts
+  add_whole(app, "--rovers", &cfg.rovers, 1, static_cast<int>(kMax), "N", "2 or 3 rovers");
+  add_whole<std::uint64_t>(app, "--seed", &cfg.seed, 1, static_cast<std::uint64_t>(kMax), "N",
+                           "terrain and noise seed; deterministic by seed");
+  add_whole(app, "--stride", &cfg.pixel_stride, 1, static_cast<int>(kMax), "K",
+            "cast every K-th pixel of the 850 x 650 frame");
+  add_real(app, "--spacing", &cfg.frame_spacing_m, 0.0, kMax, true, "M", "metres driven between frames");
+  add_whole(app, "--every", &cfg.exchange_every, 1, static_cast<int>(kMax), "N", "frames between exchanges");
+  add_real(app, "--floor", &weight_floor, 0.0, 1e6, false, "W",
+           "cells whose gain weighs less wait for a later delta");
+  add_whole(app, "--finest", &cfg.finest_layer, 0, 4, "L", "send layers L (0 = 4 cm) .. 4 (64 cm) only (0: all)");
+  add_whole<std::size_t>(app, "--packet", &cfg.packet_bytes, 1, static_cast<std::size_t>(kMax), "B",
+                         "largest delta in bytes (default: no limit); the rest waits")
+      ->default_str("");
+  app.add_option("--out", out_dir, "the picture")->type_name("DIR")->capture_default_str();
+  app.add_flag("--quick", quick, "2 rovers, stride 8, a frame every 0.6 m, an exchange every 3 (the CI test)");
+  if (const int code = ccmap::tools::parse_args(app, argc, argv); code >= 0) return code;
+  cfg.weight_floor = static_cast<float>(weight_floor);
   if (quick) {
     const ccmap::traverse::TeamConfig q = ccmap::traverse::TeamConfig::quick();
     cfg.rovers = q.rovers;
