@@ -10,8 +10,10 @@ function(ccmap_args_test name target rc err_regex out_regex)
   set_tests_properties(ccmap_args_${name} PROPERTIES LABELS "tools" TIMEOUT 60)
 endfunction()
 
-ccmap_args_test(sim_demo_help ccmap_sim_demo 0 "^$" "--stride INT" --help)
-ccmap_args_test(sim_demo_stride_zero ccmap_sim_demo 2 "^ccmap_sim_demo: error: --stride: Value 0 not in range" "^$" --stride 0)
+ccmap_args_test(sim_demo_help ccmap_sim_demo 0 "^$" "--stride K=1" --help)
+ccmap_args_test(sim_demo_stride_zero ccmap_sim_demo 2 "^ccmap_sim_demo: error: --stride: 0 is out of range" "^$" --stride 0)
+# CLI::Range lets NaN through: the demo reads numbers with tools/args/number_options.hpp.
+ccmap_args_test(sim_demo_res_nan ccmap_sim_demo 2 "^ccmap_sim_demo: error: --res: nan is out of range" "^$" --res nan)
 ccmap_args_test(sim_demo_unknown ccmap_sim_demo 2 "^ccmap_sim_demo: error: .*not expected: --bogus" "^$" --bogus)
 ccmap_args_test(sim_demo_streaks_not_a_number ccmap_sim_demo 2 "--streaks" "^$" --streaks x)
 if(CCMAP_BUILD_BENCH)  # the benchmark may be switched off on its own

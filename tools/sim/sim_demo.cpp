@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <string>
 
+#include "number_options.hpp"
 #include "parse_args.hpp"
 #include "png.hpp"
 #include "sim/rng.hpp"
@@ -24,18 +25,14 @@ int main(int argc, char** argv) {
   double res = 0.01, pitch = 25.0, streaks = 0.0;
   CLI::App app("One simulated CADRE stereo frame over lunar-like terrain: ray-casting time, depth image and\n"
                "top view (PNG).", "ccmap_sim_demo");
-  app.add_option("--seed", seed, "terrain and noise seed")->capture_default_str();
+  // Numbers through tools/args/number_options.hpp: base 10, finite (CLI::Range lets NaN through
+  // and CLI11 reads integers in base 0).
+  ccmap::tools::add_whole<std::uint64_t>(app, "--seed", &seed, 0, UINT64_MAX, "N", "terrain and noise seed");
   app.add_option("--out", out, "output directory (sim_depth.png, sim_topview.png)")->capture_default_str();
-  app.add_option("--stride", stride, "cast every K-th pixel of the 850 x 650 frame")
-      ->check(CLI::Range(1, 650))
-      ->capture_default_str();
-  app.add_option("--res", res, "terrain raster cell (m)")->check(CLI::Range(0.001, 1.0))->capture_default_str();
-  app.add_option("--pitch", pitch, "camera pitch below the horizon (degrees)")
-      ->check(CLI::Range(0.0, 89.0))
-      ->capture_default_str();
-  app.add_option("--streaks", streaks, "probability of a streak at a depth border")
-      ->check(CLI::Range(0.0, 1.0))
-      ->capture_default_str();
+  ccmap::tools::add_whole<int>(app, "--stride", &stride, 1, 650, "K", "cast every K-th pixel of the 850 x 650 frame");
+  ccmap::tools::add_real(app, "--res", &res, 0.001, 1.0, false, "M", "terrain raster cell (m)");
+  ccmap::tools::add_real(app, "--pitch", &pitch, 0.0, 89.0, false, "DEG", "camera pitch below the horizon (degrees)");
+  ccmap::tools::add_real(app, "--streaks", &streaks, 0.0, 1.0, false, "P", "probability of a streak at a depth border");
   if (const int code = ccmap::tools::parse_args(app, argc, argv); code >= 0) return code;
   using ccmap::sim::Rect;
   const Rect area{0.0, 0.0, 20.0, 20.0};
