@@ -87,8 +87,11 @@ bool finite_cell(const ccmap::CcmCell& c) {
          std::isfinite(c.s_yz);
 }
 
+/// The documented partition of a frame's received points (FrameCounters, map/types.hpp): the
+/// refusals, the used points and the four gate outcomes of the frame itself.
 std::uint32_t sum_of_reasons(const ccmap::FrameCounters& c) {
-  return c.used + c.rejected_non_finite + c.rejected_out_of_range + c.rejected_weight + c.outside_map + c.too_noisy;
+  return c.used + c.rejected_non_finite + c.rejected_out_of_range + c.rejected_weight + c.outside_map + c.too_noisy +
+         c.gated_finer + c.gated_occluded + c.gated_held + c.gated_pool_full;
 }
 
 void add(ccmap::FrameCounters& t, const ccmap::FrameCounters& f) {
@@ -99,6 +102,14 @@ void add(ccmap::FrameCounters& t, const ccmap::FrameCounters& f) {
   t.rejected_weight += f.rejected_weight;
   t.outside_map += f.outside_map;
   t.too_noisy += f.too_noisy;
+  t.gated_finer += f.gated_finer;
+  t.gated_occluded += f.gated_occluded;
+  t.gated_held += f.gated_held;
+  t.gated_pool_full += f.gated_pool_full;
+  t.gated_admitted += f.gated_admitted;
+  t.gated_dropped += f.gated_dropped;
+  t.reseeded_cells += f.reseeded_cells;
+  t.merged_cells += f.merged_cells;
 }
 
 S g_stack;                                      // ~0.5 MB: static storage, as in flight
