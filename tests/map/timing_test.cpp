@@ -7,13 +7,16 @@
 // the other core's load and preemption do not inflate), wall time printed beside it.
 //  - Native (host, or an aarch64 board): median CPU < 80 ms, the budget itself.
 //  - Under an emulator (ctest sets CCMAP_EMULATOR for the cross build, tests/map/CMakeLists.txt):
-//    the time is the emulator's on its x86-64 host, not the target's. The same binary, the same
-//    61 M instructions per cycle, took 67 ms on the development machine and 95 ms on the CI machine
-//    (QEMU 7.2: 1.1-1.55 ns per A64 instruction of this mix; float instructions are soft-float calls
-//    of ~4-6 ns). The Snapdragon 820 at 2.15 GHz and one instruction per cycle, the budget's own
-//    assumption, takes 0.47 ns: the emulator is 2.4-3.3x slower than the target. The assertion
-//    divides by 2, less than either: median emulator CPU / 2 < 80 ms, i.e. the cycle would fit the
-//    budget on a target only 2x faster than the emulator (docs/performance.md section 2).
+//    the time is the emulator's on its x86-64 host, not the target's, and it follows the
+//    emulator's cost model (float instructions are soft-float calls of ~4-6 ns, 64-bit vector
+//    lanes cost several times a 32-bit one). The cycle of 61 M instructions before the outlier
+//    gate took 67 ms on the development machine and 95 ms on the CI machine (1.1 and 1.55 ns per
+//    instruction); with the gate, 80.8 M instructions and more float, 118 ms on the development
+//    machine (1.46 ns). The Snapdragon 820 at 2.15 GHz and one instruction per cycle, the
+//    budget's own assumption, takes 0.47 ns: for the cycle as it flies the emulator is 3.1x
+//    (development machine) to ~4.4x (CI, estimated) slower than the target. The assertion
+//    divides by 3, less than that: median emulator CPU / 3 < 80 ms, i.e. the cycle would fit the
+//    budget on a target only 3x faster than the emulator (docs/performance.md section 5).
 //  The deterministic form of the budget is the instruction count of the same cycle
 //  (tests/map/cycle_icount.cpp, label timing too): at most half of 80 ms x 2.15 GHz x 1 IPC.
 //
@@ -37,7 +40,7 @@ namespace {
 constexpr int kCycles = 10;
 constexpr double kBudgetMs = 80.0;
 /// Emulator time per target time assumed by the assertion under an emulator (see above).
-constexpr double kEmulatorSlowdown = 2.0;
+constexpr double kEmulatorSlowdown = 3.0;
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
