@@ -27,16 +27,19 @@ struct CcmCellDouble {
     s_yz += k * dy * dz;
     s_xy += k * dx * dy;
     weight = total;
-    if (weight > weight_limit) {
-      const double scale = weight_limit / weight;
-      s_xx *= scale;
-      s_yy *= scale;
-      s_zz *= scale;
-      s_xz *= scale;
-      s_yz *= scale;
-      s_xy *= scale;
-      weight = weight_limit;
-    }
+    if (weight > weight_limit) scale_to(weight_limit);
+  }
+  /// Scales every co-moment by new_weight / weight and sets the weight (the limiter of eqs. 6-7,
+  /// the fading of an uncertain move): the means stay. Precondition: weight > 0.
+  void scale_to(double new_weight) {
+    const double scale = new_weight / weight;
+    s_xx *= scale;
+    s_yy *= scale;
+    s_zz *= scale;
+    s_xz *= scale;
+    s_yz *= scale;
+    s_xy *= scale;
+    weight = new_weight;
   }
   double var_xx() const { return weight > 0.0 ? s_xx / weight : 0.0; }
   double var_yy() const { return weight > 0.0 ? s_yy / weight : 0.0; }

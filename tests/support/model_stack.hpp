@@ -163,14 +163,7 @@ class ModelStack {
           const double floor = std::min(c.weight, std::max(double{params.min_weight}, 1e-3));
           w = std::max(w, floor);
           if (w >= c.weight) continue;
-          const double scale = w / c.weight;
-          c.s_xx *= scale;
-          c.s_yy *= scale;
-          c.s_zz *= scale;
-          c.s_xz *= scale;
-          c.s_yz *= scale;
-          c.s_xy *= scale;
-          c.weight = w;
+          c.scale_to(w);
         }
       } else {
         const double width = l.width;
@@ -747,16 +740,7 @@ class ModelStack {
     a.mean_y += dy * b.weight / total;
     a.mean_z += dz * b.weight / total;
     a.weight = total;
-    if (a.weight > limit) {
-      const double scale = limit / a.weight;
-      a.s_xx *= scale;
-      a.s_yy *= scale;
-      a.s_zz *= scale;
-      a.s_xz *= scale;
-      a.s_yz *= scale;
-      a.s_xy *= scale;
-      a.weight = limit;
-    }
+    if (a.weight > limit) a.scale_to(limit);
   }
 
   /// The documented end of a frame: Kalman batches of the points inside the gate, then the
