@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 
 namespace {

@@ -267,7 +267,7 @@ typedef struct ccmap_cell_record {
 ccmap_status ccmap_export_layer(const ccmap_map* map, int32_t layer, ccmap_cell_record* out, size_t capacity,
                                 size_t* written);
 
-/* ---- planner queries (include/ccmap/map/footprint.hpp, path_query.hpp, costmap.hpp) -------- */
+/* ---- planner queries (include/ccmap/planner/footprint.hpp, path_query.hpp, costmap.hpp) -------- */
 #define CCMAP_MAX_FOOTPRINT_CELLS 4096u      /* bounding box of a footprint, in finest-layer cells */
 #define CCMAP_DEFAULT_MAX_UNKNOWN_SHARE 0.1f
 #define CCMAP_MAX_PATH_SAMPLES 256u
@@ -382,7 +382,7 @@ typedef struct ccmap_costmap_stats {
 } ccmap_costmap_stats;
 
 /* Fills cost[0 .. side^2) in the costmap_2d convention (0 free .. 252, 253 inscribed, 254 lethal,
- * 255 unknown; the worst over each pixel's square; include/ccmap/map/costmap.hpp has the cost
+ * 255 unknown; the worst over each pixel's square; include/ccmap/planner/costmap.hpp has the cost
  * function). stats may be NULL. Refused, buffer untouched: CCMAP_INVALID_ARGUMENT (NULL, side 0 or
  * above CCMAP_MAX_COSTMAP_SIDE, resolution not > 0, negative radius), CCMAP_BUFFER_TOO_SMALL,
  * CCMAP_NON_FINITE_INPUT, CCMAP_OUT_OF_RANGE (raster beyond 1e5 m, radius above
@@ -400,7 +400,7 @@ typedef struct ccmap_counters {
 
 ccmap_status ccmap_get_counters(const ccmap_map* map, ccmap_counters* out);
 
-/* ---- snapshots (include/ccmap/map/snapshot.hpp has the byte format) ------------------------- */
+/* ---- snapshots (include/ccmap/persistence/snapshot.hpp has the byte format) ------------------------- */
 /* Bytes of a snapshot of this map (0 for a bad handle). */
 size_t ccmap_snapshot_size(const ccmap_map* map);
 /* CCMAP_BUFFER_TOO_SMALL if capacity < ccmap_snapshot_size(map); *written = bytes written. */
@@ -409,7 +409,7 @@ ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t c
  * (another format version or a snapshot of another preset), CCMAP_INVALID_ARGUMENT. */
 ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size);
 
-/* ---- map exchange between rovers (include/ccmap/map/exchange.hpp: rules and byte format) ---- */
+/* ---- map exchange between rovers (include/ccmap/persistence/exchange.hpp: rules and byte format) ---- */
 /* An exchange holds one copy of its map's cells (what it last sent) and a table of 8 peers; it
  * lives in caller storage like the map. Sizes: upper bounds with headroom, exact figures from
  * ccmap_exchange_storage_size(). */

@@ -1,4 +1,4 @@
-#include "ccmap/map/detail/front.hpp"
+#include "ccmap/map/update/front.hpp"
 
 #include <cmath>
 

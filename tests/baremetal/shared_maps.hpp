@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 
 namespace ccmap::bmtest {

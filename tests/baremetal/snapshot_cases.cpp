@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <cstring>
 
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "harness.hpp"
 #include "shared_maps.hpp"
 #include "support/map_state.hpp"

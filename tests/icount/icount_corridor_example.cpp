@@ -13,7 +13,7 @@
 #include <cstdlib>
 #include <memory>
 
-#include "ccmap/map/footprint.hpp"
+#include "ccmap/planner/footprint.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/flight_cycle.hpp"
 #include "support/icount_marker.hpp"

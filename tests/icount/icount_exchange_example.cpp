@@ -15,7 +15,7 @@
 #include <memory>
 #include <vector>
 
-#include "ccmap/map/exchange.hpp"
+#include "ccmap/persistence/exchange.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/icount_marker.hpp"
 

@@ -1,4 +1,4 @@
-// The integer front of the update path (map/detail/front.hpp) against independent references:
+// The integer front of the update path (map/update/front.hpp) against independent references:
 // exact conversions against double arithmetic, the fixed-point sensor -> map transform against
 // the double-precision transform of the same float inputs (the documented error bound), the
 // finest index against grid::index_of_position (what queries use) at cell edges, routing against
@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "ccmap/grid/ring_index.hpp"
-#include "ccmap/map/detail/front.hpp"
+#include "ccmap/map/update/front.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 #include "support/reference.hpp"
 

@@ -374,7 +374,7 @@ int feed_and_check_one(S& stack, PointXYZ p, const char* what) {
   EXPECT_TRUE(patched == after) << what << ": a cell other than the one locate() names changed";
   if (S::layer_is_ccm(expected_layer)) {
     // The stored offset from the cell centre is at most half a cell plus half the Q18 quantum
-    // (positions are floored to 2^-18 m and centred by half a unit: map/detail/update_path.hpp,
+    // (positions are floored to 2^-18 m and centred by half a unit: map/update/update_path.hpp,
     // relative_to_centre), plus float rounding.
     const CcmCell* cell = stack.ccm_layer(expected_layer - 1).cell(expected_index);
     const float half = 0.5F * stack.layer_cell_width(expected_layer);

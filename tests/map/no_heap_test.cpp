@@ -12,11 +12,11 @@
 #include <new>
 #include <vector>
 
-#include "ccmap/map/costmap.hpp"
-#include "ccmap/map/footprint.hpp"
-#include "ccmap/map/path_query.hpp"
-#include "ccmap/map/exchange.hpp"
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/planner/costmap.hpp"
+#include "ccmap/planner/footprint.hpp"
+#include "ccmap/planner/path_query.hpp"
+#include "ccmap/persistence/exchange.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/poses.hpp"
 

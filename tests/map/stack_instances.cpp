@@ -4,9 +4,9 @@
 // instances (extern template), so the frames it measures are the frames tools/stack-usage
 // reports, and the lint sees the templates' code as the core compiles it. The paper-cell stack
 // too, so that the warning wall and the lint see the 9-float branch.
-#include "ccmap/map/costmap.hpp"
-#include "ccmap/map/footprint.hpp"
-#include "ccmap/map/path_query.hpp"
+#include "ccmap/planner/costmap.hpp"
+#include "ccmap/planner/footprint.hpp"
+#include "ccmap/planner/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 
 template class ccmap::Stack<ccmap::CadreConfig>;

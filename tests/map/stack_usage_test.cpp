@@ -5,7 +5,7 @@
 // Portable: runs under QEMU too.
 //
 // Contract (docs/integration.md): every public call of Stack<CadreConfig> (and the planner queries
-// over it: map/footprint.hpp, map/path_query.hpp, map/costmap.hpp) uses < 4 KiB of stack
+// over it: planner/footprint.hpp, planner/path_query.hpp, planner/costmap.hpp) uses < 4 KiB of stack
 // in an optimised build (asserted when built with optimisation and without sanitizers; debug and
 // sanitizer builds only report). Worst cases: query/export pool recursively over all layers
 // (depth <= layer count), so the deepest call is measured with data in every layer.
@@ -20,9 +20,9 @@
 #include <string>
 #include <vector>
 
-#include "ccmap/map/costmap.hpp"
-#include "ccmap/map/footprint.hpp"
-#include "ccmap/map/path_query.hpp"
+#include "ccmap/planner/costmap.hpp"
+#include "ccmap/planner/footprint.hpp"
+#include "ccmap/planner/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/poses.hpp"
 

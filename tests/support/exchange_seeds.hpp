@@ -1,6 +1,6 @@
 // Small maps and the valid snapshots and deltas they produce, shared by the fuzz targets
 // (tests/fuzz/snapshot_fuzz.cpp, tests/fuzz/exchange_fuzz.cpp: the receivers they merge into)
-// and by the test that checks the committed seed corpora (tests/map/fuzz_seeds_test.cpp).
+// and by the test that checks the committed seed corpora (tests/persistence/fuzz_seeds_test.cpp).
 // Deterministic: fixed points, no randomness. Allocates (test support).
 #pragma once
 
@@ -11,8 +11,8 @@
 #include <utility>
 #include <vector>
 
-#include "ccmap/map/exchange.hpp"
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/exchange.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 
 namespace ccmap::test {
 

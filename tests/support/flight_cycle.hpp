@@ -11,7 +11,7 @@
 // pixels have no disparity (NaN) and 6 % lie beyond every IV-G range (6..15 m): a real matcher's
 // frame is not all usable ground.
 //
-// The planner's questions (map/footprint.hpp, map/path_query.hpp): the footprint query of the
+// The planner's questions (planner/footprint.hpp, planner/path_query.hpp): the footprint query of the
 // rover's 1 m x 2 m corridor ahead (0.3 .. 2.3 m in front, +-0.5 m to the sides), and the path
 // query of the next 2 m straight ahead swept by the 0.6 m x 0.4 m body every 5 cm (41 poses).
 // corridor_queries() keeps the per-cell form (1250 point queries over the same corridor) that
@@ -22,8 +22,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "ccmap/map/footprint.hpp"
-#include "ccmap/map/path_query.hpp"
+#include "ccmap/planner/footprint.hpp"
+#include "ccmap/planner/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
 

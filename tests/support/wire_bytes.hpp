@@ -7,7 +7,7 @@
 #include <cstring>
 #include <vector>
 
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 
 namespace ccmap::test {
 

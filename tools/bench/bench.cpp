@@ -6,9 +6,9 @@
 #include <memory>
 #include <vector>
 
-#include "ccmap/map/costmap.hpp"
-#include "ccmap/map/footprint.hpp"
-#include "ccmap/map/path_query.hpp"
+#include "ccmap/planner/costmap.hpp"
+#include "ccmap/planner/footprint.hpp"
+#include "ccmap/planner/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/flight_cycle.hpp"

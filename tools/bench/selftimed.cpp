@@ -12,9 +12,9 @@
 #include <memory>
 #include <vector>
 
-#include "ccmap/map/costmap.hpp"
-#include "ccmap/map/footprint.hpp"
-#include "ccmap/map/path_query.hpp"
+#include "ccmap/planner/costmap.hpp"
+#include "ccmap/planner/footprint.hpp"
+#include "ccmap/planner/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/platform/platform.hpp"
 #include "parse_args.hpp"
@@ -200,7 +200,7 @@ int main(int argc, char** argv) {
     report("move_to, 1 m step", move_us, "us");
     (void)stack->move_to(0.0F, 0.0F);
 
-    // Planner queries (map/footprint.hpp, path_query.hpp, costmap.hpp) on the same map.
+    // Planner queries (planner/footprint.hpp, path_query.hpp, costmap.hpp) on the same map.
     std::vector<double> body_us, large_us, path_us, cost_us, inflated_us;
     std::vector<std::uint8_t> cost(125U * 125U);
     const PathPoint route[] = {{0.3F, 0.0F}, {2.3F, 0.0F}};

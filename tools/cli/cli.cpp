@@ -23,7 +23,7 @@
 #include "cloud_reader.hpp"
 #include "csv_writer.hpp"
 #include "layer_images.hpp"
-#include "ccmap/map/costmap.hpp"
+#include "ccmap/planner/costmap.hpp"
 #include "map_runner.hpp"
 #include "origin.hpp"
 #include "png.hpp"

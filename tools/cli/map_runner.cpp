@@ -3,10 +3,10 @@
 #include <cmath>
 
 #include "ccmap/map/config.hpp"
-#include "ccmap/map/footprint.hpp"
-#include "ccmap/map/path_query.hpp"
-#include "ccmap/map/exchange.hpp"
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/planner/footprint.hpp"
+#include "ccmap/planner/path_query.hpp"
+#include "ccmap/persistence/exchange.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 

@@ -60,7 +60,7 @@ struct LocalQuery {
   const char* cell_class = "unknown";
 };
 
-/// A footprint query's answer (map/footprint.hpp) in the local frame.
+/// A footprint query's answer (planner/footprint.hpp) in the local frame.
 struct LocalFootprint {
   std::string status;               ///< ok, outside_map, or the refusal
   const char* worst_class = "unknown";
@@ -69,7 +69,7 @@ struct LocalFootprint {
   std::uint32_t cells_visited = 0;
 };
 
-/// A path query's answer (map/path_query.hpp) in the local frame.
+/// A path query's answer (planner/path_query.hpp) in the local frame.
 struct LocalPath {
   std::string status;
   bool hazard = false, unknown = false;

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 
 namespace ccmap::tools {
 namespace {

@@ -1,5 +1,5 @@
 // Maps saved by the ccmap tool (ccmap map --save FILE, read by ccmap merge): the library's
-// snapshot (include/ccmap/map/snapshot.hpp, unchanged) followed by a record of the absolute
+// snapshot (include/ccmap/persistence/snapshot.hpp, unchanged) followed by a record of the absolute
 // origin the tool subtracted in double before the float library saw the points, so that maps
 // made from different files align without an offset and merged output is absolute again.
 //

@@ -890,7 +890,7 @@ PYBIND11_MODULE(ccmap, m) {
            "an index into ccmap.CLASS_NAMES).")
       .def("layer_extent", &Map::layer_extent, py::arg("k"),
            "(x_min, x_max, y_min, y_max) of layer k's window, metres.")
-      .def("snapshot", &Map::snapshot, "The library's snapshot (include/ccmap/map/snapshot.hpp) as bytes.")
+      .def("snapshot", &Map::snapshot, "The library's snapshot (include/ccmap/persistence/snapshot.hpp) as bytes.")
       .def_static("from_snapshot", &Map::from_snapshot, py::arg("data"), py::arg("preset") = py::none(),
                   "A map from snapshot bytes. preset=None tries the four presets, each with the full and\n"
                   "the paper CCM cell (a snapshot of another preset or cell is refused with 'version_mismatch');\n"

@@ -1,6 +1,6 @@
 #include "map_adapter.hpp"
 
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 
 namespace ccmap::python {

@@ -32,7 +32,7 @@ class MapAdapter {
   [[nodiscard]] virtual QueryResult query_layer(int layer, float x, float y) const = 0;
   /// Every observed cell of `layer` (Stack::export_layer order: rows of increasing y).
   [[nodiscard]] virtual Status export_layer(int layer, std::vector<CellRecord>* cells) const = 0;
-  /// The library's snapshot (map/snapshot.hpp) of the whole stack.
+  /// The library's snapshot (persistence/snapshot.hpp) of the whole stack.
   [[nodiscard]] virtual Status save(std::vector<std::uint8_t>* bytes) const = 0;
   /// All-or-nothing: on failure the stack is unchanged (kVersionMismatch: another preset's snapshot).
   [[nodiscard]] virtual Status load(const std::uint8_t* data, std::size_t size) = 0;

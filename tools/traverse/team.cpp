@@ -5,8 +5,8 @@
 #include <ctime>
 #include <memory>
 
-#include "ccmap/map/exchange.hpp"
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/exchange.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "experiments/canvas.hpp"
 #include "experiments/common.hpp"
 #include "layer_images.hpp"

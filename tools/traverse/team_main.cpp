@@ -1,5 +1,5 @@
 // ccmap_team: two or three simulated CADRE rovers map the traverse terrain along different
-// paths and exchange deltas (include/ccmap/map/exchange.hpp); prints, per rover, the area its
+// paths and exchange deltas (include/ccmap/persistence/exchange.hpp); prints, per rover, the area its
 // final map knows and the hazard area it finds, alone and with the team, and what it sent.
 // See team.hpp for the definitions.
 //   ccmap_team [--rovers 2|3] [--seed N] [--stride K] [--spacing M] [--every N] [--floor W]

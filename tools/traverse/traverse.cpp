@@ -5,8 +5,8 @@
 #include <ctime>
 #include <memory>
 
-#include "ccmap/map/costmap.hpp"
-#include "ccmap/map/path_query.hpp"
+#include "ccmap/planner/costmap.hpp"
+#include "ccmap/planner/path_query.hpp"
 #include "ccmap/map/stack.hpp"
 #include "experiments/canvas.hpp"
 #include "experiments/common.hpp"

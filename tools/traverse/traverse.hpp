@@ -22,11 +22,11 @@
 // Objects (rocks, boxes) are counted as detected when any stack query point on their
 // footprint (2 cm raster) is obstacle/steep, and as observed when any such point is known.
 //
-// Look-ahead (the planner's check, map/path_query.hpp): after each frame the rover sweeps its
+// Look-ahead (the planner's check, planner/path_query.hpp): after each frame the rover sweeps its
 // body (body_length_m x body_width_m) along the next lookahead_m of its route, a pose every
 // lookahead_step_m, and notes the first hazardous footprint (obstacle or steep) and the first
 // with more than 10 % unknown area. Where the first hazard is seen is where the rover would have
-// stopped. The final pictures include the cost raster (map/costmap.hpp) around the rover.
+// stopped. The final pictures include the cost raster (planner/costmap.hpp) around the rover.
 //
 // Deterministic by seed (terrain, noise); timings are measured, not simulated.
 #pragma once

@@ -267,7 +267,7 @@ template <typename Cell>
 ///   W_r = W_t - W_p,  mu_r = mu_t + (mu_t - mu_p) * W_p / W_r,
 ///   S_r,ij = S_t,ij - S_p,ij - d_i * d_j * W_p * W_r / W_t,  d = mu_r - mu_p,
 /// the diagonal clamped at 0 (rounding). An empty `part` gives rest = total. Map exchange uses it
-/// to take what a cell gained since it was last sent (map/exchange.hpp).
+/// to take what a cell gained since it was last sent (persistence/exchange.hpp).
 /// Precision: a cancellation. Relative to float rounding of `total`, the error of mu_r grows
 /// like W_t / W_r and that of S_r like (W_t / W_r) * S_t / S_r; it is exact only in real
 /// arithmetic, and meaningless once the limiter has scaled `total` (the caller must not ask).

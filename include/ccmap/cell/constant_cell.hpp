@@ -141,7 +141,7 @@ inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_varia
 }
 
 // ---------------------------------------------------------------------------------------------
-// Merging two cells of the same ground (map exchange, map/exchange.hpp)
+// Merging two cells of the same ground (map exchange, persistence/exchange.hpp)
 // ---------------------------------------------------------------------------------------------
 
 /// Merges `other` into `cell` in information form: the Kalman update with `other`'s height as

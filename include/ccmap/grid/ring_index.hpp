@@ -112,7 +112,7 @@ namespace detail {
 }
 
 /// The map's position quantum: a position names its cell after flooring to Q18 metres
-/// (2^-18 m = 3.8 um), the fixed-point format of the update path (map/detail/front.hpp), so that
+/// (2^-18 m = 3.8 um), the fixed-point format of the update path (map/update/front.hpp), so that
 /// an update and a query of the same float position name the same cell, edges included.
 /// For |v| >= 32 m every float is already a multiple of 2^-18 m (the quantisation is the identity).
 [[nodiscard]] inline float quantize_position(float v) noexcept {
@@ -131,7 +131,7 @@ namespace detail {
 /// relative error below 2^-24, and positions are floored to 3.8 um, so a position within about
 /// 2^-24 * |x| + 3.8 um of a cell boundary (10 um at 100 m) may be put into the neighbouring cell
 /// of the true 1/w: off by one, never more. The product itself is not rounded (exact_floor_mul),
-/// so the map update (map/detail/front.hpp) and every query name the same cell for a position.
+/// so the map update (map/update/front.hpp) and every query name the same cell for a position.
 /// Beyond |x / w| = 2^23 consecutive floats are a cell or more apart, so not every cell can be
 /// named by a position (the map frame is local: see kMaxAbsCoordinateM in cell/ccm_cell.hpp).
 /// Tested in tests/grid/ring_index_test.cpp (IndexOfPosition.FloatRoundingLimitNearEdges) and,

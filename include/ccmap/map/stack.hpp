@@ -11,10 +11,10 @@
 //
 // Where the work is done (integrators need not read these):
 //   map/detail/layers.hpp       the layers' storage and windows
-//   map/detail/front.hpp        the integer front: validation, transform, range, routing, index
-//   map/detail/update_path.hpp  the per-point back half and the Kalman frame batches
-//   map/detail/pooling.hpp      pooling at query time
-//   map/detail/answers.hpp      answers, classes, the roughness filter baseline
+//   map/update/front.hpp        the integer front: validation, transform, range, routing, index
+//   map/update/update_path.hpp  the per-point back half and the Kalman frame batches
+//   map/query/pooling.hpp      pooling at query time
+//   map/query/answers.hpp      answers, classes, the roughness filter baseline
 //   map/detail/motion.hpp       what an uncertain move does to the cells
 //
 // Positions are map-frame metres relative to the stack origin (see map/types.hpp).
@@ -36,12 +36,12 @@
 #include "ccmap/grid/ring_grid.hpp"
 #include "ccmap/map/classify.hpp"
 #include "ccmap/map/config.hpp"
-#include "ccmap/map/detail/answers.hpp"
-#include "ccmap/map/detail/front.hpp"
+#include "ccmap/map/query/answers.hpp"
+#include "ccmap/map/update/front.hpp"
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/detail/motion.hpp"
-#include "ccmap/map/detail/pooling.hpp"
-#include "ccmap/map/detail/update_path.hpp"
+#include "ccmap/map/query/pooling.hpp"
+#include "ccmap/map/update/update_path.hpp"
 #include "ccmap/map/types.hpp"
 #include "ccmap/platform/platform.hpp"
 #include "ccmap/sensor/noise_model.hpp"
@@ -51,11 +51,11 @@ namespace ccmap {
 namespace detail {
 void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept;
 template <typename Config>
-struct SnapshotAccess;  // map/snapshot.hpp: save/load read and restore the raw state
+struct SnapshotAccess;  // persistence/snapshot.hpp: save/load read and restore the raw state
 template <typename Config>
-struct PlannerAccess;   // map/detail/region_walk.hpp: the planner queries read the query view
+struct PlannerAccess;   // planner/detail/region_walk.hpp: the planner queries read the query view
 template <typename Config>
-struct ExchangeAccess;  // map/exchange.hpp: delta export and merge read and fold cells
+struct ExchangeAccess;  // persistence/exchange.hpp: delta export and merge read and fold cells
 }  // namespace detail
 
 template <typename Config>
@@ -212,7 +212,7 @@ class Stack {
   }
 
   /// Same for points in the sensor frame: p_map = R p + t with the sensor pose (R, t), the
-  /// path a rover flies. The transform runs in fixed point (map/detail/front.hpp): position
+  /// path a rover flies. The transform runs in fixed point (map/update/front.hpp): position
   /// error against the double-precision transform below 8 um per axis within 10 m of the sensor
   /// (docs/design.md). Sensor-frame coordinates of 2^11 m or more are refused as out of range.
   /// Also refused as a whole: a non-finite rotation (kNonFiniteInput) or one that is not a
@@ -353,7 +353,7 @@ class Stack {
   /// held-point slots it took; at most detail::kHeldSlots per pool: CCM layers, finest layer).
   [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
   /// Frame updates accepted since init (wraps at 2^32): the sequence number that map exchange
-  /// (map/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().
+  /// (persistence/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().
   [[nodiscard]] std::uint32_t accepted_frames() const noexcept { return accepted_frames_; }
   /// Raw CCM layer `ccm_index` (0 = first CCM layer), read-only, for serialisation, pictures and
   /// tests. Contract: 0 <= ccm_index < kCcmLayerCount; a violation is reported to the assert
@@ -366,14 +366,14 @@ class Stack {
   [[nodiscard]] const RingGrid<FineCell>& fine_layer() const noexcept { return layers_.fine; }
 
   // save_snapshot / load_snapshot read and restore the private state through this friend only;
-  // a new map-state member must be added to the snapshot format (map/snapshot.hpp) as well.
+  // a new map-state member must be added to the snapshot format (persistence/snapshot.hpp) as well.
   // Bookkeeping (accepted_frames_, generation_, the layers' KeptWindows, the grids' move
   // telemetry) is not map state.
   friend struct detail::SnapshotAccess<Config>;
-  // The planner queries (map/footprint.hpp, map/path_query.hpp, map/costmap.hpp) read the layers
+  // The planner queries (planner/footprint.hpp, planner/path_query.hpp, planner/costmap.hpp) read the layers
   // through the query view, and only that, through this friend.
   friend struct detail::PlannerAccess<Config>;
-  // Map exchange reads and folds cells through this friend (map/exchange.hpp).
+  // Map exchange reads and folds cells through this friend (persistence/exchange.hpp).
   friend struct detail::ExchangeAccess<Config>;
 
  private:

@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "ccmap/map/config.hpp"
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 #include "support/hash_unit.hpp"

@@ -24,7 +24,7 @@ REFERENCE = os.environ.get("CCMAP_PY_REFERENCE", "")
 SCENARIOS = ("cadre_stereo", "ccm_lidar", "kf_stereo", "omg_inverse_variance")
 QUERY_FLOATS = ("slope_x", "slope_y", "inclination", "normal_variance_m2", "elevation_variance_m2", "weight")
 CELL_FLOATS = ("cx", "cy", "weight", "height", "slope_x", "slope_y", "normal_var", "elev_var")
-# Snapshot tail (include/ccmap/map/snapshot.hpp): ... last update duration (u64), CRC-32 (u32).
+# Snapshot tail (include/ccmap/persistence/snapshot.hpp): ... last update duration (u64), CRC-32 (u32).
 SNAPSHOT_TIMING_AND_CRC = 12
 
 

@@ -46,7 +46,7 @@ constexpr bool all_valid_sides(const std::array<std::int32_t, N>& sides) noexcep
 /// static stack stays in .bss). A move clears exactly the cells of the old window outside the new
 /// one, so a cell is inside the intersection iff it was in the window at the mark and has never
 /// left since; a cell that left and re-entered is outside it (it holds only what arrived after
-/// its return). Four integers per layer, updated by each move: map exchange (map/exchange.hpp)
+/// its return). Four integers per layer, updated by each move: map exchange (persistence/exchange.hpp)
 /// uses it to know which cells still hold what was last sent, without a word per cell.
 struct KeptWindow {
   CellIndex min{0, 0};

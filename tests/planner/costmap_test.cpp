@@ -1,4 +1,4 @@
-// The cost raster (map/costmap.hpp) against independent references:
+// The cost raster (planner/costmap.hpp) against independent references:
 //  - a raster aligned with the 4 cm cells, pixel for pixel against the point query at the pixel
 //    centre (each pixel then lies in one cell of every layer): lethal, unknown, and the documented
 //    cost formula evaluated in double from the point answer and the classifying layer's threshold;
@@ -14,7 +14,7 @@
 #include <memory>
 #include <vector>
 
-#include "ccmap/map/costmap.hpp"
+#include "ccmap/planner/costmap.hpp"
 #include "support/planner_maps.hpp"
 
 namespace ccmap {

@@ -1,4 +1,4 @@
-// The per-frame update path of a stack: the integer front of every point (map/detail/front.hpp),
+// The per-frame update path of a stack: the integer front of every point (map/update/front.hpp),
 // the back half that walks the layers and updates one cell, and the per-frame batches of the
 // piece-wise constant Kalman layer. Owned by Stack<Config>; integrators need not read it.
 //
@@ -8,7 +8,7 @@
 //
 // With the outlier gate on (StackParams::outlier_gate_sigma > 0; docs/design.md, "Outlier gate
 // and change"), a point outside its cell's gate is held back (CCM and OMG cells: in the frame's
-// HeldPool, map/detail/held_pool.hpp; Kalman cells: in their frame batch) and the end of the
+// HeldPool, map/update/held_pool.hpp; Kalman cells: in their frame batch) and the end of the
 // frame drops, merges or re-seeds per cell (change_verdict, cell/outlier_gate.hpp).
 //
 // Cost (docs/performance.md): under QEMU user mode every float instruction is a soft-float
@@ -27,8 +27,8 @@
 #include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/cell/outlier_gate.hpp"
 #include "ccmap/map/config.hpp"
-#include "ccmap/map/detail/front.hpp"
-#include "ccmap/map/detail/held_pool.hpp"
+#include "ccmap/map/update/front.hpp"
+#include "ccmap/map/update/held_pool.hpp"
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/types.hpp"
 #include "ccmap/sensor/noise_model.hpp"

@@ -1,4 +1,4 @@
-// Map exchange (include/ccmap/map/exchange.hpp): two rovers fed halves of a traverse and
+// Map exchange (include/ccmap/persistence/exchange.hpp): two rovers fed halves of a traverse and
 // exchanging deltas end equal to one map fed everything (the independent reference: the single
 // map's own updates); with the weight limit, within a stated bound of it; snapshots merge
 // likewise, with origin offsets; every corrupted, truncated, forged, duplicated, misaligned or
@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "ccmap/map/exchange.hpp"
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/exchange.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/exchange_seeds.hpp"
 #include "support/map_state.hpp"

@@ -1,5 +1,5 @@
-// The walk behind the planner queries (map/footprint.hpp, map/path_query.hpp,
-// map/costmap.hpp): every part of an oriented rectangle, answered by the finest layer that
+// The walk behind the planner queries (planner/footprint.hpp, planner/path_query.hpp,
+// planner/costmap.hpp): every part of an oriented rectangle, answered by the finest layer that
 // knows it, exactly as a point query there would be answered (Stack::query: the finest layer
 // whose window holds the point and whose cell is known; a constant-layer answer takes slope,
 // normal variance and class from the first CCM layer's pooled cell when that one is known).
@@ -27,10 +27,10 @@
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/grid/ring_grid.hpp"
-#include "ccmap/map/detail/answers.hpp"
+#include "ccmap/map/query/answers.hpp"
 #include "ccmap/map/detail/layers.hpp"
-#include "ccmap/map/detail/pooling.hpp"
-#include "ccmap/map/detail/region.hpp"
+#include "ccmap/map/query/pooling.hpp"
+#include "ccmap/planner/detail/region.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/map/types.hpp"
 

@@ -1,6 +1,6 @@
-// Non-template parts of map exchange (include/ccmap/map/exchange.hpp): the per-cell gain and
+// Non-template parts of map exchange (include/ccmap/persistence/exchange.hpp): the per-cell gain and
 // merge rules of each cell kind, the varint and the delta header.
-#include "ccmap/map/exchange.hpp"
+#include "ccmap/persistence/exchange.hpp"
 
 #include <cmath>
 #include <cstring>

@@ -1,4 +1,4 @@
-// The path query (map/path_query.hpp): its poses against double-precision geometry (std::sin /
+// The path query (planner/path_query.hpp): its poses against double-precision geometry (std::sin /
 // std::cos, the closed-form arc, polyline interpolation), its verdicts against footprint queries
 // at independently computed poses (the footprint itself is held to point queries in
 // footprint_test.cpp), an analytic approach to a box and to a hole, and its refusals.
@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "ccmap/map/path_query.hpp"
+#include "ccmap/planner/path_query.hpp"
 #include "support/planner_maps.hpp"
 
 namespace ccmap {

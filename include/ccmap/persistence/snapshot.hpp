@@ -11,8 +11,8 @@
 // windows and cells, so the loaded stack answers every query and export bitwise identically to
 // the saved one (routing table and thresholds are recomputed by init(), deterministically).
 // Not stored: RingGrid::cells_cleared_by_moves() and Stack::accepted_frames() (restart at 0 on
-// load), map exchange's bookkeeping (a load retires a bound MapExchange, map/exchange.hpp) and
-// the outlier gate's held points awaiting the change rule (map/detail/held_pool.hpp: at most
+// load), map exchange's bookkeeping (a load retires a bound MapExchange, persistence/exchange.hpp) and
+// the outlier gate's held points awaiting the change rule (map/update/held_pool.hpp: at most
 // kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
 //
 // Format (version 3: version 2 with the outlier gate's parameters and counters). Every field is little-endian, written byte by byte (never a memcpy of a
@@ -156,7 +156,7 @@ class SnapshotReader {
   bool ok_ = true;
 };
 
-// Non-template pieces of the format (src/map/snapshot.cpp).
+// Non-template pieces of the format (src/persistence/snapshot.cpp).
 void snapshot_write_header(SnapshotWriter& w, std::size_t total_size, const SnapshotFingerprint& f) noexcept;
 /// The fingerprint alone (kSnapshotFingerprintBytes): also the preset field of exchange deltas.
 void snapshot_write_fingerprint(SnapshotWriter& w, const SnapshotFingerprint& f) noexcept;
@@ -264,7 +264,7 @@ struct SnapshotAccess {
     return Status::kOk;
   }
 
-  /// Pass 1 of load_snapshot (and of merging a snapshot, map/exchange.hpp): validates
+  /// Pass 1 of load_snapshot (and of merging a snapshot, persistence/exchange.hpp): validates
   /// data[0..data_size) completely, touching no stack. On kOk, *params holds the stored
   /// parameters and *layers_begin the offset of the first layer record (for for_each_stored_cell).
   [[nodiscard]] static Status validate(const std::uint8_t* data, std::size_t data_size, StackParams* params,

@@ -1,4 +1,4 @@
-#include "ccmap/map/detail/region.hpp"
+#include "ccmap/planner/detail/region.hpp"
 
 #include <cmath>
 

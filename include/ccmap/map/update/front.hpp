@@ -1,6 +1,6 @@
 // The front of the frame update, in integer arithmetic: validation, the sensor -> map transform
 // of sensor-frame input, the squared range, routing (paper Section IV-G) and the finest-layer
-// cell index. Used by Stack's update path (map/detail/update_path.hpp); integrators need not
+// cell index. Used by Stack's update path (map/update/update_path.hpp); integrators need not
 // read it.
 //
 // Why integers: under QEMU user mode every float instruction is a call into a soft-float helper

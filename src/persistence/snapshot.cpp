@@ -1,6 +1,6 @@
-// Non-template parts of the snapshot format (include/ccmap/map/snapshot.hpp): CRC-32, the
+// Non-template parts of the snapshot format (include/ccmap/persistence/snapshot.hpp): CRC-32, the
 // little-endian field codec, header, fingerprint, parameters, cells and counters.
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 
 #include <array>
 #include <cmath>

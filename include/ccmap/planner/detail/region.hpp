@@ -1,5 +1,5 @@
-// Plane geometry of the planner queries (map/footprint.hpp, map/path_query.hpp,
-// map/costmap.hpp): an oriented rectangle, the overlap of a map cell (an axis-aligned square)
+// Plane geometry of the planner queries (planner/footprint.hpp, planner/path_query.hpp,
+// planner/costmap.hpp): an oriented rectangle, the overlap of a map cell (an axis-aligned square)
 // with it, and the part of the cell inside it. Integrators need not read it.
 //
 // Frames and units: map-frame metres. Squares and polygons are given relative to the

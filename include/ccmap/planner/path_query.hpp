@@ -8,7 +8,7 @@
 //
 // The body (a length x width rectangle, its length along the direction of travel) is placed at
 // poses every step_m along the path, from its start (distance 0) to its end (the end is always
-// a pose), and each pose is a footprint query (map/footprint.hpp). Answer: the distance along
+// a pose), and each pose is a footprint query (planner/footprint.hpp). Answer: the distance along
 // the path of the first pose whose footprint is obstacle or steep (footprint_class), and of the
 // first whose unknown share exceeds max_unknown_share (a hazardous footprint may be both), with
 // the poses there and their footprint results. The walk stops once both are found. Between poses
@@ -31,7 +31,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "ccmap/map/footprint.hpp"
+#include "ccmap/planner/footprint.hpp"
 #include "ccmap/map/stack.hpp"
 
 namespace ccmap {

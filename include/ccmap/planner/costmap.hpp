@@ -11,7 +11,7 @@
 //
 // Values (costmap_2d's): 0 free .. 252 cost, 253 inscribed, 254 lethal, 255 unknown. A pixel takes
 // the worst of the map's answers over its whole square (each part answered by the finest layer
-// that knows it, as Stack::query would: map/detail/region_walk.hpp), in the order
+// that knows it, as Stack::query would: planner/detail/region_walk.hpp), in the order
 //   lethal (a part is obstacle or steep) > unknown (a part is not known, or off the map) > cost,
 // so a pixel is free only if all of it is known and traversable. The cost of a traversable part:
 //   cost = min(252, round(252 * max(inclination / max_inclination,
@@ -34,8 +34,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "ccmap/map/detail/region.hpp"
-#include "ccmap/map/detail/region_walk.hpp"
+#include "ccmap/planner/detail/region.hpp"
+#include "ccmap/planner/detail/region_walk.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/map/types.hpp"
 

@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "support/reference.hpp"
 #include "support/wire_bytes.hpp"
 

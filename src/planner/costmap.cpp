@@ -1,6 +1,6 @@
-// Non-template parts of the cost raster (map/costmap.hpp): validation, the cost function,
+// Non-template parts of the cost raster (planner/costmap.hpp): validation, the cost function,
 // rank conversion, inflation (also for rasters the caller assembles) and counting.
-#include "ccmap/map/costmap.hpp"
+#include "ccmap/planner/costmap.hpp"
 
 #include <cmath>
 

@@ -11,7 +11,7 @@
 #include "ccmap/map/classify.hpp"
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/detail/layers.hpp"
-#include "ccmap/map/detail/pooling.hpp"
+#include "ccmap/map/query/pooling.hpp"
 #include "ccmap/map/types.hpp"
 
 namespace ccmap::detail {

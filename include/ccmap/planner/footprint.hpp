@@ -6,7 +6,7 @@
 //
 // Every part of the rectangle is answered by the finest layer that knows it, with pooling, as
 // Stack::query would answer each of its points (the answer of a map cell is computed once, not
-// per point: map/detail/region_walk.hpp). The result aggregates those answers over the exact
+// per point: planner/detail/region_walk.hpp). The result aggregates those answers over the exact
 // area (cells clipped to the rectangle):
 //  - worst_class: of the known parts, obstacle before steep before traversable; kUnknown when
 //    no part is known. How much unknown area a caller tolerates is its own threshold
@@ -27,7 +27,7 @@
 // Bounded: the rectangle's axis-aligned bounding box may touch at most kMaxFootprintCells cells
 // of the finest layer (the cells of coarser layers it touches are fewer, ~4^-k as many); larger
 // footprints are refused with kOutOfRange. docs/design.md section 6 gives the worst case of cells
-// visited for CADRE; tests/map/footprint_test.cpp asserts it.
+// visited for CADRE; tests/planner/footprint_test.cpp asserts it.
 //
 // Frames and units: map frame, metres; the heading is a direction vector (the core evaluates
 // no trigonometric function; build it with cos/sin of your yaw). No heap; stack use < 4 KiB.
@@ -37,8 +37,8 @@
 #include <cstdint>
 
 #include "ccmap/map/classify.hpp"
-#include "ccmap/map/detail/region.hpp"
-#include "ccmap/map/detail/region_walk.hpp"
+#include "ccmap/planner/detail/region.hpp"
+#include "ccmap/planner/detail/region_walk.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/map/types.hpp"
 

@@ -107,7 +107,7 @@
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/core/status.hpp"
-#include "ccmap/map/snapshot.hpp"
+#include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 
 namespace ccmap {
@@ -217,7 +217,7 @@ enum class GainKind : std::uint8_t {
   kSaturated = 2,  ///< limiter or floor engaged: the whole cell (see the file comment)
 };
 
-// Per cell kind (src/map/exchange.cpp); CcmCell, CcmPaperCell, KalmanCell and OmgCell overloads, named alike
+// Per cell kind (src/persistence/exchange.cpp); CcmCell, CcmPaperCell, KalmanCell and OmgCell overloads, named alike
 // so that the templates below compile for every cell kind.
 /// The gain of `cell` over `sent` (its last sent state), written to *gain, and its weight.
 [[nodiscard]] GainKind exchange_gain(const CcmCell& cell, const CcmCell& sent, const StackParams& params,

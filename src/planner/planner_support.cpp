@@ -2,8 +2,8 @@
 #include <cmath>
 
 #include "ccmap/map/classify.hpp"
-#include "ccmap/map/footprint.hpp"
-#include "ccmap/map/path_query.hpp"
+#include "ccmap/planner/footprint.hpp"
+#include "ccmap/planner/path_query.hpp"
 
 namespace ccmap {
 

@@ -1,4 +1,4 @@
-// The footprint query (map/footprint.hpp) against independent references:
+// The footprint query (planner/footprint.hpp) against independent references:
 //  - brute force: every point query (Stack::query) at dense samples inside the rectangle (a grid,
 //    the sides every 0.5 mm, the corners). Each sample must fall in a piece of the walk whose
 //    answer is the sample's answer (layer, cell, class, slopes, normal variance; height within
@@ -17,7 +17,7 @@
 #include <tuple>
 #include <vector>
 
-#include "ccmap/map/footprint.hpp"
+#include "ccmap/planner/footprint.hpp"
 #include "support/planner_maps.hpp"
 
 namespace ccmap {
