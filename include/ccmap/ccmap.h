@@ -19,8 +19,10 @@
  * coordinates). See docs/integration.md.
  *
  * Errors: a NULL pointer argument, a handle that was not produced by ccmap_place, or a bad
- * enum value is answered with CCMAP_INVALID_ARGUMENT and changes nothing. Functions that
- * return a number answer 0 for a bad handle.
+ * enum value is answered with CCMAP_INVALID_ARGUMENT and changes nothing. A handle whose storage
+ * header an upset damaged (docs/integration.md, "Radiation: single-event upsets") is answered
+ * with CCMAP_CORRUPT and changes nothing: place and init the map again. Functions that return a
+ * number answer 0 for a bad or damaged handle.
  *
  * Thread safety: none inside; one map must not be used by two threads at once.
  */
@@ -45,7 +47,9 @@ typedef enum ccmap_status {
   CCMAP_INVALID_ARGUMENT = 6,  /* NULL pointer, bad handle, inconsistent sizes, bad configuration */
   CCMAP_BUFFER_TOO_SMALL = 7,  /* the caller's buffer cannot hold the result */
   CCMAP_NOT_INITIALISED = 8,   /* map used before a successful ccmap_init or ccmap_load_snapshot */
-  CCMAP_CORRUPT = 9,           /* snapshot failed its integrity or validity checks */
+  CCMAP_CORRUPT = 9,           /* snapshot failed its integrity or validity checks; or the map's own
+                                  state (its storage header, parameters, windows) failed its check
+                                  after a single-event upset: re-init (or load a snapshot) */
   CCMAP_VERSION_MISMATCH = 10, /* snapshot of another format version or another preset */
   CCMAP_DUPLICATE = 11,        /* map exchange: delta already merged (sender, sequence) or this map's own */
   CCMAP_MISALIGNED = 12,       /* map exchange: another cell width, or an origin offset off the coarsest grid */
@@ -70,10 +74,10 @@ typedef enum ccmap_preset {
  * versions (the library checks at build time that its map fits); ccmap_storage_size() gives
  * the exact figure. The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
-#define CCMAP_CADRE_STORAGE_SIZE 720896u          /* 704 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2818048u    /* 2752 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3342336u /* 3264 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 983040u     /* 960 KiB */
+#define CCMAP_CADRE_STORAGE_SIZE 753664u          /* 736 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2949120u    /* 2880 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3473408u /* 3392 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1114112u    /* 1088 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \
@@ -95,10 +99,10 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 459020u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621676u
-#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786668u
-#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786668u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 459028u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621684u
+#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786676u
+#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786676u
 
 /* ---- the map handle ------------------------------------------------------------------------- */
 typedef struct ccmap_map ccmap_map; /* opaque: lives at the start of the caller's storage */
@@ -177,6 +181,8 @@ typedef struct ccmap_frame_counters {
   uint32_t gated_dropped;    /* held points it dropped as outliers (or whose cell left the map) */
   uint32_t reseeded_cells;   /* cells replaced by their held points */
   uint32_t merged_cells;     /* cells that took their held points in beside their own */
+  uint32_t corrupted_cells;  /* single-event upsets: cells whose bits disagreed with their check, reset */
+  uint32_t corrupted_slots;  /* held-point slots whose bits disagreed with their seal, dropped */
 } ccmap_frame_counters;
 
 /* Re-centres every layer on the robot at (x, y) (m). Refused (counted): non-finite or

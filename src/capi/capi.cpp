@@ -76,10 +76,40 @@ static_assert(std::is_standard_layout<PathPoint>::value && sizeof(PathPoint) == 
 // ---- storage ----
 constexpr std::uint32_t kHandleMagic = 0x43434D48U;  // "CCMH"
 
+/// The start of the caller's storage. `check` seals magic and preset (header_check): a header an
+/// upset changed is refused (CCMAP_CORRUPT), never trusted to pick a preset.
 struct HandleHeader {
   std::uint32_t magic;
   std::uint32_t preset;
+  std::uint32_t check;
 };
+
+/// Check word of a header: any single changed bit of magic, preset or check makes it disagree.
+constexpr std::uint32_t header_check(std::uint32_t magic, std::uint32_t preset) noexcept {
+  return ~(magic ^ (preset * 0x9E3779B1U));
+}
+
+/// What a handle's header says.
+enum class HeaderState : std::uint8_t { kValid, kForeign, kDamaged };
+
+/// kValid: magic, a valid preset and the check agree. kDamaged: the magic is `magic` or at most
+/// two bits from it, and something disagrees (an upset). kForeign: anything else (not a handle
+/// of this kind; `other` is the other kind's magic, one bit away: a map handed over as an
+/// exchange is foreign, not damaged).
+HeaderState classify_header(const HandleHeader& h, std::uint32_t magic, std::uint32_t other, bool preset_valid) noexcept {
+  if (h.magic == magic && preset_valid && h.check == header_check(h.magic, h.preset)) {
+    return HeaderState::kValid;
+  }
+  if (h.magic == other) {
+    return HeaderState::kForeign;
+  }
+  std::uint32_t diff = h.magic ^ magic;
+  int bits = 0;
+  for (; diff != 0U && bits <= 2; diff &= diff - 1U) {
+    ++bits;
+  }
+  return bits <= 2 ? HeaderState::kDamaged : HeaderState::kForeign;
+}
 constexpr std::size_t kStackOffset = 16U;
 static_assert(sizeof(HandleHeader) <= kStackOffset, "header must fit before the stack");
 
@@ -169,15 +199,17 @@ float default_width(ccmap_preset preset) noexcept {
   return 0.0F;
 }
 
-const HandleHeader* header_of(const ccmap_map* map) noexcept {
+const HandleHeader* header_of(const ccmap_map* map, bool* damaged = nullptr) noexcept {
   if (map == nullptr) {
     return nullptr;
   }
   const auto* header = std::launder(static_cast<const HandleHeader*>(static_cast<const void*>(map)));
-  if (header->magic != kHandleMagic || !valid_preset(static_cast<std::int64_t>(header->preset))) {
-    return nullptr;
+  const HeaderState state =
+      classify_header(*header, kHandleMagic, kExchangeMagic, valid_preset(static_cast<std::int64_t>(header->preset)));
+  if (damaged != nullptr) {
+    *damaged = state == HeaderState::kDamaged;
   }
-  return header;
+  return state == HeaderState::kValid ? header : nullptr;
 }
 
 template <typename Config>
@@ -189,12 +221,25 @@ Stack<Config>& stack_of(const ccmap_map* map) noexcept {
   return *std::launder(static_cast<Stack<Config>*>(static_cast<void*>(stack_bytes)));
 }
 
-/// Calls fn(Stack<Config>&) for the map's preset; `bad` for a NULL or foreign handle.
+/// Result of an entry point for a handle whose header an upset damaged: CCMAP_CORRUPT for a
+/// status, else the bad-handle value.
+template <typename Result>
+Result damaged_result(Result bad) noexcept {
+  if constexpr (std::is_same_v<Result, ccmap_status>) {
+    return CCMAP_CORRUPT;
+  } else {
+    return bad;
+  }
+}
+
+/// Calls fn(Stack<Config>&) for the map's preset; `bad` for a NULL or foreign handle, CCMAP_CORRUPT
+/// (or `bad`, for a number) for a damaged one.
 template <typename Result, typename Fn>
 Result dispatch(const ccmap_map* map, Result bad, Fn&& fn) noexcept {
-  const HandleHeader* header = header_of(map);
+  bool damaged = false;
+  const HandleHeader* header = header_of(map, &damaged);
   if (header == nullptr) {
-    return bad;
+    return damaged ? damaged_result(bad) : bad;
   }
   switch (static_cast<ccmap_preset>(header->preset)) {
     case CCMAP_PRESET_CADRE: return fn(stack_of<CadreConfig>(map));
@@ -206,15 +251,17 @@ Result dispatch(const ccmap_map* map, Result bad, Fn&& fn) noexcept {
   return bad;
 }
 
-const HandleHeader* exchange_header_of(const ccmap_exchange* exchange) noexcept {
+const HandleHeader* exchange_header_of(const ccmap_exchange* exchange, bool* damaged = nullptr) noexcept {
   if (exchange == nullptr) {
     return nullptr;
   }
   const auto* header = std::launder(static_cast<const HandleHeader*>(static_cast<const void*>(exchange)));
-  if (header->magic != kExchangeMagic || !valid_preset(static_cast<std::int64_t>(header->preset))) {
-    return nullptr;
+  const HeaderState state =
+      classify_header(*header, kExchangeMagic, kHandleMagic, valid_preset(static_cast<std::int64_t>(header->preset)));
+  if (damaged != nullptr) {
+    *damaged = state == HeaderState::kDamaged;
   }
-  return header;
+  return state == HeaderState::kValid ? header : nullptr;
 }
 
 template <typename Config>
@@ -227,9 +274,10 @@ MapExchange<Config>& exchange_of(const ccmap_exchange* exchange) noexcept {
 /// Calls fn(MapExchange<Config>&) for the exchange's preset; `bad` for a NULL or foreign handle.
 template <typename Result, typename Fn>
 Result dispatch_exchange(const ccmap_exchange* exchange, Result bad, Fn&& fn) noexcept {
-  const HandleHeader* header = exchange_header_of(exchange);
+  bool damaged = false;
+  const HandleHeader* header = exchange_header_of(exchange, &damaged);
   if (header == nullptr) {
-    return bad;
+    return damaged ? damaged_result(bad) : bad;
   }
   switch (static_cast<ccmap_preset>(header->preset)) {
     case CCMAP_PRESET_CADRE: return fn(exchange_of<CadreConfig>(exchange));
@@ -244,8 +292,13 @@ Result dispatch_exchange(const ccmap_exchange* exchange, Result bad, Fn&& fn) no
 /// Calls fn(MapExchange<C>&, Stack<C>&) when the exchange and the map are of the same preset.
 template <typename Fn>
 ccmap_status dispatch_pair(ccmap_exchange* exchange, ccmap_map* map, Fn&& fn) noexcept {
-  const HandleHeader* e = exchange_header_of(exchange);
-  const HandleHeader* m = header_of(map);
+  bool exchange_damaged = false;
+  bool map_damaged = false;
+  const HandleHeader* e = exchange_header_of(exchange, &exchange_damaged);
+  const HandleHeader* m = header_of(map, &map_damaged);
+  if (exchange_damaged || map_damaged) {
+    return CCMAP_CORRUPT;
+  }
   if (e == nullptr || m == nullptr || e->preset != m->preset) {
     return CCMAP_INVALID_ARGUMENT;
   }
@@ -412,7 +465,8 @@ void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
                               f.rejected_out_of_range, f.rejected_weight, f.outside_map,
                               f.too_noisy,     f.gated_finer,   f.gated_occluded,
                               f.gated_held,    f.gated_pool_full, f.gated_admitted,
-                              f.gated_dropped, f.reseeded_cells, f.merged_cells};
+                              f.gated_dropped, f.reseeded_cells, f.merged_cells,
+                              f.corrupted_cells, f.corrupted_slots};
 }
 
 }  // namespace
@@ -459,7 +513,8 @@ ccmap_status ccmap_place(void* storage, size_t storage_size, ccmap_preset preset
     case CCMAP_PRESET_SINGLE_OMG: ccmap::place<ccmap::SingleOmgConfig>(storage); break;
     default: return CCMAP_INVALID_ARGUMENT;
   }
-  new (storage) ccmap::HandleHeader{ccmap::kHandleMagic, static_cast<std::uint32_t>(preset)};
+  new (storage) ccmap::HandleHeader{ccmap::kHandleMagic, static_cast<std::uint32_t>(preset),
+                                    ccmap::header_check(ccmap::kHandleMagic, static_cast<std::uint32_t>(preset))};
   *out = static_cast<ccmap_map*>(storage);
   return CCMAP_OK;
 }
@@ -794,7 +849,8 @@ ccmap_status ccmap_exchange_place(void* storage, size_t storage_size, ccmap_pres
     case CCMAP_PRESET_SINGLE_OMG: new (bytes) ccmap::MapExchange<ccmap::SingleOmgConfig>(); break;
     default: return CCMAP_INVALID_ARGUMENT;
   }
-  new (storage) ccmap::HandleHeader{ccmap::kExchangeMagic, static_cast<std::uint32_t>(preset)};
+  new (storage) ccmap::HandleHeader{ccmap::kExchangeMagic, static_cast<std::uint32_t>(preset),
+                                    ccmap::header_check(ccmap::kExchangeMagic, static_cast<std::uint32_t>(preset))};
   *out = static_cast<ccmap_exchange*>(storage);
   return CCMAP_OK;
 }

@@ -29,7 +29,7 @@ constexpr std::array<std::uint32_t, 256> kCrcTable = make_crc_table();
 
 // The format (snapshot.hpp) lists every field of these types; a new field needs a new format
 // version, not a silent omission.
-static_assert(sizeof(FrameCounters) == 15U * sizeof(std::uint32_t),
+static_assert(sizeof(FrameCounters) == 17U * sizeof(std::uint32_t),
               "FrameCounters changed: update the snapshot format and kSnapshotFormatVersion");
 static_assert(sizeof(sensor::NoiseModel) == 4U + 5U * sizeof(float),
               "NoiseModel changed: update the snapshot format and kSnapshotFormatVersion");
@@ -414,6 +414,7 @@ void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uin
                                   t.too_noisy,       t.gated_finer,    t.gated_occluded,
                                   t.gated_held,      t.gated_pool_full, t.gated_admitted,
                                   t.gated_dropped,   t.reseeded_cells, t.merged_cells,
+                                  t.corrupted_cells, t.corrupted_slots,
                                   rejected_moves,    rejected_frames};
   for (const std::uint32_t v : values) {
     w.u32(v);
@@ -438,6 +439,8 @@ void snapshot_read_counters(SnapshotReader& r, FrameCounters* t, std::uint32_t* 
   t->gated_dropped = r.u32();
   t->reseeded_cells = r.u32();
   t->merged_cells = r.u32();
+  t->corrupted_cells = r.u32();
+  t->corrupted_slots = r.u32();
   *rejected_moves = r.u32();
   *rejected_frames = r.u32();
   *last_update_ns = r.u64();

@@ -301,11 +301,11 @@ TEST(SnapshotFormat, SizesHeaderAndCrcAreAsDocumented) {
       << "not the IEEE 802.3 / zlib CRC-32";
   const auto* abc = reinterpret_cast<const std::uint8_t*>("123456789");
   EXPECT_EQ(crc32_update(crc32_update(0U, abc, 4U), abc + 4, 5U), 0xCBF43926U) << "CRC does not continue";
-  EXPECT_EQ(snapshot_size<CadreConfig>(), 459020U);  // docs/integration.md quotes this figure
-  EXPECT_EQ(snapshot_size<PaperCell<CadreConfig>>(), 418060U);
-  EXPECT_EQ(snapshot_size<TinyConfig>(), 228U + 3U * 8U + 16U * 12U + 32U * 40U);
-  static_assert(snapshot_size<SingleCcmConfig>() == 228U + 8U + 65536U * 40U, "single CCM size");
-  static_assert(snapshot_size<PaperCell<SingleCcmConfig>>() == 228U + 8U + 65536U * 36U, "single paper CCM size");
+  EXPECT_EQ(snapshot_size<CadreConfig>(), 459028U);  // docs/integration.md quotes this figure
+  EXPECT_EQ(snapshot_size<PaperCell<CadreConfig>>(), 418068U);
+  EXPECT_EQ(snapshot_size<TinyConfig>(), 236U + 3U * 8U + 16U * 12U + 32U * 40U);
+  static_assert(snapshot_size<SingleCcmConfig>() == 236U + 8U + 65536U * 40U, "single CCM size");
+  static_assert(snapshot_size<PaperCell<SingleCcmConfig>>() == 236U + 8U + 65536U * 36U, "single paper CCM size");
 
   auto stack = make_stack<TinyConfig>(default_stack_params(0.5F));
   ASSERT_EQ(stack->move_to(3.0F, -2.0F), Status::kOk);

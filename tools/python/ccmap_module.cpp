@@ -103,6 +103,8 @@ constexpr CounterField kCounterFields[] = {
     {"gated_dropped", &FrameCounters::gated_dropped},
     {"reseeded_cells", &FrameCounters::reseeded_cells},
     {"merged_cells", &FrameCounters::merged_cells},
+    {"corrupted_cells", &FrameCounters::corrupted_cells},
+    {"corrupted_slots", &FrameCounters::corrupted_slots},
 };
 static_assert(sizeof(FrameCounters) == std::size(kCounterFields) * sizeof(std::uint32_t),
               "FrameCounters gained a member: add it to kCounterFields");

@@ -38,6 +38,7 @@
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/query/answers.hpp"
 #include "ccmap/map/update/front.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/detail/motion.hpp"
 #include "ccmap/map/query/pooling.hpp"
@@ -61,6 +62,8 @@ struct ExchangeAccess;  // persistence/exchange.hpp: delta export and merge read
 template <typename Config>
 class Stack {
   using Layers = detail::LayerSet<Config>;
+  /// Cells the scrub checks per frame: every cell within detail::ConfigScrubFrames<Config> frames.
+  static constexpr std::uint32_t kScrubCellsPerFrame = detail::scrub_cells_per_frame<Config, Layers>();
 
  public:
   static constexpr bool kHasFine = Layers::kHasFine;
@@ -86,10 +89,12 @@ class Stack {
   // -------------------------------------------------------------------------------------------
 
   /// Validates `params`, binds the layers (centred on the origin, all cells empty), builds the
-  /// routing table and calibrates the normal-variance thresholds. May be called again to reset.
+  /// routing table and calibrates the normal-variance thresholds. May be called again to reset,
+  /// also after kCorrupt (docs/integration.md, "Radiation: single-event upsets").
   /// On failure the stack is left uninitialised and every other call answers kNotInitialised.
   [[nodiscard]] Status init(const StackParams& params) noexcept {
-    initialised_ = false;
+    ready_ = 0U;
+    seal_ = detail::StateSeal{};
     const Status status = validate_stack_params(params, kLayerCount);
     if (status != Status::kOk) {
       return status;
@@ -98,6 +103,7 @@ class Stack {
     if (layers_.init(params.finest_cell_width_m) != Status::kOk) {
       return Status::kInvalidArgument;
     }
+    detail::clear_all_checks(layers_);  // integrity: every cell cleared, every check 0
     const Status routing_status =
         kHasFine ? sensor::build_routing_table(params_.noise, layers_.widths, params_.finest_max_sigma_m, &routing_)
                  : sensor::build_routing_table(params_.noise, layers_.widths, &routing_);
@@ -115,12 +121,31 @@ class Stack {
     rejected_frames_ = 0U;
     last_update_ns_ = 0U;
     accepted_frames_ = 0U;
+    scrub_cursor_ = 0U;
     ++generation_;
-    initialised_ = true;
+    ready_ = detail::kStackReady;
+    seal_state();
     return Status::kOk;
   }
 
-  [[nodiscard]] bool initialised() const noexcept { return initialised_; }
+  /// True after a successful init() or load_snapshot() (whether or not the state is intact:
+  /// state_status() says that).
+  [[nodiscard]] bool initialised() const noexcept { return ready_ == detail::kStackReady; }
+
+  /// kOk if initialised and the bookkeeping (parameters, derived constants, every grid's storage
+  /// binding and window) matches the seal taken when it last changed; kNotInitialised before
+  /// init; kCorrupt if an upset changed any of it (every call then answers kCorrupt, changing
+  /// nothing, until init() or load_snapshot()). Every call that reads or writes cells checks it
+  /// first (~100 instructions).
+  [[nodiscard]] Status state_status() const noexcept {
+    if (ready_ == 0U && seal_ == detail::StateSeal{}) {
+      return Status::kNotInitialised;
+    }
+    if (ready_ != detail::kStackReady || state_seal() != seal_) {
+      return Status::kCorrupt;
+    }
+    return Status::kOk;
+  }
 
   // -------------------------------------------------------------------------------------------
   // Run phase
@@ -132,8 +157,9 @@ class Stack {
   /// every move. Cells that leave a window are cleared; others stay bitwise unchanged.
   /// Refused (counted, map unchanged): non-finite or out-of-range position.
   [[nodiscard]] Status move_to(float x, float y) noexcept {
-    if (!initialised_) {
-      return Status::kNotInitialised;
+    const Status state = state_status();
+    if (state != Status::kOk) {
+      return state;
     }
     const Status status = check_position(x, y);
     if (status != Status::kOk) {
@@ -141,11 +167,17 @@ class Stack {
       return status;
     }
     for (int layer = 0; layer < kLayerCount; ++layer) {
+      const CellIndex old_min = layers_.window_min(layer);
       const Status moved = layers_.move_layer(layer, snapped_centre(x, y, layers_.widths[layer]));
       if (moved != Status::kOk) {
+        seal_state();
         return moved;  // not reachable: check_position bounds every centre
       }
+      // Integrity: the cells the move cleared have check 0 again.
+      detail::clear_checks_after_move(detail::layer_checks(layers_, layer), Layers::side(layer), old_min,
+                                      layers_.window_min(layer));
     }
+    seal_state();
     return Status::kOk;
   }
 
@@ -159,8 +191,9 @@ class Stack {
   /// Refused (counted, map unchanged): as move_to(x, y); a position_sigma_m that is not finite
   /// (kNonFiniteInput), negative (kInvalidArgument) or above kMaxAbsCoordinateM (kOutOfRange).
   [[nodiscard]] Status move_to(float x, float y, float position_sigma_m) noexcept {
-    if (!initialised_) {
-      return Status::kNotInitialised;
+    const Status state = state_status();
+    if (state != Status::kOk) {
+      return state;
     }
     Status status = check_position(x, y);
     if (status == Status::kOk) {
@@ -175,7 +208,11 @@ class Stack {
     }
     status = move_to(x, y);
     if (status == Status::kOk && position_sigma_m > 0.0F) {
-      detail::forget_for_motion(layers_, params_, position_sigma_m * position_sigma_m);
+      // The pass reads every cell: it resets (and counts) those an upset changed.
+      const std::uint32_t corrupted = detail::forget_for_motion(layers_, params_, position_sigma_m * position_sigma_m);
+      FrameCounters found{};
+      found.corrupted_cells = corrupted;
+      detail::accumulate(totals_, found);
     }
     return status;
   }
@@ -244,8 +281,9 @@ class Stack {
   /// that is known (hazards are a CCM matter); otherwise the roughness filter classifies.
   /// kOutsideMap if no layer holds (x, y); kUnknown if none knows it; kNotInitialised.
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
-    if (!initialised_) {
-      return detail::empty_result(Status::kNotInitialised, -1);
+    const Status state = state_status();
+    if (state != Status::kOk) {
+      return detail::empty_result(state, -1);
     }
     return view().query(x, y);
   }
@@ -253,8 +291,9 @@ class Stack {
   /// Answer of one named layer (0 = finest). kInvalidArgument for a bad layer, kOutsideMap if
   /// the layer does not hold (x, y), kUnknown if its cell is not known there.
   [[nodiscard]] QueryResult query_layer(int layer, float x, float y) const noexcept {
-    if (!initialised_) {
-      return detail::empty_result(Status::kNotInitialised, -1);
+    const Status state = state_status();
+    if (state != Status::kOk) {
+      return detail::empty_result(state, -1);
     }
     if (layer < 0 || layer >= kLayerCount) {
       return detail::empty_result(Status::kInvalidArgument, -1);
@@ -272,7 +311,7 @@ class Stack {
   [[nodiscard]] CcmCellType pooled_cell(int layer, CellIndex index) const noexcept {
     // Outside the window: the zero cell, before pooled() forms the child index 2 * index (an
     // arbitrary index would overflow int32 and alias cells near the origin).
-    if (!initialised_ || !layer_is_ccm(layer) || !layers_.contains(layer, index)) {
+    if (!layer_is_ccm(layer) || state_status() != Status::kOk || !layers_.contains(layer, index)) {
       return CcmCellType{};
     }
     return detail::pooled(layers_, params_.weight_limit, layer, index);
@@ -285,8 +324,9 @@ class Stack {
     if (written != nullptr) {
       *written = 0U;
     }
-    if (!initialised_) {
-      return Status::kNotInitialised;
+    const Status state = state_status();
+    if (state != Status::kOk) {
+      return state;
     }
     if (layer < 0 || layer >= kLayerCount || out == nullptr || written == nullptr) {
       return Status::kInvalidArgument;
@@ -359,7 +399,7 @@ class Stack {
   /// tests. Contract: 0 <= ccm_index < kCcmLayerCount; a violation is reported to the assert
   /// hook and answered with an empty, uninitialised grid (every accessor safe, no cells).
   [[nodiscard]] const RingGrid<CcmCellType>& ccm_layer(int ccm_index) const noexcept {
-    CCMAP_ASSERT_OR_RETURN(ccm_index >= 0 && ccm_index < kCcmLayerCount, no_grid_);
+    CCMAP_ASSERT_OR_RETURN(ccm_index >= 0 && ccm_index < kCcmLayerCount, kNoGrid);
     return layers_.ccm[ccm_index];
   }
   /// Raw piece-wise constant layer (uninitialised when the configuration has none).
@@ -386,9 +426,11 @@ class Stack {
   [[nodiscard]] Status begin_frame(const PointXYZ* points, std::size_t n, const PointXYZ& origin, const float* rotation,
                                    detail::FramePose* pose, FrameCounters& frame, FrameCounters* counters,
                                    std::uint64_t* start) noexcept {
-    if (!initialised_) {
+    const Status state = state_status();
+    if (state != Status::kOk) {
+      rejected_frames_ += state == Status::kCorrupt ? 1U : 0U;
       write_counters(frame, counters);
-      return Status::kNotInitialised;
+      return state;
     }
     bool too_many = false;
     // Frame counters are 32-bit. A 32-bit size_t (Cortex-M) cannot exceed them, and there the
@@ -405,8 +447,26 @@ class Stack {
     }
     *start = platform::monotonic_ns();
     frame.received = static_cast<std::uint32_t>(n);
+    // Integrity: the scrub's slice of this frame (map/detail/integrity.hpp).
+    frame.corrupted_cells += detail::scrub_slice(layers_, &scrub_cursor_, kScrubCellsPerFrame);
     return Status::kOk;
   }
+
+  /// The seal of the bookkeeping (state_status): every value that indexes memory or gives the
+  /// cells their meaning. Counters, telemetry and per-frame scratch are not in it.
+  [[nodiscard]] detail::StateSeal state_seal() const noexcept {
+    detail::StateHasher h;
+    h.add(ready_);
+    h.add(params_);
+    h.add(routing_);
+    h.add(thresholds_);
+    h.add(generation_);
+    detail::hash_layer_bindings(h, layers_);
+    update_.hash_constants(h);
+    return h.seal();
+  }
+  /// Seals the bookkeeping after a legitimate change (init, move, load, exchange binding).
+  void seal_state() noexcept { seal_ = state_seal(); }
 
   void finish_frame(const FrameCounters& frame, std::uint64_t start, FrameCounters* counters) noexcept {
     detail::accumulate(totals_, frame);
@@ -443,8 +503,14 @@ class Stack {
   /// Changes on every init() and every binding of a MapExchange: an exchange bound to an older
   /// generation refuses to run (its record of what was sent no longer describes these cells).
   std::uint32_t generation_ = 0U;
-  bool initialised_ = false;
-  RingGrid<CcmCellType> no_grid_{};  ///< the safe answer of ccm_layer() to a bad index
+  /// detail::kStackReady once initialised, 0 before (any other value: an upset). A word, not a
+  /// bool: an upset in a bool is undefined behaviour when it is loaded.
+  std::uint32_t ready_ = 0U;
+  detail::StateSeal seal_{};        ///< integrity: seal of the bookkeeping (state_status)
+  std::uint32_t scrub_cursor_ = 0U; ///< integrity: next cell the scrub checks (clamped on use)
+  /// The safe answer of ccm_layer() to a bad index: a constant, outside the stack's storage (no
+  /// upset can give it a storage pointer).
+  static constexpr RingGrid<CcmCellType> kNoGrid{};
   // ---- update-path scratch and derived constants (not map state: not in snapshots) ----
   detail::UpdatePath<Config> update_{};
 };

@@ -95,6 +95,9 @@ struct FrameCounters {
   std::uint32_t gated_dropped;          ///< held points it dropped as outliers (or whose cell left the map)
   std::uint32_t reseeded_cells;         ///< cells replaced by their held points
   std::uint32_t merged_cells;           ///< cells that took their held points in beside their own
+  /// Single-event upsets (docs/integration.md, "Radiation: single-event upsets"); not points:
+  std::uint32_t corrupted_cells;        ///< cells whose bits disagreed with their check: reset to never observed
+  std::uint32_t corrupted_slots;        ///< held-point slots whose bits disagreed with their seal: dropped
 };
 
 }  // namespace ccmap

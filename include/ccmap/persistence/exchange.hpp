@@ -83,7 +83,9 @@
 //   kInvalidArgument  data == nullptr
 //   kCorrupt          truncated, trailing bytes, wrong magic, CRC mismatch, or content no export
 //                     writes (an odd window centre, a cell position outside the window, a
-//                     non-finite or negative statistic, a zero weight, a mean outside its cell)
+//                     non-finite or negative statistic, a zero weight, a mean outside its cell);
+//                     or the stack's own state failed its integrity check (Stack::state_status:
+//                     a single-event upset, docs/integration.md), counted the same way
 //   kVersionMismatch  another format version, or a delta of another preset
 //   kMisaligned       another finest cell width, or an origin offset that is not a whole number
 //                     of coarsest cells
@@ -303,7 +305,11 @@ struct ExchangeAccess {
     typename Layers::CcmCellType ccm[Layers::kCcmCellCount];
   };
 
-  [[nodiscard]] static std::uint32_t next_generation(StackType& stack) noexcept { return ++stack.generation_; }
+  [[nodiscard]] static std::uint32_t next_generation(StackType& stack) noexcept {
+    ++stack.generation_;
+    stack.seal_state();  // integrity: the generation is sealed bookkeeping
+    return stack.generation_;
+  }
   [[nodiscard]] static std::uint32_t generation(const StackType& stack) noexcept { return stack.generation_; }
   [[nodiscard]] static const StackParams& params(const StackType& stack) noexcept { return stack.params_; }
 
@@ -341,8 +347,9 @@ struct ExchangeAccess {
   [[nodiscard]] static Status merge_snapshot(StackType& stack, SentCells* sent, const std::uint8_t* data,
                                              std::size_t size, CellIndex offset_cells, float offset_z_m,
                                              MergeReport& report) noexcept {
-    if (!stack.initialised()) {
-      return Status::kNotInitialised;
+    const Status state = stack.state_status();  // integrity: kNotInitialised or kCorrupt
+    if (state != Status::kOk) {
+      return state;
     }
     if (data == nullptr) {
       return Status::kInvalidArgument;
@@ -389,6 +396,7 @@ struct ExchangeAccess {
         kept.mark(grid.window_min(), side);
       });
     }
+    stack.seal_state();  // integrity: the kept windows are sealed bookkeeping
   }
 
   /// Writes the gains of every layer (coarsest first) after the header; updates the sent copies
@@ -412,6 +420,10 @@ struct ExchangeAccess {
         std::uint32_t count = 0U;
         std::int64_t previous = -1;
         grid.for_each([&](CellIndex index, const Cell& cell) {
+          if (!cell_intact(stack.layers_, cell)) {  // integrity: an upset's cell is not sent (the scrub resets it)
+            ++report.cells_pending;
+            return;
+          }
           Cell& copy = copies[grid::buffer_offset(index, side)];
           Cell gain{};
           const GainKind kind = exchange_gain(cell, copy, params, width, &gain);
@@ -483,8 +495,8 @@ struct ExchangeAccess {
           const std::int64_t x = min_x + static_cast<std::int64_t>(position % static_cast<std::uint64_t>(side));
           const std::int64_t y = min_y + static_cast<std::int64_t>(position / static_cast<std::uint64_t>(side));
           ++position;
-          status = merge_one(grid, copies, kept, x + (offset_x >> layer), y + (offset_y >> layer), received, dz_m, params,
-                             width, commit, report);
+          status = merge_one(stack.layers_, grid, copies, kept, x + (offset_x >> layer), y + (offset_y >> layer),
+                             received, dz_m, params, width, commit, report);
           if (status != Status::kOk) {
             return;
           }
@@ -515,7 +527,7 @@ struct ExchangeAccess {
             status = Status::kCorrupt;
             return;
           }
-          status = merge_one(grid, copies, kept, static_cast<std::int64_t>(index.x) + (offset_x >> layer),
+          status = merge_one(stack.layers_, grid, copies, kept, static_cast<std::int64_t>(index.x) + (offset_x >> layer),
                              static_cast<std::int64_t>(index.y) + (offset_y >> layer), cell, dz_m, params, width,
                              commit, report);
         }
@@ -535,7 +547,7 @@ struct ExchangeAccess {
   /// layer's KeptWindow counts as empty (what settle() makes it before the commit pass), so the
   /// validation pass computes exactly what the commit pass writes.
   template <typename Grid, typename Cell>
-  [[nodiscard]] static Status merge_one(Grid& grid, Cell* copies, const KeptWindow& kept, std::int64_t x,
+  [[nodiscard]] static Status merge_one(Layers& layers, Grid& grid, Cell* copies, const KeptWindow& kept, std::int64_t x,
                                         std::int64_t y, const Cell& received, float dz_m, const StackParams& params,
                                         float width, bool commit, MergeReport& report) noexcept {
     constexpr std::int64_t kLimit = grid::kMaxCellIndex;
@@ -556,7 +568,9 @@ struct ExchangeAccess {
       return Status::kOutOfRange;
     }
     if (commit) {
+      const std::uint64_t before = cell_signature_wide(cell);  // integrity hook: the check follows
       cell = merged;
+      rewrite_check(layers, cell, before);
       if (copy != nullptr) {
         *copy = merged_copy;
       }
@@ -614,8 +628,9 @@ class MapExchange {
   /// a non-finite origin height or one beyond kMaxAbsCoordinateM, an origin beyond
   /// +-grid::kMaxCellIndex.
   [[nodiscard]] Status init(StackType& stack, const ExchangeParams& params) noexcept {
-    if (!stack.initialised()) {
-      return Status::kNotInitialised;
+    const Status state = stack.state_status();  // integrity: kNotInitialised or kCorrupt
+    if (state != Status::kOk) {
+      return state;
     }
     if (!std::isfinite(params.origin_z_m) || std::fabs(params.origin_z_m) > kMaxAbsCoordinateM ||
         params.origin_cells.x < -grid::kMaxCellIndex || params.origin_cells.x > grid::kMaxCellIndex ||
@@ -657,6 +672,10 @@ class MapExchange {
     }
     if (!initialised()) {
       return Status::kNotInitialised;
+    }
+    const Status state = stack_->state_status();  // integrity
+    if (state != Status::kOk) {
+      return state;
     }
     if (buffer == nullptr || written == nullptr || !(options.weight_floor >= 0.0F) || options.finest_layer < 0 ||
         options.finest_layer >= kLayerCount) {
@@ -754,6 +773,10 @@ class MapExchange {
   [[nodiscard]] Status merge_delta_impl(const std::uint8_t* data, std::size_t size, MergeReport& r) noexcept {
     if (!initialised()) {
       return Status::kNotInitialised;
+    }
+    const Status state = stack_->state_status();  // integrity
+    if (state != Status::kOk) {
+      return state;
     }
     if (data == nullptr) {
       return Status::kInvalidArgument;

@@ -15,7 +15,7 @@
 // the outlier gate's held points awaiting the change rule (map/update/held_pool.hpp: at most
 // kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
 //
-// Format (version 3: version 2 with the outlier gate's parameters and counters). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 4: version 3 with the single-event-upset counters). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -39,13 +39,15 @@
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
 //                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
 //                   s_xy for CcmCell (CcmPaperCell has none).
-//   counters    60  total FrameCounters (15 x uint32, in declaration order)
+//   counters    68  total FrameCounters (17 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
 //
 // Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
-// (CcmCell with s_xy). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
+// (CcmCell with s_xy); version 3 the outlier gate's parameters and counters; version 4 the
+// counters corrupted_cells and corrupted_slots (docs/integration.md, "Radiation: single-event
+// upsets"). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
 // hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
 //
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
@@ -74,7 +76,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 3U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 4U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -84,13 +86,13 @@ inline constexpr std::uint16_t kSnapshotFormatVersion = 3U;
 
 namespace detail {
 
-static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 thresholds");
+static_assert(kMaxLayers == 8, "snapshot format version 4 stores 8 sides and 8 thresholds");
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
 inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
-inline constexpr std::size_t kSnapshotCountersBytes = 15U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotCountersBytes = 17U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
 /// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
@@ -233,8 +235,9 @@ struct SnapshotAccess {
     if (buffer == nullptr || written == nullptr) {
       return Status::kInvalidArgument;
     }
-    if (!stack.initialised_) {
-      return Status::kNotInitialised;
+    const Status state = stack.state_status();  // integrity: a corrupted state is not saved
+    if (state != Status::kOk) {
+      return state;
     }
     if (capacity < size()) {
       return Status::kBufferTooSmall;
@@ -246,10 +249,15 @@ struct SnapshotAccess {
       if (StackType::layer_is_ccm(layer)) {
         const RingGrid<CcmCellType>& grid = stack.layers_.ccm_grid(layer);
         snapshot_write_centre(w, grid.centre());
-        grid.for_each([&w](CellIndex, const CcmCellType& cell) { snapshot_write_cell(w, cell); });
+        // Integrity: a cell an upset changed is saved as never observed (map/detail/integrity.hpp).
+        grid.for_each([&w, &stack](CellIndex, const CcmCellType& cell) {
+          snapshot_write_cell(w, intact_or_empty(stack.layers_, cell));
+        });
       } else {
         snapshot_write_centre(w, stack.layers_.fine.centre());
-        stack.layers_.fine.for_each([&w](CellIndex, const typename StackType::FineCell& cell) { snapshot_write_cell(w, cell); });
+        stack.layers_.fine.for_each([&w, &stack](CellIndex, const typename StackType::FineCell& cell) {
+          snapshot_write_cell(w, intact_or_empty(stack.layers_, cell));
+        });
       }
     }
     snapshot_write_counters(w, stack.totals_, stack.rejected_moves_, stack.rejected_frames_, stack.last_update_ns_);
@@ -376,6 +384,8 @@ struct SnapshotAccess {
     }
     snapshot_read_counters(r, &stack.totals_, &stack.rejected_moves_, &stack.rejected_frames_,
                            &stack.last_update_ns_);
+    reseal_all_cells(stack.layers_);  // integrity: the loaded cells' checks, the restored windows' seal
+    stack.seal_state();
     return Status::kOk;
   }
 };
@@ -383,7 +393,7 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 459,020 bytes (PaperCell<CadreConfig>: 418,060; docs/integration.md lists every preset).
+/// CadreConfig: 459,028 bytes (PaperCell<CadreConfig>: 418,068; docs/integration.md lists every preset).
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();

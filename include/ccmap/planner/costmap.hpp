@@ -199,8 +199,9 @@ template <typename Config>
   if (stats != nullptr) {
     *stats = CostmapStats{};
   }
-  if (!stack.initialised()) {
-    return Status::kNotInitialised;
+  const Status state = stack.state_status();  // kNotInitialised, or kCorrupt after an upset
+  if (state != Status::kOk) {
+    return state;
   }
   if (cost == nullptr) {
     return Status::kInvalidArgument;

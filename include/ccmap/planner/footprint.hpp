@@ -225,8 +225,9 @@ template <typename Config>
 /// detail::make_footprint_rect states.
 template <typename Config>
 [[nodiscard]] FootprintResult query_footprint(const Stack<Config>& stack, const Footprint& footprint) noexcept {
-  if (!stack.initialised()) {
-    return detail::empty_footprint_result(Status::kNotInitialised);
+  const Status state = stack.state_status();  // kNotInitialised, or kCorrupt after an upset
+  if (state != Status::kOk) {
+    return detail::empty_footprint_result(state);
   }
   detail::OrientedRect rect{};
   const Status status = detail::make_footprint_rect(footprint, stack.layer_cell_width(0), kMaxFootprintCells, &rect);

@@ -174,8 +174,9 @@ template <typename Config>
 template <typename Config>
 [[nodiscard]] PathResult query_path(const Stack<Config>& stack, const PathPoint* points, std::size_t count,
                                     const PathSweep& sweep) noexcept {
-  if (!stack.initialised()) {
-    return detail::refused_path(Status::kNotInitialised);
+  const Status state = stack.state_status();  // kNotInitialised, or kCorrupt after an upset
+  if (state != Status::kOk) {
+    return detail::refused_path(state);
   }
   detail::PathSampler path;
   const Status status = path.make_polyline(points, count);
@@ -186,8 +187,9 @@ template <typename Config>
 template <typename Config>
 [[nodiscard]] PathResult query_arc(const Stack<Config>& stack, const PathPose& start, float curvature, float length_m,
                                    const PathSweep& sweep) noexcept {
-  if (!stack.initialised()) {
-    return detail::refused_path(Status::kNotInitialised);
+  const Status state = stack.state_status();  // kNotInitialised, or kCorrupt after an upset
+  if (state != Status::kOk) {
+    return detail::refused_path(state);
   }
   detail::PathSampler path;
   const Status status = path.make_arc(start, curvature, length_m);

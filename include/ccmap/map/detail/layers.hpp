@@ -17,6 +17,7 @@
 #include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/grid/ring_grid.hpp"
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 
 namespace ccmap::detail {
 
@@ -207,6 +208,11 @@ struct LayerSet {
   /// Per layer, the cells no move has cleared since the last mark (KeptWindow); marked by init
   /// and by map exchange. Not map state: not in snapshots.
   KeptWindow kept[kLayerSlots]{};
+  /// Integrity hook (map/detail/integrity.hpp): one 16-bit check per cell, beside the cells;
+  /// every writer of a cell keeps it, readers use a cell only when it agrees. Last member on
+  /// purpose: between the cells and the grids it moved the grids' offsets and cost 0.8 M aarch64
+  /// instructions per CADRE flight cycle (docs/performance.md, "Single-event upsets").
+  CellChecks<kFineCellCount, kCcmCellCount> checks{};
 };
 
 }  // namespace ccmap::detail

@@ -27,6 +27,7 @@
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/detail/layers.hpp"
 
 namespace ccmap::detail {
@@ -47,13 +48,24 @@ void ccm_forget_for_motion(CcmPaperCell& cell, float sigma_sq, float min_weight)
 [[nodiscard]] float neighbour_gradient(bool low_seen, float low, bool high_seen, float high, float h, float w) noexcept;
 
 /// Applies the rule to every observed cell of every layer. Precondition: sigma_sq > 0, finite.
+/// Integrity (map/detail/integrity.hpp): the pass reads every cell, so it checks each one first:
+/// a cell an upset changed is reset to never observed (and neither changed nor read as a
+/// neighbour); returns how many it reset. The cells it changes keep their checks.
 template <typename Config>
-void forget_for_motion(LayerSet<Config>& layers, const StackParams& params, float sigma_sq) noexcept {
+[[nodiscard]] std::uint32_t forget_for_motion(LayerSet<Config>& layers, const StackParams& params,
+                                              float sigma_sq) noexcept {
   using Layers = LayerSet<Config>;
+  std::uint32_t corrupted = 0U;
   for (int c = 0; c < Layers::kCcmLayerCount; ++c) {
     layers.ccm[c].for_each([&](CellIndex, typename Layers::CcmCellType& cell) {
+      if (!cell_intact(layers, cell)) {
+        reset_cell(layers, cell);
+        ++corrupted;
+        return;
+      }
       if (cell.weight > 0.0F) {
         ccm_forget_for_motion(cell, sigma_sq, params.min_weight);
+        check_of(layers, cell) = cell_signature(cell);  // it was intact: the new check is its own
       }
     });
   }
@@ -62,6 +74,13 @@ void forget_for_motion(LayerSet<Config>& layers, const StackParams& params, floa
     RingGrid<FineCell>& fine = layers.fine;
     const float w = layers.widths[0];
     // Heights are read, variances written: a cell's gradient never sees a grown variance.
+    // Corrupted cells are reset first, so that no gradient reads one.
+    fine.for_each([&](CellIndex, FineCell& cell) {
+      if (!cell_intact(layers, cell)) {
+        reset_cell(layers, cell);
+        ++corrupted;
+      }
+    });
     fine.for_each([&](CellIndex i, FineCell& cell) {
       if (!(cell.weight > 0.0F)) {
         return;
@@ -74,6 +93,7 @@ void forget_for_motion(LayerSet<Config>& layers, const StackParams& params, floa
       const auto height = [](const FineCell* n) { return n != nullptr ? n->height : 0.0F; };
       const float gx = neighbour_gradient(seen(west), height(west), seen(east), height(east), cell.height, w);
       const float gy = neighbour_gradient(seen(south), height(south), seen(north), height(north), cell.height, w);
+      const std::uint64_t before = cell_signature_wide(cell);
       if constexpr (Config::kFineKind == FineKind::kOmg) {
         // Mixture variance s / W grows by g^2 sigma^2.
         const float variance = cell.s / cell.weight;
@@ -81,8 +101,10 @@ void forget_for_motion(LayerSet<Config>& layers, const StackParams& params, floa
       } else {
         cell.variance = grown_variance(cell.variance, gx, gy, sigma_sq);
       }
+      rewrite_check(layers, cell, before);
     });
   }
+  return corrupted;
 }
 
 }  // namespace ccmap::detail

@@ -10,6 +10,7 @@
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/map/classify.hpp"
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/query/pooling.hpp"
 #include "ccmap/map/types.hpp"
@@ -80,8 +81,9 @@ class QueryView {
       return out;
     }
     if constexpr (Layers::kHasFine) {
-      const FineCell& cell = layers_.fine.cell_unchecked(index);
-      const bool known = fine_known(cell);
+      // Integrity: a cell an upset changed answers as never observed (map/detail/integrity.hpp).
+      const FineCell cell = intact_or_empty(layers_, layers_.fine.cell_unchecked(index));
+      const bool known = cell.weight >= params_.min_weight && cell.weight > 0.0F;
       if (require_known && !known) {
         return empty_result(Status::kUnknown, layer);
       }
@@ -111,9 +113,10 @@ class QueryView {
     return a;
   }
 
-  /// A piece-wise constant cell is known with at least min_weight (and some weight).
+  /// A piece-wise constant cell (of the layers' storage) is known with at least min_weight (and
+  /// some weight) and its bits agree with its check (map/detail/integrity.hpp).
   [[nodiscard]] bool fine_known(const FineCell& cell) const noexcept {
-    return cell.weight >= params_.min_weight && cell.weight > 0.0F;
+    return cell.weight >= params_.min_weight && cell.weight > 0.0F && cell_intact(layers_, cell);
   }
 
   [[nodiscard]] const Layers& layers() const noexcept { return layers_; }
@@ -131,7 +134,8 @@ class QueryView {
       for (std::int32_t dy = -1; dy <= 1; ++dy) {
         for (std::int32_t dx = -1; dx <= 1; ++dx) {
           const FineCell* n = layers_.fine.cell(CellIndex{index.x + dx, index.y + dy});
-          if (n == nullptr || (dx == 0 && dy == 0) || !(n->weight >= params_.min_weight)) {
+          // Integrity: a neighbour an upset changed counts as unobserved.
+          if (n == nullptr || (dx == 0 && dy == 0) || !(n->weight >= params_.min_weight) || !cell_intact(layers_, *n)) {
             continue;
           }
           const float limit = (dx != 0 && dy != 0) ? step * 1.41421356F : step;

@@ -11,6 +11,7 @@
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/detail/layers.hpp"
 
 namespace ccmap::detail {
@@ -43,7 +44,8 @@ template <typename Config, typename Count>
   using Cell = typename Layers::CcmCellType;
   const Cell* own = layers.ccm_grid(layer).cell(index);
   count.add(1U);
-  Cell result = own != nullptr ? *own : Cell{};
+  // Integrity: a cell an upset changed is read as never observed (map/detail/integrity.hpp).
+  Cell result = own != nullptr ? intact_or_empty(layers, *own) : Cell{};
   if (layer == 0) {
     return result;
   }
@@ -62,7 +64,7 @@ template <typename Config, typename Count>
       children[i] = pooled(layers, weight_limit, child_layer, child, count);
     } else {
       if constexpr (Layers::kHasFine) {
-        const typename Layers::FineCell& c = layers.fine.cell_unchecked(child);
+        const typename Layers::FineCell c = intact_or_empty(layers, layers.fine.cell_unchecked(child));  // integrity
         count.add(1U);
         children[i] = ccm_from_constant<Cell>(fine_height(c), fine_variance(c), c.weight, layers.widths[child_layer]);
       }

@@ -23,6 +23,7 @@
 #include <cstring>
 
 #include "ccmap/grid/ring_grid.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 
 namespace ccmap::detail {
 
@@ -52,7 +53,7 @@ class HeldPool {
   void accept(std::uint32_t cell) noexcept {
     std::uint16_t& tag = tags_[cell];
     if ((tag & kSlotBit) != 0U) {
-      ++slots_[tag & kIndexMask].accepted;
+      ++slots_[tag & kSlotMask].accepted;  // integrity: masked to the slots (a power of two)
     } else if (tag < kIndexMask) {
       ++tag;
     }
@@ -64,11 +65,11 @@ class HeldPool {
   [[nodiscard]] Slot* hold(std::uint32_t cell, CellIndex index, int layer) noexcept {
     std::uint16_t& tag = tags_[cell];
     if ((tag & kSlotBit) != 0U) {
-      Slot& slot = slots_[tag & kIndexMask];
+      Slot& slot = slots_[tag & kSlotMask];  // integrity: masked to the slots (a power of two)
       ++slot.count;
       return &slot;
     }
-    if (used_ == kSlots) {
+    if (used_ >= kSlots) {  // integrity: >=, so that no value of used_ indexes past the slots
       return nullptr;
     }
     Slot& slot = slots_[used_];
@@ -81,7 +82,7 @@ class HeldPool {
   /// Slot of cell `cell`, or nullptr.
   [[nodiscard]] Slot* find(std::uint32_t cell) noexcept {
     const std::uint16_t tag = tags_[cell];
-    return (tag & kSlotBit) != 0U ? &slots_[tag & kIndexMask] : nullptr;
+    return (tag & kSlotBit) != 0U ? &slots_[tag & kSlotMask] : nullptr;  // integrity: masked
   }
 
   /// The end of a frame: keep(slot) for every slot in the order they were taken; a slot is
@@ -90,7 +91,8 @@ class HeldPool {
   template <typename Keep>
   void end_frame(Keep&& keep) noexcept {
     std::uint32_t kept = 0U;
-    for (std::uint32_t i = 0; i < used_; ++i) {
+    const std::uint32_t used = clamped_used();  // integrity
+    for (std::uint32_t i = 0; i < used; ++i) {
       Slot& slot = slots_[i];
       if (keep(slot)) {
         ++slot.frames;
@@ -106,7 +108,8 @@ class HeldPool {
   template <typename Gone, typename Dropped>
   void drop_if(Gone&& gone, Dropped&& dropped) noexcept {
     std::uint32_t kept = 0U;
-    for (std::uint32_t i = 0; i < used_; ++i) {
+    const std::uint32_t used = clamped_used();  // integrity
+    for (std::uint32_t i = 0; i < used; ++i) {
       const Slot& slot = slots_[i];
       if (gone(slot)) {
         dropped(slot);
@@ -124,6 +127,42 @@ class HeldPool {
   void clear() noexcept {
     used_ = 0U;
     retag();
+    seal();
+  }
+
+  // ---- integrity (map/detail/integrity.hpp): slots live from frame to frame ----
+  /// Between frames: records a check of every slot (its bytes) and a copy of the slot count.
+  void seal() noexcept {
+    used_copy_ = used_;
+    const std::uint32_t used = clamped_used();
+    for (std::uint32_t i = 0; i < used; ++i) {
+      seals_[i] = cell_signature(slots_[i]);
+    }
+  }
+  /// At the next frame's start: drops every slot whose bytes no longer match their check or
+  /// whose cell number is out of range (all of them if the slot count disagrees with its copy),
+  /// then rewrites every tag from the slots (a tag that changed between frames is restored).
+  /// Returns the slots dropped (FrameCounters::corrupted_slots; their points are not counted
+  /// again: their counts are not trusted).
+  [[nodiscard]] std::uint32_t verify_seals() noexcept {
+    std::uint32_t dropped = 0U;
+    if (used_ != used_copy_ || used_ > kSlots) {
+      dropped = used_ <= kSlots ? used_ : (used_copy_ <= kSlots ? used_copy_ : 1U);
+      used_ = 0U;
+    }
+    std::uint32_t kept = 0U;
+    for (std::uint32_t i = 0; i < used_; ++i) {
+      if (cell_signature(slots_[i]) == seals_[i] && slots_[i].cell < kCells) {
+        seals_[kept] = seals_[i];
+        slots_[kept++] = slots_[i];
+      } else {
+        ++dropped;
+      }
+    }
+    used_ = kept;
+    used_copy_ = kept;
+    retag();
+    return dropped;
   }
 
   [[nodiscard]] std::uint32_t used() const noexcept { return used_; }
@@ -132,18 +171,30 @@ class HeldPool {
  private:
   static constexpr std::uint16_t kSlotBit = 0x8000U;
   static constexpr std::uint16_t kIndexMask = 0x7FFFU;
+  /// Integrity: a tag's slot index is masked with this, so that no tag indexes past the slots.
+  static constexpr std::uint16_t kSlotMask = static_cast<std::uint16_t>(kSlots - 1U);
+  static_assert((kSlots & (kSlots - 1U)) == 0U, "slot indices are masked: kSlots must be a power of two");
 
   void retag() noexcept {
     std::memset(tags_, 0, sizeof tags_);
-    for (std::uint32_t i = 0; i < used_; ++i) {
-      tags_[slots_[i].cell] = static_cast<std::uint16_t>(kSlotBit | i);
+    const std::uint32_t used = clamped_used();  // integrity
+    for (std::uint32_t i = 0; i < used; ++i) {
+      if (slots_[i].cell < kCells) {  // integrity: a corrupted cell number indexes nothing
+        tags_[slots_[i].cell] = static_cast<std::uint16_t>(kSlotBit | i);
+      }
     }
+  }
+  /// Integrity: the slot count as an index bound, whatever its bits.
+  [[nodiscard]] std::uint32_t clamped_used() const noexcept {
+    return used_ <= kSlots ? used_ : static_cast<std::uint32_t>(kSlots);
   }
 
   // ---- zero-initialised: a static stack lives in .bss ----
   std::uint16_t tags_[kCells]{};
   Slot slots_[kSlots]{};
   std::uint32_t used_ = 0U;
+  std::uint32_t used_copy_ = 0U;  ///< integrity: used_ as sealed between frames
+  CellCheck seals_[kSlots]{};     ///< integrity: check of each slot's bytes, sealed between frames
 };
 
 }  // namespace ccmap::detail

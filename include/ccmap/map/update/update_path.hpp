@@ -29,6 +29,7 @@
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/update/front.hpp"
 #include "ccmap/map/update/held_pool.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/types.hpp"
 #include "ccmap/sensor/noise_model.hpp"
@@ -139,6 +140,21 @@ class UpdatePath {
   /// Slots the last frame had taken at its end, before the change rule (both pools).
   [[nodiscard]] std::uint32_t last_frame_slots() const noexcept { return last_frame_slots_; }
 
+  /// Integrity hook (map/detail/integrity.hpp): adds every constant init() derives to the
+  /// stack's state seal. A constant added to init() belongs here too.
+  void hash_constants(StateHasher& h) const noexcept {
+    h.add(front_);
+    h.add(width_q40_);
+    h.add(gate_);
+    h.add(rule_);
+    h.add(sight_margin_);
+    h.add(gate_on_);
+    h.add(line_of_sight_);
+    h.add(constant_weight_);
+    h.add(stereo_);
+    h.add(stereo_k_);
+  }
+
  private:
   static constexpr bool kKalman = Config::kFineKind == FineKind::kKalman;
   static constexpr bool kCcmPool = Layers::kCcmLayerCount > 0;
@@ -160,6 +176,13 @@ class UpdatePath {
   using FineHeld = std::conditional_t<kKalman, KalmanHeld, OmgCell>;
 
   static constexpr std::size_t kFineBatchSlots = kKalman ? Layers::kFineCellCount : 1U;
+  /// Integrity: touched-list entries and positions are masked with this (a power of two).
+  static constexpr std::uint32_t kTouchedMask = static_cast<std::uint32_t>(kFineBatchSlots - 1U);
+  static_assert((kFineBatchSlots & (kFineBatchSlots - 1U)) == 0U, "the touched list is masked");
+  /// Integrity: the touched count as a loop bound, whatever its bits.
+  [[nodiscard]] std::uint32_t touched_count() const noexcept {
+    return fine_touched_count_ <= kFineBatchSlots ? fine_touched_count_ : static_cast<std::uint32_t>(kFineBatchSlots);
+  }
   static constexpr std::size_t kCcmPoolCells = kCcmPool ? Layers::kCcmCellCount : 1U;
   static constexpr std::size_t kCcmPoolSlots = kCcmPool ? kHeldSlots : 1U;
   static constexpr std::size_t kFinePoolCells = kFinePool ? Layers::kFineCellCount : 1U;
@@ -182,6 +205,7 @@ class UpdatePath {
   void back_half(Layers& layers, const StackParams& params, const PointXYZ* map_points, const float* weights,
                  std::size_t count, bool unit_weights, FrameCounters& frame) noexcept {
     ChunkCounts c{};
+    CheckRuns<Layers> runs{};  // integrity hook: the chunk's writes keep the cells' checks
     // The Kalman batch entry, the common case (81 % of a CADRE frame): a point routed to the
     // finest layer inside its window, no per-point weight. The window is constant over the frame.
     const CellIndex fine_min = kKalman ? layers.fine.window_min() : CellIndex{0, 0};
@@ -200,8 +224,9 @@ class UpdatePath {
           }
         }
       }
-      apply<kGate>(layers, params, i, map_points, weights, unit_weights, c);
+      apply<kGate>(layers, params, i, map_points, weights, unit_weights, c, runs);
     }
+    runs.close(layers);  // integrity hook
     frame.used += c.used;
     frame.rejected_non_finite += c.non_finite;
     frame.rejected_out_of_range += c.out_of_range;
@@ -221,7 +246,7 @@ class UpdatePath {
   /// it standard.)
   template <bool kGate>
   void apply(Layers& layers, const StackParams& params, std::size_t i, const PointXYZ* map_points,
-             const float* weights, bool unit_weights, ChunkCounts& c) noexcept {
+             const float* weights, bool unit_weights, ChunkCounts& c, CheckRuns<Layers>& runs) noexcept {
     const std::int32_t code = chunk_.code[i];
     if (code >= std::int32_t{kFrontNonFinite}) {
       c.non_finite += code == std::int32_t{kFrontNonFinite} ? 1U : 0U;
@@ -269,6 +294,7 @@ class UpdatePath {
           }
           ccm_held_.accept(number);
         }
+        runs.ccm.touch(layers, cell);  // integrity hook
         ccm_update_unchecked(cell, x, y, z, weight, params.weight_limit);
         ++c.used;
         return;
@@ -293,6 +319,7 @@ class UpdatePath {
             }
             fine_held_.accept(number);
           }
+          runs.fine.touch(layers, cell);  // integrity hook
           omg_update_unchecked(cell, z, variance, weight, params.weight_limit);
           ++c.used;
         }
@@ -422,11 +449,11 @@ class UpdatePath {
       const std::int32_t h = chunk_.height_q14[i];
       if constexpr (!kGate) {
         if (sum.count == 0U) {  // gate off: every point of the frame is inside (points stays 0)
-          fine_touched_[fine_touched_count_++] = static_cast<std::uint32_t>(slot);
+          fine_touched_[fine_touched_count_++ & kTouchedMask] = static_cast<std::uint32_t>(slot);  // integrity: masked
         }
       } else {
         if (sum.points == 0U) {
-          fine_touched_[fine_touched_count_++] = static_cast<std::uint32_t>(slot);
+          fine_touched_[fine_touched_count_++ & kTouchedMask] = static_cast<std::uint32_t>(slot);  // integrity: masked
           const KalmanCell& cell = layers.fine.storage()[slot];
           sum.reference_q14 = cell.weight > 0.0F ? q14_floor_of(cell.height) : h;
           sum.gate_q14 = q14_half_width(kalman_gate_half_width(cell, gate_[0]));
@@ -465,8 +492,14 @@ class UpdatePath {
   }
 
   /// floor(v 2^14) for |v| <= 1e5 m (a Kalman cell's height: a mean of accepted heights).
+  /// Integrity: saturated at the int32 range (NaN: INT32_MIN), so that a cell an upset changed
+  /// converts without undefined behaviour (its check tells the readers; the gate only misjudges).
   [[nodiscard]] static std::int32_t q14_floor_of(float v) noexcept {
-    return static_cast<std::int32_t>(std::floor(v * 16384.0F));
+    const float q = std::floor(v * 16384.0F);
+    if (q >= -2147483648.0F && q < 2147483648.0F) {
+      return static_cast<std::int32_t>(q);
+    }
+    return q > 0.0F ? std::int32_t{2147483647} : std::int32_t{-2147483647 - 1};
   }
   /// floor(v 2^14) of a gate half-width v >= 0 (m), saturated at 2^31 units (131 km).
   [[nodiscard]] static std::uint32_t q14_half_width(float v) noexcept {
@@ -477,6 +510,9 @@ class UpdatePath {
   /// The start of a frame: a slot whose cell left its layer's window (a move since the last
   /// frame cleared the cell) is dropped with its points.
   void begin_frame(const Layers& layers, const FramePose& pose, FrameCounters& frame) noexcept {
+    // Integrity hook (map/detail/integrity.hpp): the frame batches and touched list start empty,
+    // the held-point slots as sealed at the last frame's end, whatever happened between frames.
+    restore_frame_state(fine_sums_, &fine_touched_count_, ccm_held_, fine_held_, frame);
     if (!gate_on_) {
       return;
     }
@@ -506,13 +542,16 @@ class UpdatePath {
         ccm_held_.end_frame([&](const auto& slot) {
           auto& cell = layers.ccm_storage[slot.cell];
           const bool tight = held_is_tight(slot.held.s_zz, slot.held.weight, gate_[slot.layer]);
+          const std::uint64_t before = cell_signature_wide(cell);  // integrity hook
           switch (verdict(slot, tight, frame)) {
             case ChangeVerdict::kReseed:
               cell = slot.held;  // the held points folded into an empty cell, limiter included
+              rewrite_check(layers, cell, before);  // integrity hook
               return false;
             case ChangeVerdict::kMerge:
               // Cannot fail: the limit was validated at init, the held weight is > 0 and finite.
               (void)ccm_merge(cell, slot.held, params.weight_limit);
+              rewrite_check(layers, cell, before);  // integrity hook
               return false;
             case ChangeVerdict::kPending:
               return true;
@@ -540,11 +579,14 @@ class UpdatePath {
       }
     }
     if constexpr (kKalman) {
-      for (std::uint32_t t = 0; t < fine_touched_count_; ++t) {
-        fine_sums_[fine_touched_[t]] = FineFrameSum{};
+      const std::uint32_t touched = touched_count();  // integrity: clamped
+      for (std::uint32_t t = 0; t < touched; ++t) {
+        fine_sums_[fine_touched_[t] & kTouchedMask] = FineFrameSum{};  // integrity: masked
       }
       fine_touched_count_ = 0U;
     }
+    ccm_held_.seal();  // integrity hook: the slots as they wait for the next frame
+    fine_held_.seal();
   }
 
   /// The change rule for a slot at the end of a frame, counted in the frame's counters.
@@ -574,6 +616,7 @@ class UpdatePath {
   template <typename Slot>
   void admit_fine(Layers& layers, const StackParams& params, const Slot& slot, bool reseed) noexcept {
     FineCell& cell = layers.fine_storage[slot.cell];
+    const std::uint64_t before = cell_signature_wide(cell);  // integrity hook
     if (reseed) {
       cell = FineCell{};
     }
@@ -584,17 +627,21 @@ class UpdatePath {
       // Cannot fail: the limit was validated at init, the held statistics are finite.
       (void)omg_merge(cell, slot.held, params.weight_limit);
     }
+    rewrite_check(layers, cell, before);  // integrity hook
   }
 
   /// Fuses each touched Kalman cell's batch of this frame (the points inside the gate).
   void fuse_fine_batches(Layers& layers, const StackParams& params) noexcept {
     if constexpr (kKalman) {
       KalmanCell* cells = layers.fine.storage();
-      for (std::uint32_t t = 0; t < fine_touched_count_; ++t) {
-        const std::uint32_t slot = fine_touched_[t];
+      const std::uint32_t touched = touched_count();  // integrity: clamped
+      for (std::uint32_t t = 0; t < touched; ++t) {
+        const std::uint32_t slot = fine_touched_[t] & kTouchedMask;  // integrity: masked
         const FineFrameSum& sum = fine_sums_[slot];
         if (sum.count > 0U) {
+          const std::uint64_t before = cell_signature_wide(cells[slot]);  // integrity hook
           fuse_batch(cells[slot], params, sum.sum_height_q14, sum.sum_range_key, sum.count);
+          rewrite_check(layers, cells[slot], before);  // integrity hook
         }
       }
     } else {

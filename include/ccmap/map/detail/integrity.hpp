@@ -1,0 +1,430 @@
+// Single-event upsets: what a flipped bit in RAM can do to a stack, and what stops it
+// (docs/integration.md, "Radiation: single-event upsets", states the model and the figures).
+// Integrators need not read it.
+//
+// Cells. Every cell of every layer has a 16-bit check in parallel arrays beside the layers'
+// storage (CellChecks, a member of LayerSet): the cell types, snapshots' cell records and the C
+// API's records are unchanged. The check is a linear function of the cell's bits (XOR, no carry):
+//
+//   wide(cell)  = XOR over the cell's 64-bit lanes L_j (bytes 8j .. 8j+7; an odd last 32-bit word
+//                 is a lane of its own, zero-extended) of ror64(L_j, 3j)
+//   check(cell) = fold(wide(cell)): f = lo32 ^ ror32(hi32, 2), then lo16(f) ^ hi16(f)
+//
+// so every bit of the cell lands on exactly one of the 16 check bits, and check(0) = 0: a static
+// stack in .bss and every cleared cell are consistent with no work. Writers keep the check with
+//   check ^= fold(wide(old) ^ wide(new))
+// (no compare on the update path), which keeps D = check ^ check(cell) constant over writes: an
+// upset between two writes (D != 0) stays visible after the cell is written again. Readers (the
+// queries, pooling, exports, snapshots) use a cell only when D = 0, else as never observed; the
+// scrub (scrub_slice) checks a slice of the cells each frame and resets a cell with D != 0 to
+// never observed, its check to 0, counting it (FrameCounters::corrupted_cells).
+//
+// What the check sees (tests/map/integrity_test.cpp proves each against a brute-force
+// recomputation): every single-bit upset of a cell or of its check; every odd number of upsets in
+// one cell; every two upsets in adjacent bits of a cell (within a 32-bit word and across word
+// boundaries) and in the same bit of two words up to three words apart (the rotations 3j and 2
+// were chosen for that: SRAM interleaves the same bit of neighbouring words side by side). Two
+// upsets that land on the same check bit cancel: of all pairs of bits of a 10-float CCM cell,
+// 94 % are detected.
+//
+// Bookkeeping (state_seal): the values that index memory or give the cells their meaning (the
+// parameters, every derived constant, each grid's storage pointer, side, widths and window, the
+// kept windows, the initialised word) are sealed by a 128-bit check word (StateHasher) computed
+// whenever they change (init, load, move, exchange binding) and verified at the start of every
+// call that reads or writes the map: a mismatch is refused with Status::kCorrupt, until init()
+// or load_snapshot(). Per-frame state is restored at each frame's start (the update path's
+// restore_between_frames). No heap, no exceptions.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <type_traits>
+
+#include "ccmap/grid/ring_index.hpp"
+#include "ccmap/map/types.hpp"
+
+namespace ccmap::detail {
+
+/// Check of one cell (16 bits), kept in CellChecks beside the cells.
+using CellCheck = std::uint16_t;
+
+[[nodiscard]] constexpr std::uint64_t rotr64(std::uint64_t v, unsigned r) noexcept {
+  return (v >> (r & 63U)) | (v << ((64U - r) & 63U));
+}
+[[nodiscard]] constexpr std::uint32_t rotr32(std::uint32_t v, unsigned r) noexcept {
+  return (v >> (r & 31U)) | (v << ((32U - r) & 31U));
+}
+
+/// The wide (64-bit) signature of `size` bytes (a multiple of 4): lane j (bytes 8j .. 8j+7, or a
+/// last lone 32-bit word, zero-extended) rotated right by 3j bits, XORed. Linear over XOR:
+/// wide(a ^ b) = wide(a) ^ wide(b), and wide(0) = 0. Every bit maps to one bit.
+template <std::size_t kBytes>
+[[nodiscard]] inline std::uint64_t bytes_signature_wide(const unsigned char* bytes) noexcept {
+  static_assert(kBytes % 4U == 0U, "signatures run over whole 32-bit words");
+  constexpr std::size_t kLanes = kBytes / 8U;
+  std::uint64_t s = 0U;
+  for (std::size_t lane = 0; lane < kLanes; ++lane) {
+    std::uint64_t u = 0U;
+    std::memcpy(&u, bytes + 8U * lane, sizeof u);
+    s ^= rotr64(u, static_cast<unsigned>(3U * lane));
+  }
+  if constexpr (kBytes % 8U != 0U) {
+    std::uint32_t w = 0U;
+    std::memcpy(&w, bytes + 8U * kLanes, sizeof w);
+    s ^= rotr64(std::uint64_t{w}, static_cast<unsigned>(3U * kLanes));
+  }
+  return s;
+}
+
+/// The wide signature of a cell (any trivially copyable type of whole 32-bit words).
+template <typename T>
+[[nodiscard]] inline std::uint64_t cell_signature_wide(const T& value) noexcept {
+  static_assert(std::is_trivially_copyable<T>::value, "signatures read the bytes of a value");
+  return bytes_signature_wide<sizeof(T)>(reinterpret_cast<const unsigned char*>(&value));
+}
+
+/// The 16-bit check of a wide signature: lo32 ^ ror32(hi32, 2), then lo16 ^ hi16 (linear, and a
+/// single changed bit of the wide signature changes exactly one bit of the check).
+[[nodiscard]] constexpr CellCheck fold_signature(std::uint64_t wide) noexcept {
+  const std::uint32_t f = static_cast<std::uint32_t>(wide) ^ rotr32(static_cast<std::uint32_t>(wide >> 32U), 2U);
+  return static_cast<CellCheck>((f ^ (f >> 16U)) & 0xFFFFU);
+}
+
+/// The check a consistent cell has.
+template <typename T>
+[[nodiscard]] inline CellCheck cell_signature(const T& value) noexcept {
+  return fold_signature(cell_signature_wide(value));
+}
+
+/// The per-cell checks of a LayerSet: fine[i] belongs to fine_storage[i], ccm[i] to
+/// ccm_storage[i]. All zero: every cell never observed (a static stack lives in .bss).
+template <std::size_t kFineCells, std::size_t kCcmCells>
+struct CellChecks {
+  CellCheck fine[kFineCells]{};
+  CellCheck ccm[kCcmCells]{};
+};
+
+// ---- cells of a LayerSet (Layers: detail::LayerSet<Config>, map/detail/layers.hpp) ----------
+// Preconditions of every function below: `cell` is a cell of the layers' own storage (a
+// reference from one of its grids), never a copy.
+
+template <typename Layers>
+[[nodiscard]] inline CellCheck& check_of(Layers& layers, const typename Layers::CcmCellType& cell) noexcept {
+  return layers.checks.ccm[static_cast<std::size_t>(&cell - layers.ccm_storage)];
+}
+template <typename Layers>
+[[nodiscard]] inline CellCheck& check_of(Layers& layers, const typename Layers::FineCell& cell) noexcept {
+  return layers.checks.fine[static_cast<std::size_t>(&cell - layers.fine_storage)];
+}
+template <typename Layers>
+[[nodiscard]] inline CellCheck check_of(const Layers& layers, const typename Layers::CcmCellType& cell) noexcept {
+  return layers.checks.ccm[static_cast<std::size_t>(&cell - layers.ccm_storage)];
+}
+template <typename Layers>
+[[nodiscard]] inline CellCheck check_of(const Layers& layers, const typename Layers::FineCell& cell) noexcept {
+  return layers.checks.fine[static_cast<std::size_t>(&cell - layers.fine_storage)];
+}
+
+/// True if the cell's bits agree with its check (no upset seen).
+template <typename Layers, typename Cell>
+[[nodiscard]] inline bool cell_intact(const Layers& layers, const Cell& cell) noexcept {
+  return cell_signature(cell) == check_of(layers, cell);
+}
+
+/// The cell as a reader may use it: itself if intact, else the never-observed cell.
+template <typename Layers, typename Cell>
+[[nodiscard]] inline Cell intact_or_empty(const Layers& layers, const Cell& cell) noexcept {
+  return cell_intact(layers, cell) ? cell : Cell{};
+}
+
+/// Writer hook, second half: after a write of `cell` whose wide signature before the write was
+/// `before`, carries the change into the cell's check (check ^= fold(before ^ wide(now))).
+template <typename Layers, typename Cell>
+inline void rewrite_check(Layers& layers, const Cell& cell, std::uint64_t before) noexcept {
+  check_of(layers, cell) ^= fold_signature(before ^ cell_signature_wide(cell));
+}
+
+/// The writer hook of the per-point updates (the update path's back half): a run of writes to
+/// one cell pays for its check once. touch(cell) before each write; when the cell differs from
+/// the run's, the run before it is closed (its check takes the change) and a new one opens with
+/// the cell's signature as it is now; close() after the last write of the chunk. Consecutive
+/// points of a frame mostly fall into the same cell, so this costs a compare per point and two
+/// signatures per run. The run lives in registers or on the call stack, never in the map's
+/// storage: a run is open for at most one chunk of the update (kFrontChunkPoints points), and an
+/// upset in the open cell during that time is taken into its check (docs/integration.md).
+template <typename Cell>
+class CheckRun {
+ public:
+  template <typename Layers>
+  void touch(Layers& layers, Cell& cell) noexcept {
+    if (&cell != cell_) {
+      close(layers);
+      cell_ = &cell;
+      before_ = cell_signature_wide(cell);
+    }
+  }
+  template <typename Layers>
+  void close(Layers& layers) noexcept {
+    if (cell_ != nullptr) {
+      rewrite_check(layers, *cell_, before_);
+      cell_ = nullptr;
+    }
+  }
+
+ private:
+  Cell* cell_ = nullptr;
+  std::uint64_t before_ = 0U;
+};
+
+/// The runs of one chunk: CCM cells and piece-wise constant (OMG) cells.
+template <typename Layers>
+struct CheckRuns {
+  CheckRun<typename Layers::CcmCellType> ccm;
+  CheckRun<typename Layers::FineCell> fine;
+  void close(Layers& layers) noexcept {
+    ccm.close(layers);
+    fine.close(layers);
+  }
+};
+
+/// Sets a cell to never observed and its check to 0.
+template <typename Layers, typename Cell>
+inline void reset_cell(Layers& layers, Cell& cell) noexcept {
+  cell = Cell{};
+  check_of(layers, cell) = 0U;
+}
+
+/// Recomputes every check from its cell (after a snapshot load wrote the cells).
+template <typename Layers>
+inline void reseal_all_cells(Layers& layers) noexcept {
+  if constexpr (Layers::kHasFine) {
+    for (std::size_t i = 0; i < Layers::kFineCellCount; ++i) {
+      layers.checks.fine[i] = cell_signature(layers.fine_storage[i]);
+    }
+  }
+  if constexpr (Layers::kCcmLayerCount > 0) {
+    for (std::size_t i = 0; i < Layers::kCcmCellCount; ++i) {
+      layers.checks.ccm[i] = cell_signature(layers.ccm_storage[i]);
+    }
+  }
+}
+
+/// Every check 0 (the layers' cells were all cleared).
+template <typename Layers>
+inline void clear_all_checks(Layers& layers) noexcept {
+  for (CellCheck& c : layers.checks.fine) {
+    c = 0U;
+  }
+  for (CellCheck& c : layers.checks.ccm) {
+    c = 0U;
+  }
+}
+
+/// Cells the scrub walks: the finest layer's, then the CCM layers' (storage order).
+template <typename Layers>
+[[nodiscard]] constexpr std::uint32_t scrubbed_cells() noexcept {
+  return static_cast<std::uint32_t>((Layers::kHasFine ? Layers::kFineCellCount : 0U) +
+                                    (Layers::kCcmLayerCount > 0 ? Layers::kCcmCellCount : 0U));
+}
+
+/// Frames in which the scrub checks every cell of a stack (default; a Config may set its own
+/// `static constexpr std::uint32_t kScrubFrames`, >= 1).
+inline constexpr std::uint32_t kDefaultScrubFrames = 8U;
+
+template <typename Config, typename = void>
+struct ConfigScrubFrames {
+  static constexpr std::uint32_t value = kDefaultScrubFrames;
+};
+template <typename Config>
+struct ConfigScrubFrames<Config, std::void_t<decltype(Config::kScrubFrames)>> {
+  static constexpr std::uint32_t value = Config::kScrubFrames;
+};
+
+/// Cells the scrub checks per frame: ceil(scrubbed cells / frames), so that every cell is
+/// checked within kScrubFrames frames.
+template <typename Config, typename Layers>
+[[nodiscard]] constexpr std::uint32_t scrub_cells_per_frame() noexcept {
+  constexpr std::uint32_t kFrames = ConfigScrubFrames<Config>::value;
+  static_assert(kFrames >= 1U, "the scrub needs at least one frame per pass");
+  return (scrubbed_cells<Layers>() + kFrames - 1U) / kFrames;
+}
+
+/// Checks `count` cells from *cursor on (wrapping; *cursor is clamped first, so an upset in it
+/// cannot index outside the storage), resets every corrupted one to never observed and returns
+/// how many it reset.
+template <typename Layers>
+[[nodiscard]] inline std::uint32_t scrub_slice(Layers& layers, std::uint32_t* cursor, std::uint32_t count) noexcept {
+  constexpr std::uint32_t kTotal = scrubbed_cells<Layers>();
+  constexpr std::uint32_t kFine = Layers::kHasFine ? static_cast<std::uint32_t>(Layers::kFineCellCount) : 0U;
+  std::uint32_t at = *cursor < kTotal ? *cursor : 0U;
+  std::uint32_t reset = 0U;
+  for (std::uint32_t k = 0; k < count && k < kTotal; ++k) {
+    if (at < kFine) {
+      if constexpr (Layers::kHasFine) {
+        auto& cell = layers.fine_storage[at];
+        if (cell_signature(cell) != layers.checks.fine[at]) {
+          reset_cell(layers, cell);
+          ++reset;
+        }
+      }
+    } else {
+      if constexpr (Layers::kCcmLayerCount > 0) {
+        auto& cell = layers.ccm_storage[at - kFine];
+        if (cell_signature(cell) != layers.checks.ccm[at - kFine]) {
+          reset_cell(layers, cell);
+          ++reset;
+        }
+      }
+    }
+    at = at + 1U < kTotal ? at + 1U : 0U;
+  }
+  *cursor = at;
+  return reset;
+}
+
+/// After RingGrid::move_to moved a window of `side` cells (a power of two) whose lowest global
+/// index was `old_min` to one whose lowest index is `new_min`: zeroes the checks (checks[slot],
+/// side * side of them, slot = grid::buffer_offset) of exactly the cells the move cleared, as
+/// RingGrid::move_to chooses them (a move of a side or more on an axis clears every cell).
+inline void clear_checks_after_move(CellCheck* checks, std::int32_t side, CellIndex old_min, CellIndex new_min) noexcept {
+  const std::int64_t dx = std::int64_t{new_min.x} - std::int64_t{old_min.x};
+  const std::int64_t dy = std::int64_t{new_min.y} - std::int64_t{old_min.y};
+  const auto count = static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
+  if (dx >= side || dx <= -side || dy >= side || dy <= -side) {
+    for (std::size_t i = 0; i < count; ++i) {
+      checks[i] = 0U;
+    }
+    return;
+  }
+  const auto shift_x = static_cast<std::int32_t>(dx);
+  const auto shift_y = static_cast<std::int32_t>(dy);
+  const std::int32_t leaving_cols = shift_x >= 0 ? shift_x : -shift_x;
+  const std::int32_t leaving_rows = shift_y >= 0 ? shift_y : -shift_y;
+  const auto row_of = [side](std::int32_t global_y) {
+    return static_cast<std::size_t>(grid::wrap(global_y, side)) * static_cast<std::size_t>(side);
+  };
+  const std::int32_t first_leaving_row = shift_y >= 0 ? old_min.y : old_min.y + side + shift_y;
+  for (std::int32_t k = 0; k < leaving_rows; ++k) {
+    const std::size_t row = row_of(first_leaving_row + k);
+    for (std::int32_t c = 0; c < side; ++c) {
+      checks[row + static_cast<std::size_t>(c)] = 0U;
+    }
+  }
+  if (leaving_cols > 0) {
+    const std::int32_t first_leaving_col = shift_x >= 0 ? old_min.x : old_min.x + side + shift_x;
+    const std::int32_t first_staying_row = shift_y >= 0 ? old_min.y + shift_y : old_min.y;
+    for (std::int32_t r = 0; r < side - leaving_rows; ++r) {
+      const std::size_t row = row_of(first_staying_row + r);
+      for (std::int32_t c = 0; c < leaving_cols; ++c) {
+        checks[row + static_cast<std::size_t>(grid::wrap(first_leaving_col + c, side))] = 0U;
+      }
+    }
+  }
+}
+
+// ---- bookkeeping ------------------------------------------------------------------------------
+
+/// A 128-bit check word over bookkeeping values: two 64-bit lanes, x = rotl(x, 7) ^ w and
+/// sum = sum + w (mod 2^64) per 64-bit word w of the bytes added. Any single changed bit changes
+/// both lanes. Values are added byte for byte (a bool or pointer is read as bytes, never loaded
+/// as its type), so a corrupted value is seen without being used.
+struct StateSeal {
+  std::uint64_t x;
+  std::uint64_t sum;
+};
+[[nodiscard]] constexpr bool operator==(const StateSeal& a, const StateSeal& b) noexcept {
+  return a.x == b.x && a.sum == b.sum;
+}
+[[nodiscard]] constexpr bool operator!=(const StateSeal& a, const StateSeal& b) noexcept { return !(a == b); }
+
+class StateHasher {
+ public:
+  void add_bytes(const void* data, std::size_t size) noexcept {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    std::size_t i = 0U;
+    for (; i + 8U <= size; i += 8U) {
+      std::uint64_t w = 0U;
+      std::memcpy(&w, bytes + i, sizeof w);
+      word(w);
+    }
+    if (i < size) {
+      std::uint64_t w = 0U;
+      std::memcpy(&w, bytes + i, size - i);
+      word(w);
+    }
+  }
+  template <typename T>
+  void add(const T& value) noexcept {
+    static_assert(std::is_trivially_copyable<T>::value, "the seal reads the bytes of a value");
+    add_bytes(&value, sizeof value);
+  }
+  [[nodiscard]] StateSeal seal() const noexcept { return StateSeal{x_, sum_}; }
+
+ private:
+  void word(std::uint64_t w) noexcept {
+    x_ = rotr64(x_, 57U) ^ w;  // rotl 7
+    sum_ += w;
+  }
+  std::uint64_t x_ = 0x9E3779B97F4A7C15ULL;
+  std::uint64_t sum_ = 0U;
+};
+
+/// The update path's state between frames, restored at a frame's start (UpdatePath::begin_frame):
+/// the Kalman frame batches (all zero between frames) zeroed, the touched list emptied, each
+/// held-point pool's slots verified against their seals (HeldPool::verify_seals: a corrupted slot
+/// is dropped and counted in frame.corrupted_slots) and its tags rewritten. An upset between
+/// frames in any of them thus never reaches a cell.
+template <typename Sum, std::size_t kSums, typename CcmPool, typename FinePool>
+inline void restore_frame_state(Sum (&sums)[kSums], std::uint32_t* touched_count, CcmPool& ccm_pool,
+                                FinePool& fine_pool, FrameCounters& frame) noexcept {
+  for (Sum& sum : sums) {
+    sum = Sum{};
+  }
+  *touched_count = 0U;
+  frame.corrupted_slots += ccm_pool.verify_seals() + fine_pool.verify_seals();
+}
+
+/// Adds what a grid's accessors tell about its binding (storage address, side, widths, window)
+/// to a seal. The storage address is hashed as a number, never dereferenced.
+template <typename Grid>
+inline void hash_grid_binding(StateHasher& h, const Grid& grid) noexcept {
+  const auto address = reinterpret_cast<std::uintptr_t>(grid.storage());
+  h.add(address);
+  h.add(grid.side());
+  h.add(grid.cell_width());
+  h.add(grid.inv_cell_width());
+  h.add(grid.centre());
+  h.add(grid.window_min());
+}
+
+/// Adds the bookkeeping of a LayerSet (widths, kept windows, every grid's binding) to a seal.
+template <typename Layers>
+inline void hash_layer_bindings(StateHasher& h, const Layers& layers) noexcept {
+  h.add(layers.widths);
+  h.add(layers.kept);
+  if constexpr (Layers::kHasFine) {
+    hash_grid_binding(h, layers.fine);
+  }
+  for (int c = 0; c < Layers::kCcmLayerCount; ++c) {
+    hash_grid_binding(h, layers.ccm[c]);
+  }
+}
+
+/// The checks of stack layer `layer` (side^2 of them, in buffer order).
+template <typename Layers>
+[[nodiscard]] inline CellCheck* layer_checks(Layers& layers, int layer) noexcept {
+  if (!Layers::is_ccm(layer)) {
+    return layers.checks.fine;
+  }
+  std::size_t offset = 0U;
+  for (int k = Layers::kFineLayerCount; k < layer; ++k) {
+    offset += Layers::capacity(k);
+  }
+  return layers.checks.ccm + offset;
+}
+
+/// The word that says a stack is initialised (any other non-zero value: corrupted).
+inline constexpr std::uint32_t kStackReady = 0x5EA1AB1EU;
+
+}  // namespace ccmap::detail
