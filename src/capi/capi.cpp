@@ -138,7 +138,8 @@ static_assert(snapshot_size<SingleKalmanConfig>() == CCMAP_SINGLE_KALMAN_SNAPSHO
 static_assert(snapshot_size<SingleOmgConfig>() == CCMAP_SINGLE_OMG_SNAPSHOT_SIZE, "CCMAP_SINGLE_OMG_SNAPSHOT_SIZE");
 
 // Exchanges: the same layout (header, then the MapExchange at kStackOffset), another magic.
-constexpr std::uint32_t kExchangeMagic = 0x43434D58U;  // "CCMX"
+// Seven bits from kHandleMagic: no single or double upset turns one kind of header into the other.
+constexpr std::uint32_t kExchangeMagic = 0x58434D43U;  // "CMCX"
 
 template <typename Config>
 struct ExchangePreset {

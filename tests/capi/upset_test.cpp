@@ -309,8 +309,8 @@ void run_after_flip(Campaign& c, const Location& l, float cx, float cy, Outputs&
 
 /// outside_cells: every flip lands outside the cells and their checks (the header, the
 /// bookkeeping, the held-point pools, the scratch, the counters), where a random flip rarely goes.
-void run_campaign(std::size_t trials, std::uint64_t seed, bool outside_cells) {
-  Campaign c;
+/// The map mapped and saved in g_backup, the trial frame and the reference outputs.
+void prepare(Campaign& c) {
   ccmap_map* map = nullptr;
   ASSERT_EQ(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, &map), CCMAP_OK);
   ccmap_params params{};
@@ -333,79 +333,71 @@ void run_campaign(std::size_t trials, std::uint64_t seed, bool outside_cells) {
       c.pose.translation[0] += 0.2F;
     }
   }
-  const std::size_t size = ccmap_storage_size(CCMAP_PRESET_CADRE);
-  std::memcpy(&g_backup, &g_storage, size);
-  {  // the reference: the same calls without a flip
-    std::uint32_t cells = 0U;
-    std::uint32_t slots = 0U;
-    bool reset = false;
-    bool cleared = false;
-    std::string failure;
-    run_after_flip(c, Location{}, 0.0F, 0.0F, c.reference_before, c.reference_after, &cells, &slots, &reset, &cleared,
-                   &failure);
-    ASSERT_FALSE(c.reference_before.corrupt || c.reference_after.corrupt || c.reference_before.invalid ||
-                 c.reference_after.invalid)
-        << "the reference run failed: " << c.reference_before.why << c.reference_after.why;
-    ASSERT_EQ(cells + slots, 0U) << "the reference run found corrupted cells";
+  std::memcpy(&g_backup, &g_storage, ccmap_storage_size(CCMAP_PRESET_CADRE));
+  std::uint32_t cells = 0U;
+  std::uint32_t slots = 0U;
+  bool reset = false;
+  bool cleared = false;
+  std::string failure;
+  run_after_flip(c, Location{}, 0.0F, 0.0F, c.reference_before, c.reference_after, &cells, &slots, &reset, &cleared,
+                 &failure);
+  ASSERT_FALSE(c.reference_before.corrupt || c.reference_after.corrupt || c.reference_before.invalid ||
+               c.reference_after.invalid)
+      << "the reference run failed: " << c.reference_before.why << c.reference_after.why;
+  ASSERT_EQ(cells + slots, 0U) << "the reference run found corrupted cells";
+}
+
+/// One trial: restore, flip bit `bit` of byte `byte`, run, judge. Returns the failure ("" if none).
+std::string trial(Campaign& c, std::size_t byte, unsigned bit) {
+  std::memcpy(&g_storage, &g_backup, ccmap_storage_size(CCMAP_PRESET_CADRE));
+  const Location l = locate(byte);
+  float cx = 0.0F;
+  float cy = 0.0F;
+  const bool cell_flip = l.kind == Location::kCell || l.kind == Location::kCheck;
+  if (cell_flip) cell_centre(l, &cx, &cy);
+  g_storage.bytes[byte] = static_cast<unsigned char>(g_storage.bytes[byte] ^ (1U << bit));
+  Outputs before;
+  Outputs after;
+  std::uint32_t cells = 0U;
+  std::uint32_t slots = 0U;
+  bool reset = false;
+  bool cleared = false;
+  std::string failure;
+  run_after_flip(c, l, cx, cy, before, after, &cells, &slots, &reset, &cleared, &failure);
+  const bool refused = before.corrupt || after.corrupt;
+  if (failure.empty() && (before.invalid || after.invalid || before.content_after_corrupt || after.content_after_corrupt)) {
+    failure = before.why + after.why;
   }
-  test::detail_frames::XorShift random{seed};
-  std::size_t failures = 0U;
-  for (std::size_t t = 0; t < trials; ++t) {
-    std::memcpy(&g_storage, &g_backup, size);
-    std::size_t byte = 0U;
-    Location l;
-    do {
-      byte = (static_cast<std::size_t>(random.next()) * 65536U + random.next() % 65536U) % size;
-      l = locate(byte);
-    } while (outside_cells && (l.kind == Location::kCell || l.kind == Location::kCheck));
-    const unsigned bit = random.next() % 8U;
-    float cx = 0.0F;
-    float cy = 0.0F;
-    const bool cell_flip = l.kind == Location::kCell || l.kind == Location::kCheck;
-    if (cell_flip) cell_centre(l, &cx, &cy);
-    g_storage.bytes[byte] = static_cast<unsigned char>(g_storage.bytes[byte] ^ (1U << bit));
-    Outputs before;
-    Outputs after;
-    std::uint32_t cells = 0U;
-    std::uint32_t slots = 0U;
-    bool reset = false;
-    bool cleared = false;
-    std::string failure;
-    run_after_flip(c, l, cx, cy, before, after, &cells, &slots, &reset, &cleared, &failure);
-    const bool refused = before.corrupt || after.corrupt;
-    if (failure.empty() && (before.invalid || after.invalid || before.content_after_corrupt || after.content_after_corrupt)) {
-      failure = before.why + after.why;
+  Campaign::Outcome outcome = Campaign::kMasked;
+  if (refused) {
+    outcome = Campaign::kRefused;
+  } else if (cell_flip) {
+    if (cleared) {
+      outcome = Campaign::kClearedByMove;
+    } else if (cells == 1U) {
+      outcome = Campaign::kResetCell;
+    } else if (failure.empty()) {
+      failure = "a flipped cell was not reset within the scrub's frames (" + std::to_string(cells) + " reset)";
     }
-    Campaign::Outcome outcome = Campaign::kMasked;
-    if (refused) {
-      outcome = Campaign::kRefused;
-    } else if (cell_flip) {
-      if (cleared) {
-        outcome = Campaign::kClearedByMove;
-      } else if (cells == 1U) {
-        outcome = Campaign::kResetCell;
-      } else if (failure.empty()) {
-        failure = "a flipped cell was not reset within the scrub's frames (" + std::to_string(cells) + " reset)";
-      }
-    } else if (slots > 0U || cells > 0U) {
-      outcome = cells > 0U ? Campaign::kResetCell : Campaign::kDroppedSlot;
-    } else if ((before.values != c.reference_before.values || after.values != c.reference_after.values) &&
-               failure.empty()) {
-      failure = "a silent change: answers differ from the map without the flip, and nothing was detected";
-    }
-    if (!failure.empty()) {
-      ++failures;
-      ADD_FAILURE() << "trial " << t << ": bit " << bit << " of byte " << byte << " (location kind " << l.kind
-                    << ", cell " << l.cell << (l.fine ? " fine" : " ccm") << "): " << failure;
-      if (failures > 20U) break;
-    }
-    ++c.counts[l.kind][outcome];
-    ++c.trials;
+  } else if (slots > 0U || cells > 0U) {
+    outcome = cells > 0U ? Campaign::kResetCell : Campaign::kDroppedSlot;
+  } else if ((before.values != c.reference_before.values || after.values != c.reference_after.values) &&
+             failure.empty()) {
+    failure = "a silent change: answers differ from the map without the flip, and nothing was detected";
   }
-  std::memcpy(&g_storage, &g_backup, size);
+  ++c.counts[l.kind][outcome];
+  ++c.trials;
+  if (!failure.empty()) {
+    failure = "bit " + std::to_string(bit) + " of byte " + std::to_string(byte) + " (location kind " +
+              std::to_string(static_cast<int>(l.kind)) + ", cell " + std::to_string(l.cell) + (l.fine ? " fine" : " ccm") +
+              "): " + failure;
+  }
+  return failure;
+}
+
+void report(const Campaign& c, const char* what, std::size_t failures) {
   const char* kinds[] = {"header", "cells", "checks", "other (bookkeeping, pools, scratch, counters)"};
-  std::printf("[ upsets ] %zu trials, one bit flipped in %s %zu bytes of CADRE storage (seed %llu)\n", c.trials,
-              outside_cells ? "the non-cell bytes of the" : "the", size, static_cast<unsigned long long>(seed));
+  std::printf("[ upsets ] %zu trials: %s\n", c.trials, what);
   std::printf("[ upsets ] %-46s %7s %8s %8s %8s %8s %8s\n", "location", "trials", "masked", "refused", "reset",
               "slot", "cleared");
   std::size_t total[Campaign::kOutcomes] = {};
@@ -419,7 +411,7 @@ void run_campaign(std::size_t trials, std::uint64_t seed, bool outside_cells) {
                 c.counts[k][Campaign::kRefused], c.counts[k][Campaign::kResetCell], c.counts[k][Campaign::kDroppedSlot],
                 c.counts[k][Campaign::kClearedByMove]);
   }
-  const double n = static_cast<double>(c.trials);
+  const double n = c.trials > 0U ? static_cast<double>(c.trials) : 1.0;
   std::printf("[ upsets ] shares: masked %.1f %%, refused (CCMAP_CORRUPT) %.1f %%, cell reset %.1f %%, slot dropped "
               "%.1f %%, cleared by a move %.1f %%; failures %zu\n",
               100.0 * static_cast<double>(total[Campaign::kMasked]) / n,
@@ -427,6 +419,35 @@ void run_campaign(std::size_t trials, std::uint64_t seed, bool outside_cells) {
               100.0 * static_cast<double>(total[Campaign::kResetCell]) / n,
               100.0 * static_cast<double>(total[Campaign::kDroppedSlot]) / n,
               100.0 * static_cast<double>(total[Campaign::kClearedByMove]) / n, failures);
+}
+
+/// outside_cells: every flip lands outside the cells and their checks (the header, the
+/// bookkeeping, the held-point pools, the scratch, the counters), where a random flip rarely goes.
+void run_campaign(std::size_t trials, std::uint64_t seed, bool outside_cells) {
+  Campaign c;
+  prepare(c);
+  if (::testing::Test::HasFatalFailure()) return;
+  const std::size_t size = ccmap_storage_size(CCMAP_PRESET_CADRE);
+  test::detail_frames::XorShift random{seed};
+  std::size_t failures = 0U;
+  for (std::size_t t = 0; t < trials && failures <= 20U; ++t) {
+    std::size_t byte = 0U;
+    Location l;
+    do {
+      byte = (static_cast<std::size_t>(random.next()) * 65536U + random.next() % 65536U) % size;
+      l = locate(byte);
+    } while (outside_cells && (l.kind == Location::kCell || l.kind == Location::kCheck));
+    const std::string failure = trial(c, byte, random.next() % 8U);
+    if (!failure.empty()) {
+      ++failures;
+      ADD_FAILURE() << "trial " << t << ": " << failure;
+    }
+  }
+  std::memcpy(&g_storage, &g_backup, size);
+  const std::string what = std::string("one random bit flipped in ") +
+                           (outside_cells ? "the non-cell bytes of the " : "the ") + std::to_string(size) +
+                           " bytes of CADRE storage (seed " + std::to_string(seed) + ")";
+  report(c, what.c_str(), failures);
   EXPECT_EQ(failures, 0U);
 }
 
@@ -440,6 +461,47 @@ std::size_t trials_from_environment(std::size_t fallback) {
 TEST(Upset, RandomFlipsInTheCApiStorage) { run_campaign(trials_from_environment(200U), 0x5EEDC0DEULL, false); }
 
 TEST(Upset, RandomFlipsOutsideTheCells) { run_campaign(trials_from_environment(200U), 0xB00C4EE9ULL, true); }
+
+TEST(Upset, EveryBitOfTheBookkeeping) {
+  // Every bit of the values that index memory or give the cells their meaning: the header, the
+  // parameters, each grid's binding (storage pointer, side, widths, window), the widths and kept
+  // windows, and the 512 bytes after the counters (initialised word, seal, scrub cursor, the
+  // front's index scale and shift, routing bounds).
+  Campaign c;
+  prepare(c);
+  if (::testing::Test::HasFatalFailure()) return;
+  const std::size_t stack_offset = ccmap_storage_size(CCMAP_PRESET_CADRE) - sizeof(CadreStack);
+  const CadreStack& stack = stack_in(g_storage);
+  const Layers& layers = layers_in(g_storage);
+  auto offset_of = [](const void* p) {
+    return static_cast<std::size_t>(static_cast<const unsigned char*>(p) - g_storage.bytes);
+  };
+  struct Range {
+    std::size_t from;
+    std::size_t to;
+  };
+  const Range ranges[] = {
+      {0U, stack_offset},
+      {offset_of(&stack.params()), offset_of(&stack.params()) + sizeof(StackParams)},
+      {offset_of(&layers.fine), offset_of(&layers.checks)},
+      {offset_of(&stack.total_counters()), offset_of(&stack.total_counters()) + 512U},
+  };
+  std::size_t failures = 0U;
+  for (const Range& r : ranges) {
+    for (std::size_t byte = r.from; byte < r.to && failures <= 20U; ++byte) {
+      for (unsigned bit = 0; bit < 8U; ++bit) {
+        const std::string failure = trial(c, byte, bit);
+        if (!failure.empty()) {
+          ++failures;
+          ADD_FAILURE() << failure;
+        }
+      }
+    }
+  }
+  std::memcpy(&g_storage, &g_backup, ccmap_storage_size(CCMAP_PRESET_CADRE));
+  report(c, "every bit of the header, parameters, grid bindings, widths, kept windows and the 512 bytes after the counters", failures);
+  EXPECT_EQ(failures, 0U);
+}
 
 TEST(Upset, EveryHeaderBitIsRefused) {
   ccmap_map* map = nullptr;
