@@ -489,6 +489,9 @@ TEST(Integrity, MotionPassResetsAndCountsCorruptedCells) {
 /// Flips one bit of the stack's bytes at `address`, then checks that every call is refused with
 /// kCorrupt and changes nothing, and that init() recovers.
 void bookkeeping_flip_is_refused(Stack<CadreConfig>& stack, const void* address, std::size_t bit, const char* what) {
+  void* const raw = &stack;
+  std::vector<unsigned char> backup(static_cast<const unsigned char*>(raw),
+                                    static_cast<const unsigned char*>(raw) + sizeof(Stack<CadreConfig>));
   auto* byte = static_cast<unsigned char*>(const_cast<void*>(address)) + bit / 8U;
   *byte = static_cast<unsigned char>(*byte ^ (1U << (bit % 8U)));
   EXPECT_EQ(stack.state_status(), Status::kCorrupt) << what << " bit " << bit;
@@ -503,7 +506,8 @@ void bookkeeping_flip_is_refused(Stack<CadreConfig>& stack, const void* address,
   std::vector<std::uint8_t> snap(snapshot_size<CadreConfig>());
   std::size_t written = 0U;
   EXPECT_EQ(save_snapshot(stack, snap.data(), snap.size(), &written), Status::kCorrupt) << what;
-  *byte = static_cast<unsigned char>(*byte ^ (1U << (bit % 8U)));  // put it back: intact again
+  EXPECT_EQ(stack.query(0.5F, 0.0F).status, Status::kCorrupt) << what << ": the refusal must stay, queries included";
+  std::memcpy(raw, backup.data(), backup.size());  // the stack as it was: intact again
   EXPECT_EQ(stack.state_status(), Status::kOk) << what;
 }
 

@@ -95,6 +95,7 @@ class Stack {
   [[nodiscard]] Status init(const StackParams& params) noexcept {
     ready_ = 0U;
     seal_ = detail::StateSeal{};
+    update_seal_ = detail::StateSeal{};
     const Status status = validate_stack_params(params, kLayerCount);
     if (status != Status::kOk) {
       return status;
@@ -133,18 +134,27 @@ class Stack {
   [[nodiscard]] bool initialised() const noexcept { return ready_ == detail::kStackReady; }
 
   /// kOk if initialised and the bookkeeping (parameters, derived constants, every grid's storage
-  /// binding and window) matches the seal taken when it last changed; kNotInitialised before
+  /// binding and window) matches the seals taken when it last changed; kNotInitialised before
   /// init; kCorrupt if an upset changed any of it (every call then answers kCorrupt, changing
   /// nothing, until init() or load_snapshot()). Every call that reads or writes cells checks it
-  /// first (~100 instructions).
+  /// first (docs/performance.md section 11: its cost).
   [[nodiscard]] Status state_status() const noexcept {
-    if (ready_ == 0U && seal_ == detail::StateSeal{}) {
-      return Status::kNotInitialised;
+    const Status status = query_status();
+    if (status != Status::kOk || update_seal() == update_seal_) {
+      return status;
     }
-    if (ready_ != detail::kStackReady || state_seal() != seal_) {
-      return Status::kCorrupt;
+    return Status::kCorrupt;
+  }
+
+  /// state_status() for a caller that may change the map (every mutating call runs it first): a
+  /// corruption it finds is recorded in the initialised word, so that every later call, the
+  /// queries included (they verify only what they use), answers kCorrupt too.
+  [[nodiscard]] Status verify_state() noexcept {
+    const Status status = state_status();
+    if (status == Status::kCorrupt) {
+      ready_ = detail::kStackCorrupt;
     }
-    return Status::kOk;
+    return status;
   }
 
   // -------------------------------------------------------------------------------------------
@@ -157,7 +167,7 @@ class Stack {
   /// every move. Cells that leave a window are cleared; others stay bitwise unchanged.
   /// Refused (counted, map unchanged): non-finite or out-of-range position.
   [[nodiscard]] Status move_to(float x, float y) noexcept {
-    const Status state = state_status();
+    const Status state = verify_state();
     if (state != Status::kOk) {
       return state;
     }
@@ -191,7 +201,7 @@ class Stack {
   /// Refused (counted, map unchanged): as move_to(x, y); a position_sigma_m that is not finite
   /// (kNonFiniteInput), negative (kInvalidArgument) or above kMaxAbsCoordinateM (kOutOfRange).
   [[nodiscard]] Status move_to(float x, float y, float position_sigma_m) noexcept {
-    const Status state = state_status();
+    const Status state = verify_state();
     if (state != Status::kOk) {
       return state;
     }
@@ -281,7 +291,7 @@ class Stack {
   /// that is known (hazards are a CCM matter); otherwise the roughness filter classifies.
   /// kOutsideMap if no layer holds (x, y); kUnknown if none knows it; kNotInitialised.
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
-    const Status state = state_status();
+    const Status state = query_status();
     if (state != Status::kOk) {
       return detail::empty_result(state, -1);
     }
@@ -291,7 +301,7 @@ class Stack {
   /// Answer of one named layer (0 = finest). kInvalidArgument for a bad layer, kOutsideMap if
   /// the layer does not hold (x, y), kUnknown if its cell is not known there.
   [[nodiscard]] QueryResult query_layer(int layer, float x, float y) const noexcept {
-    const Status state = state_status();
+    const Status state = query_status();
     if (state != Status::kOk) {
       return detail::empty_result(state, -1);
     }
@@ -311,7 +321,7 @@ class Stack {
   [[nodiscard]] CcmCellType pooled_cell(int layer, CellIndex index) const noexcept {
     // Outside the window: the zero cell, before pooled() forms the child index 2 * index (an
     // arbitrary index would overflow int32 and alias cells near the origin).
-    if (!layer_is_ccm(layer) || state_status() != Status::kOk || !layers_.contains(layer, index)) {
+    if (!layer_is_ccm(layer) || query_status() != Status::kOk || !layers_.contains(layer, index)) {
       return CcmCellType{};
     }
     return detail::pooled(layers_, params_.weight_limit, layer, index);
@@ -324,7 +334,7 @@ class Stack {
     if (written != nullptr) {
       *written = 0U;
     }
-    const Status state = state_status();
+    const Status state = query_status();
     if (state != Status::kOk) {
       return state;
     }
@@ -426,7 +436,7 @@ class Stack {
   [[nodiscard]] Status begin_frame(const PointXYZ* points, std::size_t n, const PointXYZ& origin, const float* rotation,
                                    detail::FramePose* pose, FrameCounters& frame, FrameCounters* counters,
                                    std::uint64_t* start) noexcept {
-    const Status state = state_status();
+    const Status state = verify_state();
     if (state != Status::kOk) {
       rejected_frames_ += state == Status::kCorrupt ? 1U : 0U;
       write_counters(frame, counters);
@@ -462,11 +472,30 @@ class Stack {
     h.add(thresholds_);
     h.add(generation_);
     detail::hash_layer_bindings(h, layers_);
+    return h.seal();
+  }
+  /// The constants only the update path uses (its front, widths in Q40, gates): the queries need
+  /// not verify them.
+  [[nodiscard]] detail::StateSeal update_seal() const noexcept {
+    detail::StateHasher h;
     update_.hash_constants(h);
     return h.seal();
   }
+  /// state_status() without the update path's constants: what a query uses.
+  [[nodiscard]] Status query_status() const noexcept {
+    if (ready_ == 0U && seal_ == detail::StateSeal{}) {
+      return Status::kNotInitialised;
+    }
+    if (ready_ != detail::kStackReady || state_seal() != seal_) {
+      return Status::kCorrupt;
+    }
+    return Status::kOk;
+  }
   /// Seals the bookkeeping after a legitimate change (init, move, load, exchange binding).
-  void seal_state() noexcept { seal_ = state_seal(); }
+  void seal_state() noexcept {
+    seal_ = state_seal();
+    update_seal_ = update_seal();
+  }
 
   void finish_frame(const FrameCounters& frame, std::uint64_t start, FrameCounters* counters) noexcept {
     detail::accumulate(totals_, frame);
@@ -507,6 +536,7 @@ class Stack {
   /// bool: an upset in a bool is undefined behaviour when it is loaded.
   std::uint32_t ready_ = 0U;
   detail::StateSeal seal_{};        ///< integrity: seal of the bookkeeping (state_status)
+  detail::StateSeal update_seal_{}; ///< integrity: seal of the update path's constants
   std::uint32_t scrub_cursor_ = 0U; ///< integrity: next cell the scrub checks (clamped on use)
   /// The safe answer of ccm_layer() to a bad index: a constant, outside the stack's storage (no
   /// upset can give it a storage pointer).

@@ -347,7 +347,7 @@ struct ExchangeAccess {
   [[nodiscard]] static Status merge_snapshot(StackType& stack, SentCells* sent, const std::uint8_t* data,
                                              std::size_t size, CellIndex offset_cells, float offset_z_m,
                                              MergeReport& report) noexcept {
-    const Status state = stack.state_status();  // integrity: kNotInitialised or kCorrupt
+    const Status state = stack.verify_state();  // integrity: kNotInitialised or kCorrupt
     if (state != Status::kOk) {
       return state;
     }
@@ -628,7 +628,7 @@ class MapExchange {
   /// a non-finite origin height or one beyond kMaxAbsCoordinateM, an origin beyond
   /// +-grid::kMaxCellIndex.
   [[nodiscard]] Status init(StackType& stack, const ExchangeParams& params) noexcept {
-    const Status state = stack.state_status();  // integrity: kNotInitialised or kCorrupt
+    const Status state = stack.verify_state();  // integrity: kNotInitialised or kCorrupt
     if (state != Status::kOk) {
       return state;
     }
@@ -673,7 +673,7 @@ class MapExchange {
     if (!initialised()) {
       return Status::kNotInitialised;
     }
-    const Status state = stack_->state_status();  // integrity
+    const Status state = stack_->verify_state();  // integrity
     if (state != Status::kOk) {
       return state;
     }
@@ -774,7 +774,7 @@ class MapExchange {
     if (!initialised()) {
       return Status::kNotInitialised;
     }
-    const Status state = stack_->state_status();  // integrity
+    const Status state = stack_->verify_state();  // integrity
     if (state != Status::kOk) {
       return state;
     }

@@ -148,10 +148,12 @@ class UpdatePath {
     h.add(gate_);
     h.add(rule_);
     h.add(sight_margin_);
-    h.add(gate_on_);
-    h.add(line_of_sight_);
-    h.add(constant_weight_);
-    h.add(stereo_);
+    const unsigned char* flags[] = {reinterpret_cast<const unsigned char*>(&gate_on_),
+                                    reinterpret_cast<const unsigned char*>(&line_of_sight_),
+                                    reinterpret_cast<const unsigned char*>(&constant_weight_),
+                                    reinterpret_cast<const unsigned char*>(&stereo_)};
+    const unsigned char bytes[4] = {*flags[0], *flags[1], *flags[2], *flags[3]};  // read as bytes, not as bool
+    h.add(bytes);
     h.add(stereo_k_);
   }
 
