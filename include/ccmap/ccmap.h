@@ -241,7 +241,8 @@ typedef struct ccmap_query_result {
 } ccmap_query_result;
 
 /* Answer of the finest layer that knows (x, y). Returns out->status (CCMAP_OK,
- * CCMAP_UNKNOWN, CCMAP_OUTSIDE_MAP, CCMAP_NOT_INITIALISED) or CCMAP_INVALID_ARGUMENT. */
+ * CCMAP_UNKNOWN, CCMAP_OUTSIDE_MAP, CCMAP_NOT_INITIALISED, CCMAP_CORRUPT) or
+ * CCMAP_INVALID_ARGUMENT. A cell whose bits an upset changed answers as never observed. */
 ccmap_status ccmap_query(const ccmap_map* map, float x, float y, ccmap_query_result* out);
 /* Answer of one layer (0 = finest). */
 ccmap_status ccmap_query_layer(const ccmap_map* map, int32_t layer, float x, float y, ccmap_query_result* out);

@@ -18,7 +18,8 @@ enum class Status : std::uint8_t {
   kInvalidArgument,    ///< null pointer, inconsistent sizes, bad configuration
   kBufferTooSmall,     ///< caller's buffer cannot hold the result
   kNotInitialised,     ///< object used before a successful init()
-  kCorrupt,            ///< serialized data failed its integrity check
+  kCorrupt,            ///< serialized data failed its integrity check, or the map's own state did
+                       ///< (a single-event upset: Stack::state_status)
   kVersionMismatch,    ///< serialized data written by an incompatible version
   kDuplicate,          ///< map exchange: data already merged (same sender and sequence), or this map's own
   kMisaligned,         ///< map exchange: the grids disagree (cell width, or an origin offset that is not a

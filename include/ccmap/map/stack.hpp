@@ -165,7 +165,8 @@ class Stack {
   /// to an even cell index (the nearest multiple of twice its cell width), so every window
   /// starts on a coarse-cell boundary: each coarse cell covers exactly 2 x 2 finer cells after
   /// every move. Cells that leave a window are cleared; others stay bitwise unchanged.
-  /// Refused (counted, map unchanged): non-finite or out-of-range position.
+  /// Refused (counted, map unchanged): non-finite or out-of-range position. kCorrupt (map
+  /// unchanged) when the state failed its check (state_status), as every call below.
   [[nodiscard]] Status move_to(float x, float y) noexcept {
     const Status state = verify_state();
     if (state != Status::kOk) {
@@ -233,7 +234,8 @@ class Stack {
   /// noise; rejected points are counted by reason in `counters` (may be nullptr) and in
   /// total_counters(). Refused as a whole (counted in rejected_frames(), map unchanged): null
   /// points with n > 0 or n >= 2^32 (kInvalidArgument), a non-finite (kNonFiniteInput) or
-  /// out-of-range (kOutOfRange) sensor origin.
+  /// out-of-range (kOutOfRange) sensor origin; kCorrupt (state_status). Each accepted frame, with
+  /// points or none, also runs the scrub's slice (map/detail/integrity.hpp): counters->corrupted_cells.
   [[nodiscard]] Status update_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
                                     FrameCounters* counters) noexcept {
     return update_frame(points, nullptr, n, sensor_origin, counters);
@@ -289,7 +291,8 @@ class Stack {
   /// For an answer from the piece-wise constant layer, height and elevation variance come from
   /// it and slope, normal variance and class from the first CCM layer's pooled cell there when
   /// that is known (hazards are a CCM matter); otherwise the roughness filter classifies.
-  /// kOutsideMap if no layer holds (x, y); kUnknown if none knows it; kNotInitialised.
+  /// kOutsideMap if no layer holds (x, y); kUnknown if none knows it; kNotInitialised; kCorrupt.
+  /// A cell whose bits disagree with its check is read as never observed (map/detail/integrity.hpp).
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
     const Status state = query_status();
     if (state != Status::kOk) {
