@@ -405,6 +405,8 @@ typedef struct ccmap_counters {
   uint64_t last_update_ns;      /* duration of the last accepted frame update */
 } ccmap_counters;
 
+/* CCMAP_NOT_INITIALISED (out untouched); CCMAP_CORRUPT: the map's state failed its check after an
+ * upset, out written all the same (the counters say what the map saw before). */
 ccmap_status ccmap_get_counters(const ccmap_map* map, ccmap_counters* out);
 
 /* ---- snapshots (include/ccmap/persistence/snapshot.hpp has the byte format) ------------------------- */

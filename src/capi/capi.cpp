@@ -756,15 +756,17 @@ ccmap_status ccmap_get_counters(const ccmap_map* map, ccmap_counters* out) {
     return CCMAP_INVALID_ARGUMENT;
   }
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [out](const auto& stack) {
-    if (!stack.initialised()) {
+    const Status state = stack.state_status();
+    if (state == Status::kNotInitialised) {
       return CCMAP_NOT_INITIALISED;
     }
+    // After an upset (CCMAP_CORRUPT) the counters are still written: telemetry of what happened.
     *out = ccmap_counters{};
     ccmap::counters_to_c(stack.total_counters(), &out->totals);
     out->rejected_moves = stack.rejected_moves();
     out->rejected_frames = stack.rejected_frames();
     out->last_update_ns = stack.last_update_ns();
-    return CCMAP_OK;
+    return ccmap::to_c(state);
   });
 }
 

@@ -503,6 +503,29 @@ TEST(Upset, EveryBitOfTheBookkeeping) {
   EXPECT_EQ(failures, 0U);
 }
 
+TEST(Upset, ACorruptMapStillGivesItsCountersAndRecoversWithInit) {
+  ccmap_map* map = nullptr;
+  ASSERT_EQ(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, &map), CCMAP_OK);
+  ccmap_params params{};
+  ASSERT_EQ(ccmap_default_params(CCMAP_PRESET_CADRE, &params), CCMAP_OK);
+  ASSERT_EQ(ccmap_init(map, &params), CCMAP_OK);
+  const float origin[3] = {0.0F, 0.0F, 0.175F};
+  ASSERT_EQ(ccmap_update_frame(map, nullptr, nullptr, 0U, origin, nullptr), CCMAP_OK);
+  // One bit of the coverage tau in the stack's parameters.
+  const CadreStack& stack = stack_in(g_storage);
+  auto* tau = reinterpret_cast<unsigned char*>(const_cast<float*>(&stack.params().coverage_tau));
+  tau[1] = static_cast<unsigned char>(tau[1] ^ 0x04U);
+  ccmap_query_result q{};
+  EXPECT_EQ(ccmap_query(map, 1.0F, 0.0F, &q), CCMAP_CORRUPT);
+  EXPECT_EQ(ccmap_update_frame(map, nullptr, nullptr, 0U, origin, nullptr), CCMAP_CORRUPT);
+  ccmap_counters counters{};
+  EXPECT_EQ(ccmap_get_counters(map, &counters), CCMAP_CORRUPT);
+  EXPECT_EQ(counters.rejected_frames, 1U) << "the refused frame must be counted and the counters written";
+  EXPECT_EQ(ccmap_init(map, &params), CCMAP_OK) << "init must recover a map whose state failed its check";
+  EXPECT_EQ(ccmap_query(map, 1.0F, 0.0F, &q), CCMAP_UNKNOWN);
+  EXPECT_EQ(ccmap_get_counters(map, &counters), CCMAP_OK);
+}
+
 TEST(Upset, EveryHeaderBitIsRefused) {
   ccmap_map* map = nullptr;
   ASSERT_EQ(ccmap_place(&g_storage, sizeof g_storage, CCMAP_PRESET_CADRE, &map), CCMAP_OK);
