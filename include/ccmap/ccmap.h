@@ -95,10 +95,10 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 459020u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621676u
-#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786668u
-#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786668u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 459032u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621688u
+#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786680u
+#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786680u
 
 /* ---- the map handle ------------------------------------------------------------------------- */
 typedef struct ccmap_map ccmap_map; /* opaque: lives at the start of the caller's storage */
@@ -146,6 +146,9 @@ typedef struct ccmap_params {
                                  point trusted, the paper's update (docs/design.md) */
   float change_min_points;    /* change rule: held points (and those inside the gate) are a surface */
   float change_share;         /* of their own with this many points and this share of the cell's */
+  uint32_t frame_point_budget;   /* frame budget: at most this many points per frame (0: all) */
+  uint32_t frame_time_budget_us; /* and no new 128-point chunk after this many us (0: no limit);
+                                    docs/integration.md, "The frame budget" */
   ccmap_noise_params noise;
 } ccmap_params;
 
@@ -177,6 +180,7 @@ typedef struct ccmap_frame_counters {
   uint32_t gated_dropped;    /* held points it dropped as outliers (or whose cell left the map) */
   uint32_t reseeded_cells;   /* cells replaced by their held points */
   uint32_t merged_cells;     /* cells that took their held points in beside their own */
+  uint32_t skipped_budget;   /* not processed: the frame budget was spent */
 } ccmap_frame_counters;
 
 /* Re-centres every layer on the robot at (x, y) (m). Refused (counted): non-finite or

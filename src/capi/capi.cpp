@@ -294,6 +294,8 @@ void params_to_c(const StackParams& p, ccmap_params* out) noexcept {
   out->outlier_gate_sigma = p.outlier_gate_sigma;
   out->change_min_points = p.change_min_points;
   out->change_share = p.change_share;
+  out->frame_point_budget = p.frame_point_budget;
+  out->frame_time_budget_us = p.frame_time_budget_us;
   // default_stack_params uses the CADRE stereo model (sensor::cadre_stereo()).
   out->noise.sensor = CCMAP_SENSOR_STEREO;
   out->noise.stereo_focal_px = sensor::kCadreStereoParams.focal_px;
@@ -321,6 +323,8 @@ Status params_from_c(const ccmap_params& c, StackParams* out) noexcept {
   p.outlier_gate_sigma = c.outlier_gate_sigma;
   p.change_min_points = c.change_min_points;
   p.change_share = c.change_share;
+  p.frame_point_budget = c.frame_point_budget;
+  p.frame_time_budget_us = c.frame_time_budget_us;
   if (c.noise.sensor == CCMAP_SENSOR_STEREO) {
     p.noise = sensor::NoiseModel::stereo(sensor::StereoParams{
         c.noise.stereo_focal_px, c.noise.stereo_baseline_m, c.noise.stereo_disparity_sigma_px});
@@ -412,7 +416,8 @@ void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
                               f.rejected_out_of_range, f.rejected_weight, f.outside_map,
                               f.too_noisy,     f.gated_finer,   f.gated_occluded,
                               f.gated_held,    f.gated_pool_full, f.gated_admitted,
-                              f.gated_dropped, f.reseeded_cells, f.merged_cells};
+                              f.gated_dropped, f.reseeded_cells, f.merged_cells,
+                              f.skipped_budget};
 }
 
 }  // namespace

@@ -103,6 +103,7 @@ constexpr CounterField kCounterFields[] = {
     {"gated_dropped", &FrameCounters::gated_dropped},
     {"reseeded_cells", &FrameCounters::reseeded_cells},
     {"merged_cells", &FrameCounters::merged_cells},
+    {"skipped_budget", &FrameCounters::skipped_budget},
 };
 static_assert(sizeof(FrameCounters) == std::size(kCounterFields) * sizeof(std::uint32_t),
               "FrameCounters gained a member: add it to kCounterFields");

@@ -15,7 +15,7 @@
 // the outlier gate's held points awaiting the change rule (map/update/held_pool.hpp: at most
 // kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
 //
-// Format (version 3: version 2 with the outlier gate's parameters and counters). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 4: version 3 with the frame budget's parameters and counter). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -31,6 +31,7 @@
 //                   normal_variance_threshold[0..7]
 //                4  finest_max_sigma_m
 //               12  outlier_gate_sigma, change_min_points, change_share
+//                8  frame_point_budget, frame_time_budget_us (uint32 each)
 //               20  noise model: kind (u8), weight mode (u8), 2 reserved 0, stereo k = sigma_d/(f b)
 //                   (1/m), lidar sigma0 (m), lidar sigma per m, reference range (m)
 //   per layer    8  window centre (int32 x, int32 y; global cell indices), then
@@ -39,13 +40,14 @@
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
 //                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
 //                   s_xy for CcmCell (CcmPaperCell has none).
-//   counters    60  total FrameCounters (15 x uint32, in declaration order)
+//   counters    64  total FrameCounters (16 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
 //
 // Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
-// (CcmCell with s_xy). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
+// (CcmCell with s_xy); version 3 the outlier gate's parameters and counters; version 4 the frame
+// budget's. A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
 // hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
 //
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
@@ -74,7 +76,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 3U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 4U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -88,9 +90,9 @@ static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 t
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
-inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U) + 20U;
+inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
-inline constexpr std::size_t kSnapshotCountersBytes = 15U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotCountersBytes = 16U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
 /// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
