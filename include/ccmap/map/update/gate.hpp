@@ -86,6 +86,8 @@ class OutlierGate {
   /// empty pools. The gate is on iff params.outlier_gate_sigma > 0.
   void init(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
     on_ = params.outlier_gate_sigma > 0.0F;
+    // A cell is known from min_weight on (and never while empty).
+    mature_weight_ = params.min_weight > 1.0e-30F ? params.min_weight : 1.0e-30F;
     line_of_sight_ = on_ && params.noise.kind() == sensor::SensorKind::kStereo;
     rule_ = ChangeRule{params.change_min_points, params.change_share};
     for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
@@ -119,16 +121,25 @@ class OutlierGate {
 
   /// Judges a point of a CCM cell (cell number `number` of layer `layer`, global index `index`)
   /// at height z (m) with position (x, y) relative to the cell's centre and weight w; a held
-  /// point is folded into its slot here.
+  /// point is folded into its slot here. The range-error checks (finer layer, line of sight)
+  /// judge the points that their own cell cannot: those outside its gate, and every point of a
+  /// cell that is not yet known (weight below min_weight: its statistics are no judge yet). A
+  /// point inside the gate of a known cell agrees with ground that was itself judged when it
+  /// was young; it is folded in with the own gate's 6 float operations alone (docs/design.md,
+  /// "Outlier gate and change": what this costs and what it changes).
   [[nodiscard]] __attribute__((always_inline)) GateOutcome judge_ccm(const Layers& layers, const LayerWalk<Config>& walk, int layer,
                                       std::uint32_t number, CellIndex index, const FrontChunk& chunk, std::size_t i,
                                       float x, float y, float w, float weight_limit) noexcept {
     const float z = chunk.z[i];
-    const GateOutcome first = range_error(layers, walk, layer, chunk, i);
-    if (first != GateOutcome::kFold) {
-      return first;
+    const auto& cell = layers.ccm_storage[number];
+    const bool outside = ccm_outside_gate(cell, z, constants_[layer]);
+    if (outside || !(cell.weight >= mature_weight_)) {
+      const GateOutcome first = range_error(layers, walk, layer, chunk, i);
+      if (first != GateOutcome::kFold) {
+        return first;
+      }
     }
-    if (ccm_outside_gate(layers.ccm_storage[number], z, constants_[layer])) {
+    if (outside) {
       auto* slot = ccm_held_.hold(number, index, layer);
       if (slot == nullptr) {
         return GateOutcome::kPoolFull;
@@ -278,6 +289,7 @@ class OutlierGate {
   FinerCache finer_{};
   ChangeRule rule_{};
   std::uint32_t last_frame_slots_ = 0U;
+  float mature_weight_ = 0.0F;  ///< the weight from which a cell's own gate judges alone (min_weight)
   bool on_ = false;
   bool line_of_sight_ = false;
 };
