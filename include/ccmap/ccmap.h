@@ -70,7 +70,7 @@ typedef enum ccmap_preset {
  * versions (the library checks at build time that its map fits); ccmap_storage_size() gives
  * the exact figure. The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
-#define CCMAP_CADRE_STORAGE_SIZE 720896u          /* 704 KiB */
+#define CCMAP_CADRE_STORAGE_SIZE 737280u          /* 720 KiB */
 #define CCMAP_SINGLE_CCM_STORAGE_SIZE 2818048u    /* 2752 KiB */
 #define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3342336u /* 3264 KiB */
 #define CCMAP_SINGLE_OMG_STORAGE_SIZE 983040u     /* 960 KiB */

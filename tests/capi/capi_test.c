@@ -232,12 +232,12 @@ static void test_frames_queries_export(ccmap_map* map) {
     CHECK(c.used == n);
     CHECK(c.gated_held == 0u && c.gated_pool_full == 0u && c.gated_finer == 0u);
     /* The ground 10 cm higher (a pose jump): every point held, the cells re-seeded, at most one
-     * pool of held-point slots (512 cells) per frame; the rest waits for later frames. */
+     * pool of held-point slots (the finest layer's: 1024 cells) per frame; the rest waits. */
     pose.translation[2] = 0.1f;
     CHECK_STATUS(ccmap_update_frame_sensor(map, g_xyz, n, &pose, &c), CCMAP_OK);
     CHECK(c.used == 0u);
     CHECK(c.gated_held + c.gated_pool_full == n);
-    CHECK(c.gated_admitted == c.gated_held && c.reseeded_cells == 512u);
+    CHECK(c.gated_admitted == c.gated_held && c.reseeded_cells == 1024u);
     pose.translation[2] = 0.0f;
     CHECK_STATUS(ccmap_update_frame_sensor(map, g_xyz, n, NULL, &c), CCMAP_INVALID_ARGUMENT);
     pose.rotation[3] = (float)INFINITY;
@@ -250,7 +250,7 @@ static void test_frames_queries_export(ccmap_map* map) {
   CHECK_STATUS(ccmap_get_counters(map, &totals), CCMAP_OK);
   CHECK(totals.totals.received == 4u * n);
   CHECK(totals.totals.used == 3u * n - 1u);
-  CHECK(totals.totals.gated_held == 512u * 4u); /* 4 points in each 4 cm cell of the 2 cm grid */
+  CHECK(totals.totals.gated_held == 1024u * 4u); /* 4 points in each 4 cm cell of the 2 cm grid */
   CHECK(totals.totals.rejected_weight == 1u);
   CHECK(totals.rejected_moves == 1u);
   /* Counted by the map: NULL points, NaN origin, Inf rotation (a NULL origin or pose is refused

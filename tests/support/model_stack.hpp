@@ -436,7 +436,7 @@ class ModelStack {
       ++c.held;
       return s;
     }
-    if (slots.size() >= detail::kHeldSlots) {
+    if (slots.size() >= (&slots == &ccm_slots_ ? S::kCcmHeldSlots : S::kFineHeldSlots)) {
       ++c.pool_full;
       return nullptr;
     }

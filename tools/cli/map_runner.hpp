@@ -24,7 +24,7 @@ struct RunnerOptions {
   double lidar_sigma_m = 0.005;           ///< range noise of the lidar model (m)
   /// The library's outlier gate in standard deviations (docs/design.md, "Outlier gate and
   /// change"); 0: off, the paper's update. Off by default here: a file is one frame, and the
-  /// gate judges at most detail::kHeldSlots cells per frame (the rest of a whole scan's held
+  /// gate judges at most Stack::kCcmHeldSlots cells per frame (the rest of a whole scan's held
   /// points would be dropped as "pool full").
   double outlier_gate_sigma = 0.0;
 };

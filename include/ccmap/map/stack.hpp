@@ -73,6 +73,12 @@ class Stack {
   /// function (ccm_surface, ccm_merge, ccm_pool4, ccm_is_covered, ...) takes both.
   using CcmCellType = typename Layers::CcmCellType;
   static constexpr CcmCellKind kCcmCellKind = kConfigCcmCell<Config>;
+  /// Held-point slots of the outlier gate's pools (CCM layers, finest layer; 0 without the gate
+  /// compiled in): a frame judges at most this many cells of each (docs/design.md section 9).
+  static constexpr std::size_t kCcmHeldSlots =
+      kConfigOutlierGate<Config> ? detail::OutlierGate<Config>::kCcmSlots : std::size_t{0};
+  static constexpr std::size_t kFineHeldSlots =
+      kConfigOutlierGate<Config> && Layers::kHasFine ? detail::OutlierGate<Config>::kFineSlots : std::size_t{0};
 
   Stack() noexcept = default;
   Stack(const Stack&) = delete;
@@ -353,7 +359,7 @@ class Stack {
     return update_.pending_ccm_cells() + update_.pending_fine_cells();
   }
   /// Cells with held points at the end of the last frame, before the change rule decided (the
-  /// held-point slots it took; at most detail::kHeldSlots per pool: CCM layers, finest layer).
+  /// held-point slots it took; at most kCcmHeldSlots + kFineHeldSlots).
   [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
   /// Frame updates accepted since init (wraps at 2^32): the sequence number that map exchange
   /// (persistence/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().

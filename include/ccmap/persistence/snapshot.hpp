@@ -13,7 +13,8 @@
 // Not stored: RingGrid::cells_cleared_by_moves() and Stack::accepted_frames() (restart at 0 on
 // load), map exchange's bookkeeping (a load retires a bound MapExchange, persistence/exchange.hpp) and
 // the outlier gate's held points awaiting the change rule (map/update/held_pool.hpp: at most
-// kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
+// Stack::kCcmHeldSlots / kFineHeldSlots cells; after a load such a cell needs change_min_points
+// held points anew).
 //
 // Format (version 4: version 3 with the frame budget's parameters and counter). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:

@@ -64,7 +64,9 @@ class OutlierGate {
   static constexpr bool kKalman = Config::kFineKind == FineKind::kKalman;
   static constexpr bool kCcmPool = Layers::kCcmLayerCount > 0;
   static constexpr bool kFinePool = Layers::kHasFine;
-  static constexpr std::size_t kSlots = kConfigHeldSlots<Config> > 0U ? kConfigHeldSlots<Config> : kHeldSlots;
+  static constexpr std::size_t kCcmSlots = kConfigCcmHeldSlots<Config> > 0U ? kConfigCcmHeldSlots<Config> : kHeldSlots;
+  static constexpr std::size_t kFineSlots =
+      kConfigFineHeldSlots<Config> > 0U ? kConfigFineHeldSlots<Config> : kFineHeldSlots;
 
   /// CCM cells as the layers store them.
   using CcmCellType = typename Layers::CcmCellType;
@@ -79,8 +81,8 @@ class OutlierGate {
     float spread_sum;             ///< sum of squared deviations from that mean (m^2)
   };
   using FineHeld = std::conditional_t<kKalman, KalmanHeld, OmgCell>;
-  using CcmPool = HeldPool<CcmCellType, kCcmPool ? Layers::kCcmCellCount : 1U, kCcmPool ? kSlots : 1U>;
-  using FinePool = HeldPool<FineHeld, kFinePool ? Layers::kFineCellCount : 1U, kFinePool ? kSlots : 1U>;
+  using CcmPool = HeldPool<CcmCellType, kCcmPool ? Layers::kCcmCellCount : 1U, kCcmPool ? kCcmSlots : 1U>;
+  using FinePool = HeldPool<FineHeld, kFinePool ? Layers::kFineCellCount : 1U, kFinePool ? kFineSlots : 1U>;
 
   /// Gate constants of every layer (k from the params, V from the routing bounds max_range_sq_m2),
   /// empty pools. The gate is on iff params.outlier_gate_sigma > 0.
