@@ -1,0 +1,81 @@
+// The 4 x 4 algebra of registration: normal equations of (dx, dy, dz, dyaw), their
+// eigen-decomposition for observability, the step and the covariance restricted to the
+// observable directions. Implemented in src/registration/normal_equations.cpp with Eigen's
+// fixed-size float types (Matrix4f, SelfAdjointEigenSolver<Matrix4f>: no heap, no exceptions);
+// this header names no Eigen type, so the public API stays free of it.
+#pragma once
+
+#include <cstdint>
+
+namespace ccmap::detail {
+
+/// Normal equations H = sum w J J^T, b = sum w J r of a weighted least-squares problem in the
+/// four parameters (dx, dy, dz, dyaw): J the residual's gradient, r the residual, w its weight;
+/// and N = sum w A C A^T, the part of H that errors in J contribute on average, for residuals
+/// whose J = A g + e_z comes from an estimated surface gradient g with covariance C
+/// (J = (-g_x, -g_y, 1, g_x l_y - g_y l_x): A = [-1 0; 0 -1; 0 0; l_y -l_x]).
+struct NormalEquations4 {
+  float h[4][4];  ///< symmetric; add() fills the upper triangle, solve mirrors it
+  float n[4][4];  ///< the gradient-noise information, likewise
+  float b[4];
+
+  void clear() noexcept {
+    for (int i = 0; i < 4; ++i) {
+      b[i] = 0.0F;
+      for (int j = 0; j < 4; ++j) {
+        h[i][j] = 0.0F;
+        n[i][j] = 0.0F;
+      }
+    }
+  }
+  /// Adds one residual r with gradient j and weight w (14 multiply-adds).
+  void add(const float j[4], float w, float r) noexcept {
+    for (int row = 0; row < 4; ++row) {
+      const float wj = w * j[row];
+      b[row] += wj * r;
+      for (int col = row; col < 4; ++col) {
+        h[row][col] += wj * j[col];
+      }
+    }
+  }
+  /// Adds w A C A^T for the gradient covariance C = [var_gx cov; cov var_gy] and lever (lx, ly).
+  void add_gradient_noise(float w, float var_gx, float var_gy, float cov_gxy, float lx, float ly) noexcept {
+    // Columns of A: a = (-1, 0, 0, ly), c = (0, -1, 0, -lx); A C A^T = var_gx a a^T + var_gy c c^T
+    // + cov (a c^T + c a^T).
+    const float a[4] = {-1.0F, 0.0F, 0.0F, ly};
+    const float c[4] = {0.0F, -1.0F, 0.0F, -lx};
+    for (int row = 0; row < 4; ++row) {
+      if (row == 2) {
+        continue;  // A has no z row
+      }
+      for (int col = row; col < 4; ++col) {
+        n[row][col] += w * (var_gx * a[row] * a[col] + var_gy * c[row] * c[col] +
+                            cov_gxy * (a[row] * c[col] + c[row] * a[col]));
+      }
+    }
+  }
+};
+
+/// Solution of the normal equations in the observable subspace.
+struct Solve4 {
+  float step[4];           ///< -H^+ b over the observable directions (m, m, m, rad)
+  float covariance[4][4];  ///< variance_factor * H^+ over the observable directions
+  bool axis_observable[4]; ///< the axis lies in the observable subspace (>= 99 % of its length squared)
+  float axis_share[4];     ///< share of each axis' squared length in the observable subspace, 0..1
+  std::uint8_t rank;       ///< observable directions
+  bool ok;                 ///< false: non-finite input, or the eigen solver did not converge
+};
+
+/// Observability: the eigen-decomposition of H - noise_margin N, scaled to lengths (the yaw
+/// times lever_m, m; lever_m > 0) and divided by variance_factor (>= 1: the residuals' own
+/// scatter beyond their model). A direction is observable when its standard deviation is at
+/// most max_sigma_m and its eigenvalue at least 1e-6 of the largest (float resolution of the
+/// decomposition); noise_margin >= 1 asks that much more information than noise in the
+/// gradients alone gives (1 removes its bias only).
+/// Step: the Gauss-Newton step of H in the observable subspace, -Q (Q^T H Q)^-1 Q^T b.
+/// Covariance: variance_factor Q (Q^T (H - N) Q)^-1 Q^T (the information without the noise's bias).
+/// Bounded work: Eigen's tridiagonal QR on a 4 x 4 matrix (at most 30 * 4 sweeps), two 4 x 4 LDLT.
+[[nodiscard]] Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float variance_factor,
+                                            float max_sigma_m, float noise_margin) noexcept;
+
+}  // namespace ccmap::detail

@@ -1,0 +1,133 @@
+// The 4 x 4 algebra of registration with Eigen's fixed-size float types. Fixed-size Eigen
+// objects live on the stack and never allocate (tests/registration/eigen_no_malloc_test.cpp
+// runs this file under EIGEN_RUNTIME_NO_MALLOC); the core is built with -fno-exceptions, under
+// which Eigen throws nothing; EIGEN_MAX_STATIC_ALIGN_BYTES is the same on every target (the
+// ccmap_eigen target in the top CMakeLists.txt).
+#include "ccmap/registration/detail/normal_equations.hpp"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+namespace ccmap::detail {
+
+namespace {
+
+/// The share of an axis' squared length that must lie in the observable subspace for the axis
+/// to be called observable: 0.99, i.e. within asin(0.1) = 5.7 deg of it.
+constexpr float kAxisInSubspace = 0.99F;
+/// Eigenvalues below this share of the largest are float noise of the decomposition.
+constexpr float kRelativeEigenFloor = 1.0e-6F;
+
+Solve4 refused() noexcept {
+  Solve4 out{};
+  out.ok = false;
+  return out;
+}
+
+/// V^T M V with the rows and columns of unobservable directions replaced by the identity's:
+/// the reduced matrix Q^T M Q, padded to 4 x 4 so that it stays a fixed-size type.
+Eigen::Matrix4f reduced(const Eigen::Matrix4f& m, const Eigen::Matrix4f& v, const bool keep[4]) noexcept {
+  Eigen::Matrix4f r = v.transpose() * m * v;
+  for (int k = 0; k < 4; ++k) {
+    if (!keep[k]) {
+      r.row(k).setZero();
+      r.col(k).setZero();
+      r(k, k) = 1.0F;
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
+Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float variance_factor, float max_sigma_m,
+                              float noise_margin) noexcept {
+  if (!(lever_m > 0.0F) || !(variance_factor >= 1.0F) || !(max_sigma_m > 0.0F) || !(noise_margin >= 1.0F) ||
+      !std::isfinite(lever_m) || !std::isfinite(variance_factor) || !std::isfinite(noise_margin)) {
+    return refused();
+  }
+  // Scale the yaw to a length: theta_s = lever * dyaw, so H_s = S^-1 H S^-1, b_s = S^-1 b with
+  // S = diag(1, 1, 1, lever).
+  const float inv_lever = 1.0F / lever_m;
+  const float scale[4] = {1.0F, 1.0F, 1.0F, inv_lever};
+  Eigen::Matrix4f h;
+  Eigen::Matrix4f noise;
+  Eigen::Vector4f b;
+  for (int i = 0; i < 4; ++i) {
+    b(i) = eq.b[i] * scale[i];
+    for (int j = i; j < 4; ++j) {
+      const float s = scale[i] * scale[j];
+      h(i, j) = h(j, i) = eq.h[i][j] * s;
+      noise(i, j) = noise(j, i) = eq.n[i][j] * s;
+    }
+  }
+  if (!h.allFinite() || !noise.allFinite() || !b.allFinite()) {
+    return refused();
+  }
+  // Observability from H less the gradients' noise information (its eigenvalues may be
+  // negative: directions that noise alone explains fail the threshold like any other).
+  const Eigen::Matrix4f judged = h - noise_margin * noise;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4f> solver(judged, Eigen::ComputeEigenvectors);
+  if (solver.info() != Eigen::Success) {
+    return refused();
+  }
+  const Eigen::Vector4f& lambda = solver.eigenvalues();  // ascending
+  const Eigen::Matrix4f& v = solver.eigenvectors();     // orthonormal columns
+  // Observable: information / variance_factor >= 1 / max_sigma^2, i.e. the direction's sigma
+  // sqrt(variance_factor / lambda) <= max_sigma.
+  const float min_lambda = variance_factor / (max_sigma_m * max_sigma_m);
+  const float floor_lambda = kRelativeEigenFloor * lambda(3);
+  bool keep[4] = {false, false, false, false};
+  Solve4 out{};
+  out.rank = 0U;
+  Eigen::Vector4f in_subspace = Eigen::Vector4f::Zero();
+  for (int k = 0; k < 4; ++k) {
+    keep[k] = lambda(k) >= min_lambda && lambda(k) > floor_lambda;
+    if (keep[k]) {
+      ++out.rank;
+      in_subspace += v.col(k).cwiseProduct(v.col(k));
+    }
+  }
+  Eigen::Vector4f step_s = Eigen::Vector4f::Zero();
+  Eigen::Matrix4f cov_s = Eigen::Matrix4f::Zero();
+  if (out.rank > 0U) {
+    // Step: Gauss-Newton with H in the observable subspace, y = -(Q^T H Q)^-1 Q^T b.
+    Eigen::Vector4f rhs = -(v.transpose() * b);
+    for (int k = 0; k < 4; ++k) {
+      rhs(k) = keep[k] ? rhs(k) : 0.0F;
+    }
+    const Eigen::LDLT<Eigen::Matrix4f> step_solver(reduced(h, v, keep));
+    const Eigen::LDLT<Eigen::Matrix4f> cov_solver(reduced(h - noise, v, keep));
+    if (step_solver.info() != Eigen::Success || cov_solver.info() != Eigen::Success || !step_solver.isPositive() ||
+        !cov_solver.isPositive()) {
+      return refused();
+    }
+    step_s = v * step_solver.solve(rhs);
+    Eigen::Matrix4f inv_reduced = cov_solver.solve(Eigen::Matrix4f::Identity());
+    for (int k = 0; k < 4; ++k) {
+      if (!keep[k]) {
+        inv_reduced.row(k).setZero();
+        inv_reduced.col(k).setZero();
+      }
+    }
+    cov_s = variance_factor * (v * inv_reduced * v.transpose());
+  }
+  if (!step_s.allFinite() || !cov_s.allFinite()) {
+    return refused();
+  }
+  for (int i = 0; i < 4; ++i) {
+    out.step[i] = step_s(i) * scale[i];
+    out.axis_observable[i] = in_subspace(i) >= kAxisInSubspace;
+    out.axis_share[i] = in_subspace(i);
+    for (int j = 0; j < 4; ++j) {
+      out.covariance[i][j] = cov_s(i, j) * scale[i] * scale[j];
+    }
+  }
+  out.ok = true;
+  return out;
+}
+
+}  // namespace ccmap::detail
