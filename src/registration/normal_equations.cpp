@@ -54,6 +54,7 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
   const float inv_lever = 1.0F / lever_m;
   const float scale[4] = {1.0F, 1.0F, 1.0F, inv_lever};
   Eigen::Matrix4f h;
+  Eigen::Matrix4f evidence;
   Eigen::Matrix4f noise;
   Eigen::Vector4f b;
   for (int i = 0; i < 4; ++i) {
@@ -61,15 +62,16 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
     for (int j = i; j < 4; ++j) {
       const float s = scale[i] * scale[j];
       h(i, j) = h(j, i) = eq.h[i][j] * s;
+      evidence(i, j) = evidence(j, i) = eq.e[i][j] * s;
       noise(i, j) = noise(j, i) = eq.n[i][j] * s;
     }
   }
-  if (!h.allFinite() || !noise.allFinite() || !b.allFinite()) {
+  if (!h.allFinite() || !evidence.allFinite() || !noise.allFinite() || !b.allFinite()) {
     return refused();
   }
-  // Observability from H less the gradients' noise information (its eigenvalues may be
-  // negative: directions that noise alone explains fail the threshold like any other).
-  const Eigen::Matrix4f judged = h - noise_margin * noise;
+  // Observability from the evidence less the gradients' noise information (its eigenvalues may
+  // be negative: directions that noise alone explains fail the threshold like any other).
+  const Eigen::Matrix4f judged = evidence - noise_margin * noise;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4f> solver(judged, Eigen::ComputeEigenvectors);
   if (solver.info() != Eigen::Success) {
     return refused();
@@ -100,7 +102,7 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
       rhs(k) = keep[k] ? rhs(k) : 0.0F;
     }
     const Eigen::LDLT<Eigen::Matrix4f> step_solver(reduced(h, v, keep));
-    const Eigen::LDLT<Eigen::Matrix4f> cov_solver(reduced(h - noise, v, keep));
+    const Eigen::LDLT<Eigen::Matrix4f> cov_solver(reduced(evidence - noise, v, keep));
     if (step_solver.info() != Eigen::Success || cov_solver.info() != Eigen::Success || !step_solver.isPositive() ||
         !cov_solver.isPositive()) {
       return refused();
@@ -119,6 +121,10 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
     return refused();
   }
   for (int i = 0; i < 4; ++i) {
+    out.keep[i] = keep[i];
+    for (int j = 0; j < 4; ++j) {
+      out.basis[i][j] = v(i, j);
+    }
     out.step[i] = step_s(i) * scale[i];
     out.axis_observable[i] = in_subspace(i) >= kAxisInSubspace;
     out.axis_share[i] = in_subspace(i);
@@ -128,6 +134,72 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
   }
   out.ok = true;
   return out;
+}
+
+bool jackknife_covariance(const NormalEquations4& all, const NormalEquations4* groups, const bool* group_used,
+                          const Solve4& solve, float lever_m, float covariance[4][4]) noexcept {
+  if (!solve.ok || !(lever_m > 0.0F) || groups == nullptr || group_used == nullptr) {
+    return false;
+  }
+  const float scale[4] = {1.0F, 1.0F, 1.0F, 1.0F / lever_m};
+  Eigen::Matrix4f v;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      v(i, j) = solve.basis[i][j];
+    }
+  }
+  auto scaled = [&scale](const NormalEquations4& eq, Eigen::Matrix4f* h, Eigen::Vector4f* b) {
+    for (int i = 0; i < 4; ++i) {
+      (*b)(i) = eq.b[i] * scale[i];
+      for (int j = i; j < 4; ++j) {
+        (*h)(i, j) = (*h)(j, i) = eq.h[i][j] * scale[i] * scale[j];
+      }
+    }
+  };
+  Eigen::Matrix4f h_all;
+  Eigen::Vector4f b_all;
+  scaled(all, &h_all, &b_all);
+  Eigen::Vector4f deltas[kJackknifeGroups];
+  int used = 0;
+  Eigen::Vector4f mean = Eigen::Vector4f::Zero();
+  for (int g = 0; g < kJackknifeGroups; ++g) {
+    if (!group_used[g]) {
+      continue;
+    }
+    Eigen::Matrix4f h_g;
+    Eigen::Vector4f b_g;
+    scaled(groups[g], &h_g, &b_g);
+    Eigen::Vector4f rhs = v.transpose() * (b_g - b_all);
+    for (int k = 0; k < 4; ++k) {
+      rhs(k) = solve.keep[k] ? rhs(k) : 0.0F;
+    }
+    const Eigen::LDLT<Eigen::Matrix4f> ldlt(reduced(h_all - h_g, v, solve.keep));
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
+      return false;  // the rest does not determine the subspace without this group: no estimate
+    }
+    deltas[used] = v * ldlt.solve(rhs);
+    if (!deltas[used].allFinite()) {
+      return false;
+    }
+    mean += deltas[used];
+    ++used;
+  }
+  if (used < 2) {
+    return false;
+  }
+  mean /= static_cast<float>(used);
+  Eigen::Matrix4f c = Eigen::Matrix4f::Zero();
+  for (int k = 0; k < used; ++k) {
+    const Eigen::Vector4f d = deltas[k] - mean;
+    c += d * d.transpose();
+  }
+  c *= static_cast<float>(used - 1) / static_cast<float>(used);
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      covariance[i][j] = c(i, j) * scale[i] * scale[j];
+    }
+  }
+  return true;
 }
 
 }  // namespace ccmap::detail

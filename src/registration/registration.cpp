@@ -11,7 +11,6 @@ RegistrationParams default_registration_params() noexcept {
   RegistrationParams p{};
   p.max_points = 2048U;
   p.max_iterations = 12U;
-  p.coarse_iterations = 0U;
   p.min_matches = 30U;
   p.max_translation_m = 0.5F;
   p.max_yaw_rad = 0.2F;
@@ -31,7 +30,7 @@ Status validate_registration_params(const RegistrationParams& p) noexcept {
     }
   }
   const bool counts = p.max_points >= 1U && p.max_points <= kMaxRegistrationPoints && p.max_iterations >= 1U &&
-                      p.max_iterations <= kMaxRegistrationIterations && p.coarse_iterations < p.max_iterations &&
+                      p.max_iterations <= kMaxRegistrationIterations &&
                       p.min_matches >= 3U;
   const bool bounds = p.max_translation_m > 0.0F && p.max_translation_m <= kMaxAbsCoordinateM && p.max_yaw_rad > 0.0F &&
                       p.max_yaw_rad <= 0.5F && p.max_sigma_m > 0.0F && p.robust_sigmas > 0.0F &&

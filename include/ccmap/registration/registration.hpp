@@ -23,8 +23,9 @@
 //   kNonFiniteInput      a non-finite sensor origin or pose; every sampled point non-finite
 //   kOutOfRange          a sensor origin beyond kMaxAbsCoordinateM
 //   kDegenerateInput     no points, fewer than 3 usable, or all within one finest cell in x and y
-//   kOutsideMap          the sensor origin outside the coarsest layer's window, or most samples
-//                        outside every window (a pose far from the map)
+//   kOutsideMap          the sensor origin outside the coarsest layer's window, most samples
+//                        outside every window, or every usable sample beyond every layer's
+//                        range (a pose far from the map)
 //   kInsufficientOverlap fewer than min_matches samples on known cells
 //   kNotConverged        no convergence within max_iterations, or a solution beyond
 //                        max_translation_m / max_yaw_rad
@@ -67,13 +68,13 @@ class FrameSamples {
   }
 
   template <typename Fn>
-  std::uint32_t for_each(Fn&& fn) const noexcept {
-    std::uint32_t rejected = 0U;
+  SampleRefusals for_each(Fn&& fn) const noexcept {
+    SampleRefusals refused{};
     const sensor::NoiseModel& noise = stack_.params().noise;
     for (std::size_t i = first_; i < n_; i += stride_) {
       const PointXYZ p = points_[i];
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-        ++rejected;
+        ++refused.non_finite;
         continue;
       }
       float x = 0.0F;
@@ -84,7 +85,7 @@ class FrameSamples {
         // Sensor-frame coordinates of 2^11 m or more are refused, as by update_frame_sensor.
         constexpr float kMaxSensorM = 2048.0F;
         if (!(std::fabs(p.x) < kMaxSensorM && std::fabs(p.y) < kMaxSensorM && std::fabs(p.z) < kMaxSensorM)) {
-          ++rejected;
+          ++refused.out_of_reach;
           continue;
         }
         range_sq = p.x * p.x + p.y * p.y + p.z * p.z;
@@ -95,7 +96,7 @@ class FrameSamples {
       } else {
         if (!(std::fabs(p.x) <= kMaxAbsCoordinateM && std::fabs(p.y) <= kMaxAbsCoordinateM &&
               std::fabs(p.z) <= kMaxAbsCoordinateM)) {
-          ++rejected;
+          ++refused.out_of_reach;
           continue;
         }
         x = p.x;
@@ -114,13 +115,13 @@ class FrameSamples {
         }
       }
       if (layer < 0) {
-        ++rejected;  // too noisy for every layer: the map would not take it either
+        ++refused.out_of_reach;  // too noisy for every layer: the map would not take it either
         continue;
       }
       const float sigma = noise.sigma_at_range_sq(range_sq);
       fn(RegistrationSample{x, y, z, sigma * sigma, 0.0F, layer});
     }
-    return rejected;
+    return refused;
   }
 
  private:
@@ -171,7 +172,8 @@ struct RegistrationAccess {
     }
     const FrameSamples<Config> samples(stack, points, n, origin, rotation, params.max_points);
     const StackSurface<Config> surface(stack);
-    return solve_registration(samples, surface, origin.x, origin.y, origin.z, params, stack.layer_cell_width(0));
+    return solve_registration(samples, surface, origin.x, origin.y, origin.z, params, stack.layer_cell_width(0),
+                              stack.layer_cell_width(StackType::kLayerCount - 1));
   }
 };
 

@@ -45,10 +45,6 @@ struct RegistrationParams {
   std::uint32_t max_points;
   /// Gauss-Newton iterations, all passes together: 1 .. kMaxRegistrationIterations.
   std::uint32_t max_iterations;
-  /// Iterations of the coarse pass (every point against the coarsest CCM layer: the widest
-  /// capture range) before the fine pass (every point against the layer its range routes it
-  /// to, Section IV-G). 0: fine pass only. At most max_iterations - 1.
-  std::uint32_t coarse_iterations;
   /// Fewest points that must lie on known cells (else kInsufficientOverlap), >= 3.
   std::uint32_t min_matches;
   /// Largest horizontal correction |(dx, dy)| and |dz| searched (m, > 0): a solution beyond it
@@ -69,7 +65,7 @@ struct RegistrationParams {
   float convergence_m;
 };
 
-/// Defaults: 2,048 points, 12 iterations of which 3 coarse, 30 matches, a 0.5 m / 0.2 rad
+/// Defaults: 2,048 points, 12 iterations, 30 matches, a 0.5 m / 0.2 rad
 /// search, observable below 3 cm, Cauchy at 3 sigma, (1 mm)^2 model variance, 0.3 mm steps.
 [[nodiscard]] RegistrationParams default_registration_params() noexcept;
 

@@ -10,13 +10,16 @@
 namespace ccmap::detail {
 
 /// Normal equations H = sum w J J^T, b = sum w J r of a weighted least-squares problem in the
-/// four parameters (dx, dy, dz, dyaw): J the residual's gradient, r the residual, w its weight;
-/// and N = sum w A C A^T, the part of H that errors in J contribute on average, for residuals
-/// whose J = A g + e_z comes from an estimated surface gradient g with covariance C
-/// (J = (-g_x, -g_y, 1, g_x l_y - g_y l_x): A = [-1 0; 0 -1; 0 0; l_y -l_x]).
+/// four parameters (dx, dy, dz, dyaw): J the residual's gradient, r the residual, w its weight.
+/// Beside them, what counts as evidence: E = sum w J J^T over the residuals whose gradient is
+/// evidence (add_evidence), and N = sum w A C A^T, the part of E that errors in their J
+/// contribute on average (J = A g + e_z from an estimated surface gradient g with covariance C:
+/// J = (-g_x, -g_y, 1, g_x l_y - g_y l_x), A = [-1 0; 0 -1; 0 0; l_y -l_x]). A residual whose
+/// gradient is not evidence adds height information only (add_height_evidence).
 struct NormalEquations4 {
-  float h[4][4];  ///< symmetric; add() fills the upper triangle, solve mirrors it
-  float n[4][4];  ///< the gradient-noise information, likewise
+  float h[4][4];  ///< symmetric; the add functions fill the upper triangle, solve mirrors it
+  float e[4][4];  ///< the evidence, likewise
+  float n[4][4];  ///< the gradient-noise information of the evidence, likewise
   float b[4];
 
   void clear() noexcept {
@@ -24,21 +27,28 @@ struct NormalEquations4 {
       b[i] = 0.0F;
       for (int j = 0; j < 4; ++j) {
         h[i][j] = 0.0F;
+        e[i][j] = 0.0F;
         n[i][j] = 0.0F;
       }
     }
   }
-  /// Adds one residual r with gradient j and weight w (14 multiply-adds).
-  void add(const float j[4], float w, float r) noexcept {
+  /// Adds one residual r with gradient j and weight w to H and b (14 multiply-adds); with
+  /// `evidence` to E as well.
+  void add(const float j[4], float w, float r, bool evidence) noexcept {
     for (int row = 0; row < 4; ++row) {
       const float wj = w * j[row];
       b[row] += wj * r;
       for (int col = row; col < 4; ++col) {
         h[row][col] += wj * j[col];
+        if (evidence) {
+          e[row][col] += wj * j[col];
+        }
       }
     }
   }
-  /// Adds w A C A^T for the gradient covariance C = [var_gx cov; cov var_gy] and lever (lx, ly).
+  /// Adds the information w about dz alone to E.
+  void add_height_evidence(float w) noexcept { e[2][2] += w; }
+  /// Adds w A C A^T to N for the gradient covariance C = [var_gx cov; cov var_gy] and lever (lx, ly).
   void add_gradient_noise(float w, float var_gx, float var_gy, float cov_gxy, float lx, float ly) noexcept {
     // Columns of A: a = (-1, 0, 0, ly), c = (0, -1, 0, -lx); A C A^T = var_gx a a^T + var_gy c c^T
     // + cov (a c^T + c a^T).
@@ -64,18 +74,36 @@ struct Solve4 {
   float axis_share[4];     ///< share of each axis' squared length in the observable subspace, 0..1
   std::uint8_t rank;       ///< observable directions
   bool ok;                 ///< false: non-finite input, or the eigen solver did not converge
+  float basis[4][4];       ///< the directions (columns, in the yaw-scaled space), observable ones flagged in keep
+  bool keep[4];
 };
 
-/// Observability: the eigen-decomposition of H - noise_margin N, scaled to lengths (the yaw
+/// Groups of the delete-one-group jackknife (jackknife_covariance).
+inline constexpr int kJackknifeGroups = 8;
+
+/// Observability: the eigen-decomposition of E - noise_margin N, scaled to lengths (the yaw
 /// times lever_m, m; lever_m > 0) and divided by variance_factor (>= 1: the residuals' own
 /// scatter beyond their model). A direction is observable when its standard deviation is at
 /// most max_sigma_m and its eigenvalue at least 1e-6 of the largest (float resolution of the
 /// decomposition); noise_margin >= 1 asks that much more information than noise in the
 /// gradients alone gives (1 removes its bias only).
 /// Step: the Gauss-Newton step of H in the observable subspace, -Q (Q^T H Q)^-1 Q^T b.
-/// Covariance: variance_factor Q (Q^T (H - N) Q)^-1 Q^T (the information without the noise's bias).
+/// Covariance: variance_factor Q (Q^T (E - N) Q)^-1 Q^T (the evidence without the noise's bias).
 /// Bounded work: Eigen's tridiagonal QR on a 4 x 4 matrix (at most 30 * 4 sweeps), two 4 x 4 LDLT.
 [[nodiscard]] Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float variance_factor,
                                             float max_sigma_m, float noise_margin) noexcept;
+
+/// The delete-one-group jackknife covariance of the solution in the observable subspace of
+/// `solve` (solve_normal_equations of `all` with the same lever_m): `all` is the sum of the
+/// groups' normal equations, accumulated at the solution (b of all ~ 0). Without group g the
+/// solution moves by delta_g = (H - H_g)^-1 (b_g - b) restricted to the subspace (H: the step's
+/// matrix, every residual); the estimate is
+/// (G - 1) / G sum (delta_g - mean)(delta_g - mean)^T over the G groups that hold samples
+/// (G >= 2; else false). Groups are blocks of ground, so what their samples share (a rock seen
+/// differently from two places, a cell whose plane misleads) shows as scatter between groups,
+/// which the model covariance, built on independent samples, cannot show.
+[[nodiscard]] bool jackknife_covariance(const NormalEquations4& all, const NormalEquations4* groups,
+                                        const bool* group_used, const Solve4& solve, float lever_m,
+                                        float covariance[4][4]) noexcept;
 
 }  // namespace ccmap::detail

@@ -15,13 +15,26 @@
 // part across the plane changes r; elevation_variance is the cell's sigma_s^2 (1 + (1 + d^T
 // Sigma^+ d) / W), the plane's spread plus its own uncertainty at q). The gradient of r:
 //     dr/d(dx, dy, dz, dyaw) = (-g_x, -g_y, 1, g_x (q_y - o_y) - g_y (q_x - o_x))
-// where g is the plane's gradient and l the lever from o to where g belongs (a CCM cell's mean).
-// The gradient is an estimate with covariance C_g (the least-squares plane's), so sum w J J^T
-// over-states the information by N = sum w A C_g A^T (J = A g + e_z): a direction is observable
-// only with its information in H - 3 N (once the bias, errors in variables; twice its scatter),
-// and the covariance is that of H - N. A slope the map cannot tell from zero (flat ground seen with noise)
-// then carries no information about x, y or yaw, and none is claimed. Weights are iteratively re-weighted Cauchy,
+//     dr/d(dx, dy, dz, dyaw) = (-g_x, -g_y, 1, g_x l_y - g_y l_x)
+// where g is the plane's gradient and l the lever from o to where g belongs (a CCM cell's mean;
+// the centre of a bilinear patch). Weights are iteratively re-weighted Cauchy,
 // w = 1 / (var (1 + r^2 / (c^2 var))), c = RegistrationParams::robust_sigmas.
+//
+// Evidence. Every sample steers the step (H = sum w J J^T, b = sum w J r), but what is claimed
+// comes from the evidence E:
+//  - a CCM cell's plane is evidence about x, y and yaw too. Its gradient is an estimate with
+//    covariance C_g (the least-squares plane's), so w J J^T over-states the information by
+//    w A C_g A^T (J = A g + e_z), summed in N: a direction is observable only with its
+//    information in E - 2 N (once the bias, errors in variables; once its scatter), and the
+//    covariance is that of E - N. A slope the map cannot tell from zero (flat ground seen with
+//    noise) carries no information about x, y or yaw, and none is claimed.
+//  - the bilinear surface of constant cells (the finest layer) is evidence about the height only,
+//    and only as far as its gradient leaves the height free of x and y within the search bound
+//    sigma_p = max_translation_m: w / (1 + w |g|^2 sigma_p^2). Measured: constant cells at rocks
+//    seen from two places disagree (shadows), and their gradients claimed a yaw to 1 mrad that
+//    was 11 mrad off (docs/design.md, "Registration").
+// The claimed covariance is the larger of E - N's and a delete-one-group jackknife's over blocks
+// of ground (what blocks disagree on is not known, whatever the model says).
 //
 // Each iteration accumulates the 4 x 4 normal equations over every sample (one pass; samples
 // re-read, nothing stored per sample) and solves them in the observable subspace
@@ -67,9 +80,19 @@ struct SurfacePlane {
   float lever_x;   ///< map-frame position the gradient belongs to (m): a CCM cell's mean, the point
   float lever_y;
   float variance;  ///< m^2, elevation variance of the surface at the point
+  /// The gradient is evidence about x, y and yaw (a CCM cell's plane). False: it steers the
+  /// step, but only the height counts as evidence, and only as far as the gradient leaves it
+  /// unaffected by x and y (the bilinear surface of constant cells: see registration_pass).
+  bool gradient_is_evidence;
 };
 
 enum class SurfaceAnswer : std::uint8_t { kKnown, kUnknown, kOutside };
+
+/// Samples a source refused in one pass, by reason.
+struct SampleRefusals {
+  std::uint32_t non_finite = 0U;    ///< a NaN or infinite coordinate
+  std::uint32_t out_of_reach = 0U;  ///< beyond kMaxAbsCoordinateM, or too noisy for every layer
+};
 
 /// A result that claims nothing (status != kOk).
 [[nodiscard]] inline RegistrationResult unclaimed_result(Status status) noexcept {
@@ -88,9 +111,10 @@ enum class SurfaceAnswer : std::uint8_t { kKnown, kUnknown, kOutside };
 /// kInvalidArgument). src/registration/registration.cpp.
 [[nodiscard]] Status check_registration_rotation(const float* rotation) noexcept;
 
-/// How many times the gradients' noise information N is taken off H to judge observability
-/// (see registration_pass): a direction counts when its information is at least this many times
-/// what noise in the map's slopes alone would give it (flat ground: E[sum w g g^T] = N).
+/// How many times the gradients' noise information N is taken off the evidence E to judge
+/// observability (see the file comment): a direction counts when its information is at least
+/// this many times what noise in the map's slopes alone would give it (flat ground: E = N on
+/// average).
 inline constexpr float kGradientNoiseMargin = 2.0F;
 
 /// Largest step of one iteration: 10 cm horizontally and vertically, 0.05 rad in yaw.
@@ -98,13 +122,16 @@ inline constexpr float kMaxStepM = 0.10F;
 inline constexpr float kMaxStepRad = 0.05F;
 /// Smallest lever arm used to scale the yaw (m): below it the yaw is a rotation in place.
 inline constexpr float kMinLeverM = 1.0e-3F;
-/// An axis whose share in the observable subspace is below this gets exactly no correction.
-inline constexpr float kAxisAbsent = 0.01F;
+/// An axis whose share in the observable subspace is below this (1 % of its length) gets exactly
+/// no correction: what remains is float rounding of the decomposition.
+inline constexpr float kAxisAbsent = 1.0e-4F;
+static_assert(kJackknifeGroups == 8, "registration_pass hashes blocks to 3 bits");
 
 /// What one pass over the samples gathered.
 struct RegistrationPass {
   std::uint32_t sampled = 0U;   ///< finite samples
   std::uint32_t rejected = 0U;  ///< non-finite, out of range or too noisy
+  std::uint32_t non_finite = 0U;  ///< of those, non-finite
   std::uint32_t matched = 0U;   ///< on a known cell
   std::uint32_t unknown = 0U;   ///< inside the map, on no known cell
   std::uint32_t outside = 0U;   ///< outside every window
@@ -123,17 +150,26 @@ struct RigidState {
 
 /// One pass: every sample through the correction, matched, weighted, accumulated into eq.
 /// Samples::for_each(fn) calls fn(const RegistrationSample&) for every usable sample and returns
-/// how many it refused (non-finite, out of range, too noisy); Surface::at(x, y, layer, &plane)
-/// answers the map there.
+/// the SampleRefusals; Surface::at(x, y, layer, &plane) answers the map there. With `groups`
+/// (kJackknifeGroups of them), each sample is also added to the group of its block of ground
+/// (block_m square blocks, hashed), and group_used says which received any.
 template <typename Samples, typename Surface>
 void registration_pass(const Samples& samples, const Surface& surface, float ox, float oy, float oz,
                        const RigidState& state, const RegistrationParams& params, NormalEquations4* eq,
-                       RegistrationPass* pass) noexcept {
+                       RegistrationPass* pass, NormalEquations4* groups = nullptr, bool* group_used = nullptr,
+                       float block_m = 1.0F) noexcept {
   eq->clear();
+  if (groups != nullptr) {
+    for (int g = 0; g < kJackknifeGroups; ++g) {
+      groups[g].clear();
+      group_used[g] = false;
+    }
+  }
+  const float inv_block = 1.0F / block_m;
   RegistrationPass acc{};
   bool first = true;
   const float c2 = params.robust_sigmas * params.robust_sigmas;
-  acc.rejected = samples.for_each([&](const RegistrationSample& s) {
+  const SampleRefusals refused = samples.for_each([&](const RegistrationSample& s) {
     ++acc.sampled;
     if (first) {
       acc.min_x = acc.max_x = s.x;
@@ -191,26 +227,45 @@ void registration_pass(const Samples& samples, const Surface& surface, float ox,
     const float gx = plane.slope_x;
     const float gy = plane.slope_y;
     const float j[4] = {-gx, -gy, 1.0F, gx * ly - gy * lx};
-    eq->add(j, w, r);
-    // Errors in the gradient: E[g g^T] = g_true g_true^T + C_g, so J J^T over-states the
-    // information by A C_g A^T (J = A g + e_z, A = [-1 0; 0 -1; 0 0; ly -lx]).
-    eq->add_gradient_noise(w, plane.var_gx, plane.var_gy, plane.cov_gxy, lx, ly);
+    eq->add(j, w, r, plane.gradient_is_evidence);
+    if (groups != nullptr) {
+      // |q| <= ~1e5 m and block_m >= 1 cm keep the block indices within int32.
+      const auto bx = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::floor(qx * inv_block)));
+      const auto by = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::floor(qy * inv_block)));
+      const std::uint32_t g = ((bx * 73856093U) ^ (by * 19349663U)) >> 29U;  // top 3 bits: 8 groups
+      groups[g].add(j, w, r, plane.gradient_is_evidence);
+      group_used[g] = true;
+    }
+    if (plane.gradient_is_evidence) {
+      // Errors in the gradient: E[g g^T] = g_true g_true^T + C_g, so J J^T over-states the
+      // information by A C_g A^T (J = A g + e_z, A = [-1 0; 0 -1; 0 0; ly -lx]).
+      eq->add_gradient_noise(w, plane.var_gx, plane.var_gy, plane.cov_gxy, lx, ly);
+    } else {
+      // A gradient that is no evidence leaves x and y open within the search bound sigma_p =
+      // max_translation_m, so the height constrains dz only to within |g| sigma_p.
+      const float g2 = gx * gx + gy * gy;
+      const float prior = params.max_translation_m * params.max_translation_m;
+      eq->add_height_evidence(w / (1.0F + w * g2 * prior));
+    }
     ++acc.matched;
     acc.sum_w += w;
     acc.sum_w_lever_sq += w * (lx * lx + ly * ly);
     acc.sum_robust += robust;
     acc.sum_robust_e2 += robust * e2;
   });
+  acc.rejected = refused.non_finite + refused.out_of_reach;
+  acc.non_finite = refused.non_finite;
   *pass = acc;
 }
 
 /// Runs the registration. (ox, oy, oz): the rotation centre (the sensor origin of a frame).
 /// `extent_floor_m`: samples spanning less than this in both x and y are a degenerate frame.
+/// `block_m`: the side of the blocks of ground the jackknife groups samples by (>= 0.01 m).
 /// Preconditions: params validated.
 template <typename Samples, typename Surface>
 [[nodiscard]] RegistrationResult solve_registration(const Samples& samples, const Surface& surface, float ox, float oy,
                                                     float oz, const RegistrationParams& params,
-                                                    float extent_floor_m) noexcept {
+                                                    float extent_floor_m, float block_m) noexcept {
   RigidState state{};
   NormalEquations4 eq{};
   RegistrationPass pass{};
@@ -230,7 +285,11 @@ template <typename Samples, typename Surface>
     if (iterations == 1U) {
       // What the frame itself is, before anything about the map.
       if (pass.sampled == 0U) {
-        return unclaimed(pass.rejected > 0U ? Status::kNonFiniteInput : Status::kDegenerateInput);
+        // Nothing usable: every sample non-finite; else beyond every layer's reach (a frame far
+        // from the map); else there were no points.
+        return unclaimed(pass.rejected == 0U               ? Status::kDegenerateInput
+                         : pass.non_finite == pass.rejected ? Status::kNonFiniteInput
+                                                            : Status::kOutsideMap);
       }
       if (pass.sampled < 3U || (pass.max_x - pass.min_x < extent_floor_m && pass.max_y - pass.min_y < extent_floor_m)) {
         return unclaimed(Status::kDegenerateInput);
@@ -300,8 +359,27 @@ template <typename Samples, typename Surface>
     if (!converged) {
       continue;
     }
-    // Converged: the last pass was within convergence_m of the solution; its normal equations
-    // give observability and the covariance.
+    // Converged. One more pass at the solution gives the normal equations for observability and
+    // the covariance, and the same per block of ground for the jackknife.
+    NormalEquations4 groups[kJackknifeGroups];
+    bool group_used[kJackknifeGroups] = {};
+    registration_pass(samples, surface, ox, oy, oz, state, params, &eq, &pass, groups, group_used, block_m);
+    if (pass.matched < params.min_matches) {
+      return unclaimed(Status::kNotConverged);
+    }
+    float final_lever = pass.sum_w > 0.0F ? std::sqrt(pass.sum_w_lever_sq / pass.sum_w) : 0.0F;
+    final_lever = final_lever > kMinLeverM ? final_lever : kMinLeverM;
+    const float final_e2 = pass.sum_robust > 0.0F ? pass.sum_robust_e2 / pass.sum_robust : 0.0F;
+    const Solve4 final_solve = solve_normal_equations(eq, final_lever, final_e2 > 1.0F ? final_e2 : 1.0F,
+                                                      params.max_sigma_m, kGradientNoiseMargin);
+    if (!final_solve.ok) {
+      return unclaimed(Status::kNotConverged);
+    }
+    // The jackknife's covariance where it is larger than the model's: what blocks of ground
+    // disagree on is not known, whatever the model says. Without an estimate (fewer than two
+    // blocks, or a block the rest cannot do without) nothing beyond dz is claimed.
+    float jack[4][4] = {};
+    const bool jack_ok = jackknife_covariance(eq, groups, group_used, final_solve, final_lever, jack);
     constexpr float kInf = std::numeric_limits<float>::infinity();
     RegistrationResult r{};
     r.status = Status::kOk;
@@ -309,9 +387,17 @@ template <typename Samples, typename Surface>
     float out[4] = {};
     float sigma[4] = {};
     for (int i = 0; i < 4; ++i) {
-      r.observable[i] = solve.axis_observable[i];
-      out[i] = solve.axis_share[i] < kAxisAbsent ? 0.0F : values[i];
-      sigma[i] = solve.axis_observable[i] ? std::sqrt(solve.covariance[i][i]) : kInf;
+      float variance = final_solve.covariance[i][i];
+      if (jack_ok) {
+        variance = jack[i][i] > variance ? jack[i][i] : variance;
+      } else if (i != kAxisZ) {
+        variance = kInf;
+      }
+      const float limit = i == kAxisYaw ? params.max_sigma_m / final_lever : params.max_sigma_m;
+      const float sd = std::sqrt(variance);
+      r.observable[i] = final_solve.axis_observable[i] && sd <= limit;
+      out[i] = final_solve.axis_share[i] < kAxisAbsent ? 0.0F : values[i];
+      sigma[i] = r.observable[i] ? sd : kInf;
     }
     r.dx = out[0];
     r.dy = out[1];
@@ -321,13 +407,13 @@ template <typename Samples, typename Surface>
     r.sigma_dy = sigma[1];
     r.sigma_dz = sigma[2];
     r.sigma_dyaw = sigma[3];
-    r.rank = solve.rank;
+    r.rank = final_solve.rank;
     r.iterations = iterations;
     r.points_sampled = pass.sampled;
     r.points_rejected = pass.rejected;
     r.points_matched = pass.matched;
-    r.lever_m = lever;
-    r.residual_sigma = std::sqrt(mean_e2);
+    r.lever_m = final_lever;
+    r.residual_sigma = std::sqrt(final_e2);
     return r;
   }
 }

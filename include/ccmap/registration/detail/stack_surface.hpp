@@ -149,14 +149,20 @@ class StackSurface {
       vxy += dx[k] * dy[k] * p[k];
     }
     const float inv_w2 = inv_w * inv_w;
-    out->var_gx = vxx * inv_w2;
-    out->var_gy = vyy * inv_w2;
+    // Beyond the heights' own errors, a surface that is no plane at the patch's scale (a rock's
+    // rim) has no one gradient: the twist h00 - h10 - h01 + h11 changes the x gradient by
+    // twist / w across the patch (and the y gradient alike), a spread of (twist / w)^2 / 12.
+    const float twist = h[0] - h[1] - h[2] + h[3];
+    const float spread = twist * twist * inv_w2 * (1.0F / 12.0F);
+    out->var_gx = vxx * inv_w2 + spread;
+    out->var_gy = vyy * inv_w2 + spread;
     out->cov_gxy = vxy * inv_w2;
     // The bilinear gradient along x is the difference quotient between the two cell-centre
     // columns (exact at their mid-line, x = (i0 + 1) w, for a quadratic surface), along y between
     // the rows: it belongs to the patch centre, not to the point.
     out->lever_x = (fu0 + 1.0F) * w;
     out->lever_y = (fv0 + 1.0F) * w;
+    out->gradient_is_evidence = false;
     return true;
   }
 
@@ -199,6 +205,7 @@ class StackSurface {
     }
     out->lever_x = grid::cell_centre(index.x, width) + cell.mean_x;
     out->lever_y = grid::cell_centre(index.y, width) + cell.mean_y;
+    out->gradient_is_evidence = true;
     return true;
   }
 
