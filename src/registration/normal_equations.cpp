@@ -108,7 +108,13 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
       return refused();
     }
     step_s = v * step_solver.solve(rhs);
-    Eigen::Matrix4f inv_reduced = cov_solver.solve(Eigen::Matrix4f::Identity());
+    // Column by column: a vector right-hand side keeps Eigen on its fixed-size vector paths
+    // (a matrix right-hand side takes the blocked level-3 solver, which sizes a workspace at run
+    // time and, without alloca, takes it from the heap).
+    Eigen::Matrix4f inv_reduced;
+    for (int k = 0; k < 4; ++k) {
+      inv_reduced.col(k) = cov_solver.solve(Eigen::Vector4f::Unit(k));
+    }
     for (int k = 0; k < 4; ++k) {
       if (!keep[k]) {
         inv_reduced.row(k).setZero();
