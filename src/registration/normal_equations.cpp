@@ -61,11 +61,12 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
     b(i) = eq.b[i] * scale[i];
     for (int j = i; j < 4; ++j) {
       const float s = scale[i] * scale[j];
-      h(i, j) = h(j, i) = eq.h[i][j] * s;
       evidence(i, j) = evidence(j, i) = eq.e[i][j] * s;
+      h(i, j) = h(j, i) = (eq.e[i][j] + eq.f[i][j]) * s;
       noise(i, j) = noise(j, i) = eq.n[i][j] * s;
     }
   }
+  evidence(2, 2) += eq.height_evidence;
   if (!h.allFinite() || !evidence.allFinite() || !noise.allFinite() || !b.allFinite()) {
     return refused();
   }
@@ -158,7 +159,7 @@ bool jackknife_covariance(const NormalEquations4& all, const NormalEquations4* g
     for (int i = 0; i < 4; ++i) {
       (*b)(i) = eq.b[i] * scale[i];
       for (int j = i; j < 4; ++j) {
-        (*h)(i, j) = (*h)(j, i) = eq.h[i][j] * scale[i] * scale[j];
+        (*h)(i, j) = (*h)(j, i) = (eq.e[i][j] + eq.f[i][j]) * scale[i] * scale[j];
       }
     }
   };

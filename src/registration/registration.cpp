@@ -9,8 +9,8 @@ namespace ccmap {
 
 RegistrationParams default_registration_params() noexcept {
   RegistrationParams p{};
-  p.max_points = 2048U;
-  p.max_iterations = 12U;
+  p.max_points = 1024U;
+  p.max_iterations = 10U;
   p.min_matches = 30U;
   p.max_translation_m = 0.5F;
   p.max_yaw_rad = 0.2F;

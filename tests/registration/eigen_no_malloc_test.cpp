@@ -84,7 +84,7 @@ TEST(RegistrationAlgebra, FullRankStepAndCovarianceMatchADoubleSolve) {
     b(i) = eq.b[i];
     for (int j = 0; j < 4; ++j) {
       const int a = std::min(i, j), c = std::max(i, j);
-      h(i, j) = eq.h[a][c];
+      h(i, j) = eq.e[a][c] + eq.f[a][c];
       e(i, j) = eq.e[a][c];
       n(i, j) = eq.n[a][c];
     }
@@ -107,14 +107,14 @@ TEST(RegistrationAlgebra, FlatGroundKeepsOnlyTheHeight) {
   EXPECT_TRUE(s.axis_observable[2]);
   EXPECT_FALSE(s.axis_observable[0] || s.axis_observable[1] || s.axis_observable[3]);
   // The height step is the weighted mean residual's negative: -b_z / H_zz.
-  EXPECT_NEAR(s.step[2], -eq.b[2] / eq.h[2][2], 1e-6);
+  EXPECT_NEAR(s.step[2], -eq.b[2] / eq.e[2][2], 1e-6);
   EXPECT_EQ(s.step[0], 0.0F);
 }
 
 TEST(RegistrationAlgebra, RefusesNonFiniteEquations) {
   NormalEquations4 groups[1];
   NormalEquations4 eq = random_equations(17U, 0.3F, 0, groups);
-  eq.h[0][1] = std::nanf("");
+  eq.e[0][1] = std::nanf("");
   EXPECT_FALSE(solve_normal_equations(eq, 1.5F, 1.0F, 0.03F, 2.0F).ok);
   eq = random_equations(17U, 0.3F, 0, groups);
   EXPECT_FALSE(solve_normal_equations(eq, 0.0F, 1.0F, 0.03F, 2.0F).ok) << "a zero lever";

@@ -61,11 +61,12 @@ struct RegistrationParams {
   /// Variance added to every residual (m^2, >= 0): what the plane model of a cell cannot say
   /// about the ground inside it beyond its own normal variance (curvature, float rounding).
   float model_variance_m2;
-  /// Iterations stop when a step moves no point by more than this (m, > 0; yaw times the lever).
+  /// Iterations stop when no parameter's step moves a point by more than this (m, > 0; yaw
+  /// times the lever) or by more than a quarter of that parameter's standard deviation.
   float convergence_m;
 };
 
-/// Defaults: 2,048 points, 12 iterations, 30 matches, a 0.5 m / 0.2 rad
+/// Defaults: 1,024 points, 10 iterations, 30 matches, a 0.5 m / 0.2 rad
 /// search, observable below 3 cm, Cauchy at 3 sigma, (1 mm)^2 model variance, 0.3 mm steps.
 [[nodiscard]] RegistrationParams default_registration_params() noexcept;
 

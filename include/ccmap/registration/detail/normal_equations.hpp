@@ -11,58 +11,57 @@ namespace ccmap::detail {
 
 /// Normal equations H = sum w J J^T, b = sum w J r of a weighted least-squares problem in the
 /// four parameters (dx, dy, dz, dyaw): J the residual's gradient, r the residual, w its weight.
-/// Beside them, what counts as evidence: E = sum w J J^T over the residuals whose gradient is
-/// evidence (add_evidence), and N = sum w A C A^T, the part of E that errors in their J
-/// contribute on average (J = A g + e_z from an estimated surface gradient g with covariance C:
-/// J = (-g_x, -g_y, 1, g_x l_y - g_y l_x), A = [-1 0; 0 -1; 0 0; l_y -l_x]). A residual whose
-/// gradient is not evidence adds height information only (add_height_evidence).
+/// H is kept in two parts by what the residual's gradient is: evidence (E, add with evidence:
+/// a CCM cell's plane) or not (F: it steers the step, H = E + F, but only its height counts,
+/// add_height_evidence, into the evidence's z entry, E_zz). Beside them N = sum w A C A^T over
+/// the evidence, the part of E that errors in J contribute on average (J = A g + e_z from an
+/// estimated surface gradient g with covariance C: J = (-g_x, -g_y, 1, g_x l_y - g_y l_x),
+/// A = [-1 0; 0 -1; 0 0; l_y -l_x]).
 struct NormalEquations4 {
-  float h[4][4];  ///< symmetric; the add functions fill the upper triangle, solve mirrors it
-  float e[4][4];  ///< the evidence, likewise
+  float e[4][4];  ///< evidence, symmetric: the add functions fill the upper triangle
+  float f[4][4];  ///< the rest of H, likewise
   float n[4][4];  ///< the gradient-noise information of the evidence, likewise
   float b[4];
+  float height_evidence;  ///< information about dz alone from the residuals in F
 
   void clear() noexcept {
     for (int i = 0; i < 4; ++i) {
       b[i] = 0.0F;
       for (int j = 0; j < 4; ++j) {
-        h[i][j] = 0.0F;
         e[i][j] = 0.0F;
+        f[i][j] = 0.0F;
         n[i][j] = 0.0F;
       }
     }
+    height_evidence = 0.0F;
   }
-  /// Adds one residual r with gradient j and weight w to H and b (14 multiply-adds); with
-  /// `evidence` to E as well.
+  /// Adds one residual r with gradient j and weight w to E (evidence) or F, and to b
+  /// (14 multiply-adds).
   void add(const float j[4], float w, float r, bool evidence) noexcept {
+    float (*m)[4] = evidence ? e : f;
     for (int row = 0; row < 4; ++row) {
       const float wj = w * j[row];
       b[row] += wj * r;
       for (int col = row; col < 4; ++col) {
-        h[row][col] += wj * j[col];
-        if (evidence) {
-          e[row][col] += wj * j[col];
-        }
+        m[row][col] += wj * j[col];
       }
     }
   }
-  /// Adds the information w about dz alone to E.
-  void add_height_evidence(float w) noexcept { e[2][2] += w; }
+  /// Adds the information w about dz alone.
+  void add_height_evidence(float w) noexcept { height_evidence += w; }
   /// Adds w A C A^T to N for the gradient covariance C = [var_gx cov; cov var_gy] and lever (lx, ly).
+  /// With a = (-1, 0, 0, ly), c = (0, -1, 0, -lx): A C A^T = var_gx a a^T + var_gy c c^T +
+  /// cov (a c^T + c a^T), zero in the z row and column.
   void add_gradient_noise(float w, float var_gx, float var_gy, float cov_gxy, float lx, float ly) noexcept {
-    // Columns of A: a = (-1, 0, 0, ly), c = (0, -1, 0, -lx); A C A^T = var_gx a a^T + var_gy c c^T
-    // + cov (a c^T + c a^T).
-    const float a[4] = {-1.0F, 0.0F, 0.0F, ly};
-    const float c[4] = {0.0F, -1.0F, 0.0F, -lx};
-    for (int row = 0; row < 4; ++row) {
-      if (row == 2) {
-        continue;  // A has no z row
-      }
-      for (int col = row; col < 4; ++col) {
-        n[row][col] += w * (var_gx * a[row] * a[col] + var_gy * c[row] * c[col] +
-                            cov_gxy * (a[row] * c[col] + c[row] * a[col]));
-      }
-    }
+    const float vx = w * var_gx;
+    const float vy = w * var_gy;
+    const float cv = w * cov_gxy;
+    n[0][0] += vx;
+    n[0][1] += cv;
+    n[0][3] += cv * lx - vx * ly;
+    n[1][1] += vy;
+    n[1][3] += vy * lx - cv * ly;
+    n[3][3] += vx * ly * ly + vy * lx * lx - 2.0F * cv * lx * ly;
   }
 };
 
@@ -81,7 +80,7 @@ struct Solve4 {
 /// Groups of the delete-one-group jackknife (jackknife_covariance).
 inline constexpr int kJackknifeGroups = 8;
 
-/// Observability: the eigen-decomposition of E - noise_margin N, scaled to lengths (the yaw
+/// Observability: the eigen-decomposition of E + height evidence - noise_margin N, scaled to lengths (the yaw
 /// times lever_m, m; lever_m > 0) and divided by variance_factor (>= 1: the residuals' own
 /// scatter beyond their model). A direction is observable when its standard deviation is at
 /// most max_sigma_m and its eigenvalue at least 1e-6 of the largest (float resolution of the

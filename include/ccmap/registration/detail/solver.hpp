@@ -328,9 +328,16 @@ template <typename Samples, typename Surface>
     for (int i = 0; i < 4; ++i) {
       previous[i] = step[i];
     }
-    const bool converged = std::sqrt(step[0] * step[0] + step[1] * step[1]) <= params.convergence_m &&
-                           std::fabs(step[2]) <= params.convergence_m &&
-                           std::fabs(step[3]) * lever <= params.convergence_m;
+    // Converged: the step moves no point by more than convergence_m, or by no more than a
+    // quarter of its own standard deviation (the samples' cells and robust weights can switch
+    // between states that differ by less than the answer is known: a cycle there is noise).
+    bool converged = true;
+    for (int i = 0; i < 4; ++i) {
+      const float length = i == kAxisYaw ? lever : 1.0F;
+      const float quarter_sigma = 0.25F * std::sqrt(solve.covariance[i][i] > 0.0F ? solve.covariance[i][i] : 0.0F);
+      const float bound = params.convergence_m > quarter_sigma * length ? params.convergence_m : quarter_sigma * length;
+      converged = converged && std::fabs(step[i]) * length <= bound;
+    }
     if (!converged && iterations >= params.max_iterations) {
       return unclaimed(Status::kNotConverged);
     }
