@@ -18,6 +18,7 @@
 #include "ccmap/persistence/exchange.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/alignment.hpp"
 #include "support/poses.hpp"
 
 extern "C" {
@@ -171,7 +172,7 @@ TEST(NoHeap, MapExchangeExportsAndMergesWithoutAllocating) {
   EXPECT_EQ(g_allocations.load(), 0L) << "map exchange allocated on the heap";
 }
 
-TEST(NoHeap, RegistrationRegistersWithoutAllocating) {
+TEST(NoHeap, RegistrationAndAlignmentRunWithoutAllocating) {
   ASSERT_EQ(g_stack.init(default_stack_params(0.04F)), Status::kOk);
   // Rolling ground around the sensor, mapped once; the same ground registered again, map frame
   // and sensor frame, and refused (a NaN origin).
@@ -189,6 +190,8 @@ TEST(NoHeap, RegistrationRegistersWithoutAllocating) {
   }
   const Pose pose = test::identity_pose(origin);
   const RegistrationParams params = default_registration_params();
+  std::size_t snapshot_bytes = 0;
+  ASSERT_EQ(save_snapshot(g_stack, g_snapshot, sizeof g_snapshot, &snapshot_bytes), Status::kOk);
   g_allocations = 0;
   g_counting = true;
   long status_errors = 0;
@@ -197,6 +200,10 @@ TEST(NoHeap, RegistrationRegistersWithoutAllocating) {
     status_errors += g_stack.register_frame_sensor(sensor.data(), sensor.size(), pose, params).status != Status::kOk;
     status_errors += g_stack.register_frame(frame.data(), frame.size(), PointXYZ{std::nanf(""), 0.0F, 0.0F}, params)
                          .status != Status::kNonFiniteInput;
+    // Team alignment: the same map as another rover's, from the stack and from its snapshot.
+    status_errors += align_maps(g_stack, g_stack, MapOffset{0.01F, 0.0F, 0.0F}, params).correction.status != Status::kOk;
+    status_errors += align_snapshot(g_stack, g_snapshot, snapshot_bytes, MapOffset{0.0F, 0.01F, 0.0F}, params)
+                         .correction.status != Status::kOk;
   }
   g_counting = false;
   EXPECT_EQ(status_errors, 0);
