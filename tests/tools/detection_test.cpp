@@ -9,6 +9,8 @@
 
 #include "experiments/detection.hpp"
 #include "experiments/drift.hpp"
+#include "experiments/registration.hpp"
+#include "sim/data_dir.hpp"
 
 namespace ex = ccmap::experiments;
 
@@ -150,4 +152,40 @@ TEST(ExperimentsDrift, RegistrationKeepsTheWaveTraversableAndThePoseOnIt) {
     EXPECT_EQ(registered->x_observable, registered->registrations) << "the wave fixes x in every frame";
   }
   EXPECT_FALSE(std::isfinite(ex::drift_crossing(r, w, wl, cfg.tolerance, false, true))) << "registered maps crossed 5 %";
+}
+
+TEST(ExperimentsRegistration, FlatGroundClaimsOnlyHeightAndTheSinusoidAliasesBeyondHalfAPeriod) {
+  ex::RegistrationExpConfig cfg = ex::RegistrationExpConfig::quick();
+  cfg.terrains = {ex::RegistrationTerrain::kFlat, ex::RegistrationTerrain::kSinusoid};
+  const ex::RegistrationExpResult r = ex::run_registration_experiment(cfg);
+  ASSERT_EQ(r.cells.size(), 2U * cfg.overlaps.size() * cfg.offsets.size());
+  for (const ex::RegistrationCell& c : r.cells) {
+    if (c.terrain == ex::RegistrationTerrain::kFlat) {
+      EXPECT_EQ(c.claimed_x + c.claimed_y + c.claimed_yaw, 0) << "flat ground claimed x, y or yaw";
+      EXPECT_EQ(c.claimed_z, c.trials) << "flat ground should fix the height in every trial";
+      EXPECT_EQ(c.over_claims, 0);
+    } else {
+      EXPECT_EQ(c.claimed_y, 0) << "nothing varies along the sinusoid's crests";
+      if (c.offset_m < 0.3) {
+        EXPECT_EQ(c.claimed_x, c.trials) << "offset " << c.offset_m;
+        EXPECT_EQ(c.over_claims, 0) << "offset " << c.offset_m;
+      }
+    }
+  }
+}
+
+TEST(ExperimentsRegistration, RealTerrainWithoutOverClaims) {
+  ex::RegistrationExpConfig cfg = ex::RegistrationExpConfig::quick();
+  cfg.terrains = {ex::RegistrationTerrain::kLoneStar, ex::RegistrationTerrain::kMarsDtm};
+  cfg.offsets = {0.02, 0.1};
+  cfg.data_dir = ccmap::sim::resolve_data_dir();
+  const ex::RegistrationExpResult r = ex::run_registration_experiment(cfg);
+  int available = 0, claimed = 0;
+  for (const ex::RegistrationTerrainInfo& t : r.terrains) available += t.available ? 1 : 0;
+  if (available == 0) GTEST_SKIP() << "no real terrain data: " << r.terrains.front().why;
+  for (const ex::RegistrationCell& c : r.cells) {
+    EXPECT_EQ(c.over_claims, 0) << "terrain " << int(c.terrain) << " overlap " << c.overlap << " offset " << c.offset_m;
+    claimed += c.claimed_x;
+  }
+  EXPECT_GT(claimed, 0) << "real terrain should fix x in some trials";
 }

@@ -62,7 +62,8 @@ struct RegistrationParams {
   /// about the ground inside it beyond its own normal variance (curvature, float rounding).
   float model_variance_m2;
   /// Iterations stop when no parameter's step moves a point by more than this (m, > 0; yaw
-  /// times the lever) or by more than a quarter of that parameter's standard deviation.
+  /// times the lever) or, once the residuals fit their model, by more than a quarter of that
+  /// parameter's standard deviation.
   float convergence_m;
 };
 

@@ -117,6 +117,10 @@ struct SampleRefusals {
 /// average).
 inline constexpr float kGradientNoiseMargin = 2.0F;
 
+/// The residuals fit their model when their mean squared normalised value (the variance
+/// factor) is at most this: only then do the estimate's sigmas end the iterations.
+inline constexpr float kFitFactor = 2.0F;
+
 /// Largest step of one iteration: 10 cm horizontally and vertically, 0.05 rad in yaw.
 inline constexpr float kMaxStepM = 0.10F;
 inline constexpr float kMaxStepRad = 0.05F;
@@ -306,7 +310,10 @@ template <typename Samples, typename Surface>
     lever = lever > kMinLeverM ? lever : kMinLeverM;
     const float mean_e2 = pass.sum_robust > 0.0F ? pass.sum_robust_e2 / pass.sum_robust : 0.0F;
     const float variance_factor = mean_e2 > 1.0F ? mean_e2 : 1.0F;
-    const Solve4 solve = solve_normal_equations(eq, lever, variance_factor, params.max_sigma_m, kGradientNoiseMargin);
+    // The step's subspace: what the information fixes, whatever the residuals say so far (far
+    // from the solution they are all large, and a variance factor from them would forbid every
+    // step). The residuals' fit enters the claims, at the solution.
+    const Solve4 solve = solve_normal_equations(eq, lever, 1.0F, params.max_sigma_m, kGradientNoiseMargin);
     if (!solve.ok) {
       return unclaimed(Status::kNotConverged);
     }
@@ -328,13 +335,17 @@ template <typename Samples, typename Surface>
     for (int i = 0; i < 4; ++i) {
       previous[i] = step[i];
     }
-    // Converged: the step moves no point by more than convergence_m, or by no more than a
-    // quarter of its own standard deviation (the samples' cells and robust weights can switch
-    // between states that differ by less than the answer is known: a cycle there is noise).
+    // Converged: the step moves no point by more than convergence_m, or, once the residuals fit
+    // their model (variance factor <= kFitFactor), by no more than a quarter of its own standard
+    // deviation (the samples' cells and robust weights can switch between states that differ by
+    // less than the answer is known: a cycle there is noise). Far from the solution the
+    // residuals do not fit, their sigmas say nothing, and only convergence_m ends the iterations.
+    const bool fits = variance_factor <= kFitFactor;
     bool converged = true;
     for (int i = 0; i < 4; ++i) {
       const float length = i == kAxisYaw ? lever : 1.0F;
-      const float quarter_sigma = 0.25F * std::sqrt(solve.covariance[i][i] > 0.0F ? solve.covariance[i][i] : 0.0F);
+      const float variance = solve.covariance[i][i] * variance_factor;
+      const float quarter_sigma = fits ? 0.25F * std::sqrt(variance > 0.0F ? variance : 0.0F) : 0.0F;
       const float bound = params.convergence_m > quarter_sigma * length ? params.convergence_m : quarter_sigma * length;
       converged = converged && std::fabs(step[i]) * length <= bound;
     }
