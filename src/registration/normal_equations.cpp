@@ -41,6 +41,54 @@ Eigen::Matrix4f reduced(const Eigen::Matrix4f& m, const Eigen::Matrix4f& v, cons
   return r;
 }
 
+/// The eigen-decomposition (ascending eigenvalues, orthonormal eigenvectors); false if it did not
+/// converge. Each of these helpers has its own frame (noinline), so that their Eigen temporaries
+/// do not add up on the caller's stack (docs/performance.md, the stack of register_frame).
+[[gnu::noinline]] bool decompose(const Eigen::Matrix4f& m, Eigen::Matrix4f* vectors, Eigen::Vector4f* values) noexcept {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4f> solver(m, Eigen::ComputeEigenvectors);
+  if (solver.info() != Eigen::Success) {
+    return false;
+  }
+  *vectors = solver.eigenvectors();
+  *values = solver.eigenvalues();
+  return true;
+}
+
+/// V y with y = (Q^T M Q)^-1 rhs in the kept directions (rhs in V's basis, 0 elsewhere); false
+/// unless Q^T M Q is positive definite.
+[[gnu::noinline]] bool reduced_solve(const Eigen::Matrix4f& m, const Eigen::Matrix4f& v, const bool keep[4],
+                                     const Eigen::Vector4f& rhs, Eigen::Vector4f* out) noexcept {
+  const Eigen::LDLT<Eigen::Matrix4f> ldlt(reduced(m, v, keep));
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
+    return false;
+  }
+  *out = v * ldlt.solve(rhs);
+  return out->allFinite();
+}
+
+/// V (Q^T M Q)^-1 V^T over the kept directions; false unless Q^T M Q is positive definite. Column
+/// by column: a vector right-hand side keeps Eigen on its fixed-size vector paths (a matrix
+/// right-hand side takes the blocked level-3 solver, which sizes a workspace at run time and,
+/// without alloca, takes it from the heap: the Cortex-M7 image refused it).
+[[gnu::noinline]] bool reduced_inverse(const Eigen::Matrix4f& m, const Eigen::Matrix4f& v, const bool keep[4],
+                                       Eigen::Matrix4f* out) noexcept {
+  const Eigen::LDLT<Eigen::Matrix4f> ldlt(reduced(m, v, keep));
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
+    return false;
+  }
+  Eigen::Matrix4f inv;
+  for (int k = 0; k < 4; ++k) {
+    inv.col(k) = keep[k] ? Eigen::Vector4f(ldlt.solve(Eigen::Vector4f::Unit(k))) : Eigen::Vector4f::Zero();
+  }
+  for (int k = 0; k < 4; ++k) {
+    if (!keep[k]) {
+      inv.row(k).setZero();
+    }
+  }
+  *out = v * inv * v.transpose();
+  return out->allFinite();
+}
+
 }  // namespace
 
 Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float variance_factor, float max_sigma_m,
@@ -72,13 +120,11 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
   }
   // Observability from the evidence less the gradients' noise information (its eigenvalues may
   // be negative: directions that noise alone explains fail the threshold like any other).
-  const Eigen::Matrix4f judged = evidence - noise_margin * noise;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4f> solver(judged, Eigen::ComputeEigenvectors);
-  if (solver.info() != Eigen::Success) {
+  Eigen::Matrix4f v;       // orthonormal columns
+  Eigen::Vector4f lambda;  // ascending
+  if (!decompose(evidence - noise_margin * noise, &v, &lambda)) {
     return refused();
   }
-  const Eigen::Vector4f& lambda = solver.eigenvalues();  // ascending
-  const Eigen::Matrix4f& v = solver.eigenvectors();     // orthonormal columns
   // Observable: information / variance_factor >= 1 / max_sigma^2, i.e. the direction's sigma
   // sqrt(variance_factor / lambda) <= max_sigma.
   const float min_lambda = variance_factor / (max_sigma_m * max_sigma_m);
@@ -102,27 +148,10 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
     for (int k = 0; k < 4; ++k) {
       rhs(k) = keep[k] ? rhs(k) : 0.0F;
     }
-    const Eigen::LDLT<Eigen::Matrix4f> step_solver(reduced(h, v, keep));
-    const Eigen::LDLT<Eigen::Matrix4f> cov_solver(reduced(evidence - noise, v, keep));
-    if (step_solver.info() != Eigen::Success || cov_solver.info() != Eigen::Success || !step_solver.isPositive() ||
-        !cov_solver.isPositive()) {
+    if (!reduced_solve(h, v, keep, rhs, &step_s) || !reduced_inverse(evidence - noise, v, keep, &cov_s)) {
       return refused();
     }
-    step_s = v * step_solver.solve(rhs);
-    // Column by column: a vector right-hand side keeps Eigen on its fixed-size vector paths
-    // (a matrix right-hand side takes the blocked level-3 solver, which sizes a workspace at run
-    // time and, without alloca, takes it from the heap).
-    Eigen::Matrix4f inv_reduced;
-    for (int k = 0; k < 4; ++k) {
-      inv_reduced.col(k) = cov_solver.solve(Eigen::Vector4f::Unit(k));
-    }
-    for (int k = 0; k < 4; ++k) {
-      if (!keep[k]) {
-        inv_reduced.row(k).setZero();
-        inv_reduced.col(k).setZero();
-      }
-    }
-    cov_s = variance_factor * (v * inv_reduced * v.transpose());
+    cov_s *= variance_factor;
   }
   if (!step_s.allFinite() || !cov_s.allFinite()) {
     return refused();
@@ -143,8 +172,8 @@ Solve4 solve_normal_equations(const NormalEquations4& eq, float lever_m, float v
   return out;
 }
 
-bool jackknife_covariance(const NormalEquations4& all, const NormalEquations4* groups, const bool* group_used,
-                          const Solve4& solve, float lever_m, float covariance[4][4]) noexcept {
+bool jackknife_covariance(const GroupEquations4* groups, const bool* group_used, const Solve4& solve, float lever_m,
+                          float covariance[4][4]) noexcept {
   if (!solve.ok || !(lever_m > 0.0F) || groups == nullptr || group_used == nullptr) {
     return false;
   }
@@ -155,17 +184,26 @@ bool jackknife_covariance(const NormalEquations4& all, const NormalEquations4* g
       v(i, j) = solve.basis[i][j];
     }
   }
-  auto scaled = [&scale](const NormalEquations4& eq, Eigen::Matrix4f* h, Eigen::Vector4f* b) {
+  auto scaled_group = [&scale](const GroupEquations4& eq, Eigen::Matrix4f* h, Eigen::Vector4f* b) {
     for (int i = 0; i < 4; ++i) {
       (*b)(i) = eq.b[i] * scale[i];
       for (int j = i; j < 4; ++j) {
-        (*h)(i, j) = (*h)(j, i) = (eq.e[i][j] + eq.f[i][j]) * scale[i] * scale[j];
+        (*h)(i, j) = (*h)(j, i) = eq.h[i][j] * scale[i] * scale[j];
       }
     }
   };
-  Eigen::Matrix4f h_all;
-  Eigen::Vector4f b_all;
-  scaled(all, &h_all, &b_all);
+  // The whole: the sum of the groups.
+  Eigen::Matrix4f h_all = Eigen::Matrix4f::Zero();
+  Eigen::Vector4f b_all = Eigen::Vector4f::Zero();
+  for (int g = 0; g < kJackknifeGroups; ++g) {
+    if (group_used[g]) {
+      Eigen::Matrix4f h_g;
+      Eigen::Vector4f b_g;
+      scaled_group(groups[g], &h_g, &b_g);
+      h_all += h_g;
+      b_all += b_g;
+    }
+  }
   Eigen::Vector4f deltas[kJackknifeGroups];
   int used = 0;
   Eigen::Vector4f mean = Eigen::Vector4f::Zero();
@@ -175,18 +213,13 @@ bool jackknife_covariance(const NormalEquations4& all, const NormalEquations4* g
     }
     Eigen::Matrix4f h_g;
     Eigen::Vector4f b_g;
-    scaled(groups[g], &h_g, &b_g);
+    scaled_group(groups[g], &h_g, &b_g);
     Eigen::Vector4f rhs = v.transpose() * (b_g - b_all);
     for (int k = 0; k < 4; ++k) {
       rhs(k) = solve.keep[k] ? rhs(k) : 0.0F;
     }
-    const Eigen::LDLT<Eigen::Matrix4f> ldlt(reduced(h_all - h_g, v, solve.keep));
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
+    if (!reduced_solve(h_all - h_g, v, solve.keep, rhs, &deltas[used])) {
       return false;  // the rest does not determine the subspace without this group: no estimate
-    }
-    deltas[used] = v * ldlt.solve(rhs);
-    if (!deltas[used].allFinite()) {
-      return false;
     }
     mean += deltas[used];
     ++used;

@@ -23,7 +23,7 @@ namespace {
 
 /// Normal equations of n random residuals with gradients (-gx, -gy, 1, gx ly - gy lx): a terrain
 /// with slopes of `slope` (0: flat) and levers up to 3 m.
-NormalEquations4 random_equations(std::uint32_t seed, float slope, int groups_n, NormalEquations4* groups) {
+NormalEquations4 random_equations(std::uint32_t seed, float slope, int groups_n, GroupEquations4* groups) {
   std::mt19937 rng(seed);
   std::normal_distribution<float> g(0.0F, 1.0F);
   NormalEquations4 eq{};
@@ -37,13 +37,13 @@ NormalEquations4 random_equations(std::uint32_t seed, float slope, int groups_n,
     const float r = 1.0e-3F * g(rng);
     eq.add(j, w, r, true);
     eq.add_gradient_noise(w, 1e-6F, 1e-6F, 0.0F, lx, ly);
-    if (groups_n > 0) groups[i % groups_n].add(j, w, r, true);
+    if (groups_n > 0) groups[i % groups_n].add(j, w, r);
   }
   return eq;
 }
 
 TEST(RegistrationAlgebra, SolvesWithoutTheHeap) {
-  NormalEquations4 groups[kJackknifeGroups];
+  GroupEquations4 groups[kJackknifeGroups];
   bool used[kJackknifeGroups];
   for (bool& u : used) u = true;
   for (const float slope : {0.0F, 0.05F, 0.3F}) {
@@ -51,7 +51,7 @@ TEST(RegistrationAlgebra, SolvesWithoutTheHeap) {
     Eigen::internal::set_is_malloc_allowed(false);
     const Solve4 s = solve_normal_equations(eq, 1.5F, 1.0F, 0.03F, 2.0F);
     float jack[4][4] = {};
-    const bool jack_ok = s.rank > 0U && jackknife_covariance(eq, groups, used, s, 1.5F, jack);
+    const bool jack_ok = s.rank > 0U && jackknife_covariance(groups, used, s, 1.5F, jack);
     Eigen::internal::set_is_malloc_allowed(true);
     ASSERT_TRUE(s.ok) << "slope " << slope;
     if (s.rank > 0U) {
@@ -73,7 +73,7 @@ TEST(RegistrationAlgebraDeathTest, TheGuardCatchesAnEigenHeapAllocation) {
 }
 
 TEST(RegistrationAlgebra, FullRankStepAndCovarianceMatchADoubleSolve) {
-  NormalEquations4 groups[1];
+  GroupEquations4 groups[1];
   const NormalEquations4 eq = random_equations(11U, 0.3F, 0, groups);
   const Solve4 s = solve_normal_equations(eq, 1.5F, 1.0F, 0.03F, 2.0F);
   ASSERT_TRUE(s.ok);
@@ -99,7 +99,7 @@ TEST(RegistrationAlgebra, FullRankStepAndCovarianceMatchADoubleSolve) {
 }
 
 TEST(RegistrationAlgebra, FlatGroundKeepsOnlyTheHeight) {
-  NormalEquations4 groups[1];
+  GroupEquations4 groups[1];
   const NormalEquations4 eq = random_equations(13U, 0.0F, 0, groups);
   const Solve4 s = solve_normal_equations(eq, 1.5F, 1.0F, 0.03F, 2.0F);
   ASSERT_TRUE(s.ok);
@@ -112,7 +112,7 @@ TEST(RegistrationAlgebra, FlatGroundKeepsOnlyTheHeight) {
 }
 
 TEST(RegistrationAlgebra, RefusesNonFiniteEquations) {
-  NormalEquations4 groups[1];
+  GroupEquations4 groups[1];
   NormalEquations4 eq = random_equations(17U, 0.3F, 0, groups);
   eq.e[0][1] = std::nanf("");
   EXPECT_FALSE(solve_normal_equations(eq, 1.5F, 1.0F, 0.03F, 2.0F).ok);

@@ -65,6 +65,30 @@ struct NormalEquations4 {
   }
 };
 
+/// One block of ground's part of H (every residual, evidence or not) and b, for the jackknife:
+/// 20 floats, where NormalEquations4 keeps 53.
+struct GroupEquations4 {
+  float h[4][4];  ///< upper triangle filled
+  float b[4];
+  void clear() noexcept {
+    for (int i = 0; i < 4; ++i) {
+      b[i] = 0.0F;
+      for (int j = 0; j < 4; ++j) {
+        h[i][j] = 0.0F;
+      }
+    }
+  }
+  void add(const float j[4], float w, float r) noexcept {
+    for (int row = 0; row < 4; ++row) {
+      const float wj = w * j[row];
+      b[row] += wj * r;
+      for (int col = row; col < 4; ++col) {
+        h[row][col] += wj * j[col];
+      }
+    }
+  }
+};
+
 /// Solution of the normal equations in the observable subspace.
 struct Solve4 {
   float step[4];           ///< -H^+ b over the observable directions (m, m, m, rad)
@@ -93,16 +117,14 @@ inline constexpr int kJackknifeGroups = 8;
                                             float max_sigma_m, float noise_margin) noexcept;
 
 /// The delete-one-group jackknife covariance of the solution in the observable subspace of
-/// `solve` (solve_normal_equations of `all` with the same lever_m): `all` is the sum of the
-/// groups' normal equations, accumulated at the solution (b of all ~ 0). Without group g the
-/// solution moves by delta_g = (H - H_g)^-1 (b_g - b) restricted to the subspace (H: the step's
-/// matrix, every residual); the estimate is
-/// (G - 1) / G sum (delta_g - mean)(delta_g - mean)^T over the G groups that hold samples
-/// (G >= 2; else false). Groups are blocks of ground, so what their samples share (a rock seen
-/// differently from two places, a cell whose plane misleads) shows as scatter between groups,
-/// which the model covariance, built on independent samples, cannot show.
-[[nodiscard]] bool jackknife_covariance(const NormalEquations4& all, const NormalEquations4* groups,
-                                        const bool* group_used, const Solve4& solve, float lever_m,
-                                        float covariance[4][4]) noexcept;
+/// `solve` (solve_normal_equations with the same lever_m, at the same solution): the groups'
+/// normal equations (H: every residual; b ~ 0 summed over all of them at the solution). Without
+/// group g the solution moves by delta_g = (H - H_g)^-1 (b_g - b) restricted to the subspace;
+/// the estimate is (G - 1) / G sum (delta_g - mean)(delta_g - mean)^T over the G groups that hold
+/// samples (G >= 2; else false). Groups are blocks of ground, so what their samples share (a rock
+/// seen differently from two places, a cell whose plane misleads) shows as scatter between
+/// groups, which the model covariance, built on independent samples, cannot show.
+[[nodiscard]] bool jackknife_covariance(const GroupEquations4* groups, const bool* group_used, const Solve4& solve,
+                                        float lever_m, float covariance[4][4]) noexcept;
 
 }  // namespace ccmap::detail

@@ -160,7 +160,7 @@ struct RigidState {
 template <typename Samples, typename Surface>
 void registration_pass(const Samples& samples, const Surface& surface, float ox, float oy, float oz,
                        const RigidState& state, const RegistrationParams& params, NormalEquations4* eq,
-                       RegistrationPass* pass, NormalEquations4* groups = nullptr, bool* group_used = nullptr,
+                       RegistrationPass* pass, GroupEquations4* groups = nullptr, bool* group_used = nullptr,
                        float block_m = 1.0F) noexcept {
   eq->clear();
   if (groups != nullptr) {
@@ -237,7 +237,7 @@ void registration_pass(const Samples& samples, const Surface& surface, float ox,
       const auto bx = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::floor(qx * inv_block)));
       const auto by = static_cast<std::uint32_t>(static_cast<std::int32_t>(std::floor(qy * inv_block)));
       const std::uint32_t g = ((bx * 73856093U) ^ (by * 19349663U)) >> 29U;  // top 3 bits: 8 groups
-      groups[g].add(j, w, r, plane.gradient_is_evidence);
+      groups[g].add(j, w, r);
       group_used[g] = true;
     }
     if (plane.gradient_is_evidence) {
@@ -262,14 +262,111 @@ void registration_pass(const Samples& samples, const Surface& surface, float ox,
   *pass = acc;
 }
 
-/// Runs the registration. (ox, oy, oz): the rotation centre (the sensor origin of a frame).
-/// `extent_floor_m`: samples spanning less than this in both x and y are a degenerate frame.
-/// `block_m`: the side of the blocks of ground the jackknife groups samples by (>= 0.01 m).
-/// Preconditions: params validated.
+/// The final pass at the converged state (finish_registration): the normal equations there,
+/// solved for observability and the covariance; *pass, *lever, *e2 (the mean squared normalised
+/// residual) as gathered. Its own frame (noinline): the normal equations and the eigen solver's
+/// temporaries are not on the stack beside the jackknife's groups.
 template <typename Samples, typename Surface>
-[[nodiscard]] RegistrationResult solve_registration(const Samples& samples, const Surface& surface, float ox, float oy,
-                                                    float oz, const RegistrationParams& params,
-                                                    float extent_floor_m, float block_m) noexcept {
+[[gnu::noinline]] Solve4 final_pass(const Samples& samples, const Surface& surface, float ox, float oy, float oz,
+                                    const RigidState& state, const RegistrationParams& params, RegistrationPass* pass,
+                                    float* lever, float* e2) noexcept {
+  NormalEquations4 eq{};
+  registration_pass(samples, surface, ox, oy, oz, state, params, &eq, pass);
+  float l = pass->sum_w > 0.0F ? std::sqrt(pass->sum_w_lever_sq / pass->sum_w) : 0.0F;
+  *lever = l > kMinLeverM ? l : kMinLeverM;
+  *e2 = pass->sum_robust > 0.0F ? pass->sum_robust_e2 / pass->sum_robust : 0.0F;
+  if (pass->matched < params.min_matches) {
+    Solve4 refused{};
+    refused.ok = false;
+    return refused;
+  }
+  return solve_normal_equations(eq, *lever, *e2 > 1.0F ? *e2 : 1.0F, params.max_sigma_m, kGradientNoiseMargin);
+}
+
+/// The jackknife's pass at the converged state (finish_registration): the normal equations per
+/// block of ground (block_m squares), and the delete-one-group covariance in the subspace of
+/// `solve`. Its own frame (noinline), as final_pass.
+template <typename Samples, typename Surface>
+[[gnu::noinline]] bool jackknife_pass(const Samples& samples, const Surface& surface, float ox, float oy, float oz,
+                                      const RigidState& state, const RegistrationParams& params, float block_m,
+                                      const Solve4& solve, float lever, float covariance[4][4]) noexcept {
+  NormalEquations4 unused{};
+  RegistrationPass pass{};
+  GroupEquations4 groups[kJackknifeGroups];
+  bool group_used[kJackknifeGroups] = {};
+  registration_pass(samples, surface, ox, oy, oz, state, params, &unused, &pass, groups, group_used, block_m);
+  return jackknife_covariance(groups, group_used, solve, lever, covariance);
+}
+
+/// The end of a converged registration (solve_registration): observability and the covariance
+/// at the solution (final_pass), the jackknife (jackknife_pass), the claims. Two passes over the
+/// samples, one per helper, so that their buffers never share the stack.
+template <typename Samples, typename Surface>
+[[gnu::noinline]] RegistrationResult finish_registration(const Samples& samples, const Surface& surface, float ox,
+                                                         float oy, float oz, const RigidState& state,
+                                                         const RegistrationParams& params, float block_m,
+                                                         std::uint32_t iterations) noexcept {
+  RegistrationPass pass{};
+  float final_lever = kMinLeverM;
+  float final_e2 = 0.0F;
+  const Solve4 final_solve = final_pass(samples, surface, ox, oy, oz, state, params, &pass, &final_lever, &final_e2);
+  if (!final_solve.ok) {
+    RegistrationResult r = unclaimed_result(Status::kNotConverged);
+    r.iterations = iterations;
+    r.points_sampled = pass.sampled;
+    r.points_rejected = pass.rejected;
+    r.points_matched = pass.matched;
+    return r;
+  }
+  // The jackknife's covariance where it is larger than the model's: what blocks of ground
+  // disagree on is not known, whatever the model says. Without an estimate (fewer than two
+  // blocks, or a block the rest cannot do without) nothing beyond dz is claimed.
+  float jack[4][4] = {};
+  const bool jack_ok = jackknife_pass(samples, surface, ox, oy, oz, state, params, block_m, final_solve, final_lever, jack);
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  RegistrationResult r{};
+  r.status = Status::kOk;
+  const float values[4] = {state.tx, state.ty, state.tz, state.yaw};
+  float out[4] = {};
+  float sigma[4] = {};
+  for (int i = 0; i < 4; ++i) {
+    float variance = final_solve.covariance[i][i];
+    if (jack_ok) {
+      variance = jack[i][i] > variance ? jack[i][i] : variance;
+    } else if (i != kAxisZ) {
+      variance = kInf;
+    }
+    const float limit = i == kAxisYaw ? params.max_sigma_m / final_lever : params.max_sigma_m;
+    const float sd = std::sqrt(variance);
+    r.observable[i] = final_solve.axis_observable[i] && sd <= limit;
+    out[i] = final_solve.axis_share[i] < kAxisAbsent ? 0.0F : values[i];
+    sigma[i] = r.observable[i] ? sd : kInf;
+  }
+  r.dx = out[0];
+  r.dy = out[1];
+  r.dz = out[2];
+  r.dyaw = out[3];
+  r.sigma_dx = sigma[0];
+  r.sigma_dy = sigma[1];
+  r.sigma_dz = sigma[2];
+  r.sigma_dyaw = sigma[3];
+  r.rank = final_solve.rank;
+  r.iterations = iterations;
+  r.points_sampled = pass.sampled;
+  r.points_rejected = pass.rejected;
+  r.points_matched = pass.matched;
+  r.lever_m = final_lever;
+  r.residual_sigma = std::sqrt(final_e2);
+  return r;
+}
+
+/// The iterations of solve_registration: a refusal, or kOk (nothing claimed yet) with the
+/// converged state and the iterations used. Its own frame (noinline).
+template <typename Samples, typename Surface>
+[[gnu::noinline]] RegistrationResult iterate_registration(const Samples& samples, const Surface& surface, float ox,
+                                                          float oy, float oz, const RegistrationParams& params,
+                                                          float extent_floor_m, RigidState* converged_state,
+                                                          std::uint32_t* converged_iterations) noexcept {
   RigidState state{};
   NormalEquations4 eq{};
   RegistrationPass pass{};
@@ -377,63 +474,28 @@ template <typename Samples, typename Surface>
     if (!converged) {
       continue;
     }
-    // Converged. One more pass at the solution gives the normal equations for observability and
-    // the covariance, and the same per block of ground for the jackknife.
-    NormalEquations4 groups[kJackknifeGroups];
-    bool group_used[kJackknifeGroups] = {};
-    registration_pass(samples, surface, ox, oy, oz, state, params, &eq, &pass, groups, group_used, block_m);
-    if (pass.matched < params.min_matches) {
-      return unclaimed(Status::kNotConverged);
-    }
-    float final_lever = pass.sum_w > 0.0F ? std::sqrt(pass.sum_w_lever_sq / pass.sum_w) : 0.0F;
-    final_lever = final_lever > kMinLeverM ? final_lever : kMinLeverM;
-    const float final_e2 = pass.sum_robust > 0.0F ? pass.sum_robust_e2 / pass.sum_robust : 0.0F;
-    const Solve4 final_solve = solve_normal_equations(eq, final_lever, final_e2 > 1.0F ? final_e2 : 1.0F,
-                                                      params.max_sigma_m, kGradientNoiseMargin);
-    if (!final_solve.ok) {
-      return unclaimed(Status::kNotConverged);
-    }
-    // The jackknife's covariance where it is larger than the model's: what blocks of ground
-    // disagree on is not known, whatever the model says. Without an estimate (fewer than two
-    // blocks, or a block the rest cannot do without) nothing beyond dz is claimed.
-    float jack[4][4] = {};
-    const bool jack_ok = jackknife_covariance(eq, groups, group_used, final_solve, final_lever, jack);
-    constexpr float kInf = std::numeric_limits<float>::infinity();
-    RegistrationResult r{};
-    r.status = Status::kOk;
-    const float values[4] = {state.tx, state.ty, state.tz, state.yaw};
-    float out[4] = {};
-    float sigma[4] = {};
-    for (int i = 0; i < 4; ++i) {
-      float variance = final_solve.covariance[i][i];
-      if (jack_ok) {
-        variance = jack[i][i] > variance ? jack[i][i] : variance;
-      } else if (i != kAxisZ) {
-        variance = kInf;
-      }
-      const float limit = i == kAxisYaw ? params.max_sigma_m / final_lever : params.max_sigma_m;
-      const float sd = std::sqrt(variance);
-      r.observable[i] = final_solve.axis_observable[i] && sd <= limit;
-      out[i] = final_solve.axis_share[i] < kAxisAbsent ? 0.0F : values[i];
-      sigma[i] = r.observable[i] ? sd : kInf;
-    }
-    r.dx = out[0];
-    r.dy = out[1];
-    r.dz = out[2];
-    r.dyaw = out[3];
-    r.sigma_dx = sigma[0];
-    r.sigma_dy = sigma[1];
-    r.sigma_dz = sigma[2];
-    r.sigma_dyaw = sigma[3];
-    r.rank = final_solve.rank;
-    r.iterations = iterations;
-    r.points_sampled = pass.sampled;
-    r.points_rejected = pass.rejected;
-    r.points_matched = pass.matched;
-    r.lever_m = final_lever;
-    r.residual_sigma = std::sqrt(final_e2);
-    return r;
+    *converged_state = state;
+    *converged_iterations = iterations;
+    return unclaimed(Status::kOk);  // a marker: solve_registration goes on
   }
+}
+
+/// Runs the registration. (ox, oy, oz): the rotation centre (the sensor origin of a frame).
+/// `extent_floor_m`: samples spanning less than this in both x and y are a degenerate frame.
+/// `block_m`: the side of the blocks of ground the jackknife groups samples by (>= 0.01 m).
+/// Preconditions: params validated. The iterations and the end each have their own frame.
+template <typename Samples, typename Surface>
+[[nodiscard]] RegistrationResult solve_registration(const Samples& samples, const Surface& surface, float ox, float oy,
+                                                    float oz, const RegistrationParams& params,
+                                                    float extent_floor_m, float block_m) noexcept {
+  RigidState state{};
+  std::uint32_t iterations = 0U;
+  const RegistrationResult iterated =
+      iterate_registration(samples, surface, ox, oy, oz, params, extent_floor_m, &state, &iterations);
+  if (iterated.status != Status::kOk) {
+    return iterated;
+  }
+  return finish_registration(samples, surface, ox, oy, oz, state, params, block_m, iterations);
 }
 
 }  // namespace ccmap::detail
