@@ -1,8 +1,8 @@
 # Installable package: `cmake --install` gives the public headers (include/ccmap/**, the platform
 # header), the static libraries (ccmap_core and the platform library chosen by CCMAP_PLATFORM),
 # a CMake package (find_package(ccmap) -> ccmap::core, with the platform resolved) and a
-# pkg-config file ccmap.pc. The flight core has no third-party dependency (Eigen serves the
-# tests' double-precision references and the host tools only).
+# pkg-config file ccmap.pc. The flight core has no third-party dependency a consumer needs: Eigen
+# (header-only) is compiled into src/registration/ and appears in no installed header.
 # examples/consumer builds against it; tools/check-install proves it for host and aarch64.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)

@@ -49,6 +49,9 @@ typedef enum ccmap_status {
   CCMAP_VERSION_MISMATCH = 10, /* snapshot of another format version or another preset */
   CCMAP_DUPLICATE = 11,        /* map exchange: delta already merged (sender, sequence) or this map's own */
   CCMAP_MISALIGNED = 12,       /* map exchange: another cell width, or an origin offset off the coarsest grid */
+  CCMAP_INSUFFICIENT_OVERLAP = 13, /* registration: too few samples on known cells of the map */
+  CCMAP_DEGENERATE_INPUT = 14,     /* registration: no usable points, or all of them at one spot */
+  CCMAP_NOT_CONVERGED = 15,        /* registration: no solution within the iteration or search bounds */
   CCMAP_STATUS_MAX_ENUM_ = 0x7FFFFFFF /* not a status: keeps the enum 32 bits wide */
 } ccmap_status;
 
@@ -211,6 +214,63 @@ typedef struct ccmap_pose {
 /* Same as ccmap_update_frame for points in the sensor frame (noise-model weights). */
 ccmap_status ccmap_update_frame_sensor(ccmap_map* map, const float* xyz, size_t n, const ccmap_pose* pose,
                                        ccmap_frame_counters* counters);
+
+/* ---- registration (include/ccmap/registration/registration.hpp, types.hpp) ------------------ */
+/* The rigid correction (dx, dy, dz m; dyaw rad about the vertical through the rotation centre:
+ * the sensor origin of a frame) that best aligns a frame's map-frame points with the map: p' =
+ * Rz(dyaw)(p - o) + o + d. Axes a terrain does not fix are not claimed: observable[k] == 0, their
+ * sigma +infinity, and the correction has no component along them. Indices: 0 dx, 1 dy, 2 dz, 3 dyaw. */
+typedef struct ccmap_registration_params {
+  uint32_t max_points;      /* points used, at most (every k-th): 1 .. 65536 */
+  uint32_t max_iterations;  /* 1 .. 64 */
+  uint32_t min_matches;     /* fewest points on known cells, >= 3 */
+  float max_translation_m;  /* search bound of |(dx, dy)| and |dz| */
+  float max_yaw_rad;        /* search bound of |dyaw|, (0, 0.5] */
+  float max_sigma_m;        /* a direction is observable when its sigma is at most this (yaw times the lever) */
+  float robust_sigmas;      /* Cauchy weight scale in standard deviations */
+  float model_variance_m2;  /* variance added to every residual */
+  float convergence_m;      /* a step moving no point by more than this ends the iterations */
+} ccmap_registration_params;
+
+typedef struct ccmap_registration_result {
+  int32_t status;          /* ccmap_status; on any but CCMAP_OK nothing is claimed */
+  float correction[4];     /* dx, dy, dz (m), dyaw (rad) */
+  float sigma[4];          /* 1-sigma; +infinity where not observable */
+  uint8_t observable[4];   /* 1 where the terrain fixes the parameter */
+  uint32_t rank;           /* observable directions, 0 .. 4 */
+  uint32_t iterations;
+  uint32_t points_sampled;
+  uint32_t points_rejected;
+  uint32_t points_matched;
+  float lever_m;           /* the yaw's lever arm */
+  float residual_sigma;    /* RMS residual in its own standard deviations */
+  float centre[2];         /* rotation centre, map frame (m): the sensor origin; team alignment: the
+                              centre of the other map's cells */
+  uint32_t cells;          /* team alignment: the other map's usable cells; 0 for a frame */
+} ccmap_registration_result;
+
+/* The library's defaults (1,024 points, 10 iterations, ...). CCMAP_INVALID_ARGUMENT for NULL. */
+ccmap_status ccmap_default_registration_params(ccmap_registration_params* out);
+/* Registers map-frame points (xyz: 3 n floats) seen from sensor_origin_xyz before they are folded
+ * in; changes nothing in the map. params NULL: the defaults. Returns out->status:
+ * CCMAP_NOT_INITIALISED, CCMAP_INVALID_ARGUMENT (NULL out or origin, NULL xyz with n > 0, bad
+ * params), CCMAP_NON_FINITE_INPUT, CCMAP_OUT_OF_RANGE, CCMAP_DEGENERATE_INPUT, CCMAP_OUTSIDE_MAP
+ * (a pose far from the map), CCMAP_INSUFFICIENT_OVERLAP, CCMAP_NOT_CONVERGED. */
+ccmap_status ccmap_register_frame(const ccmap_map* map, const float* xyz, size_t n, const float* sensor_origin_xyz,
+                                  const ccmap_registration_params* params, ccmap_registration_result* out);
+/* The same for sensor-frame points with the sensor pose (rotation centre: its translation). */
+ccmap_status ccmap_register_frame_sensor(const ccmap_map* map, const float* xyz, size_t n, const ccmap_pose* pose,
+                                         const ccmap_registration_params* params, ccmap_registration_result* out);
+/* Team alignment (include/ccmap/registration/alignment.hpp): the correction of another map of the
+ * same preset, a snapshot (ccmap_save_snapshot) placed by the nominal offset (its map-frame
+ * point p lies at p + offset in this map, m), or an exchange delta placed by the two origins in
+ * the team frame (this map's origin given here). Also CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH,
+ * CCMAP_MISALIGNED (another cell width), CCMAP_OUT_OF_RANGE (a bad offset). */
+ccmap_status ccmap_align_snapshot(const ccmap_map* map, const uint8_t* data, size_t size, const float* offset_xyz_m,
+                                  const ccmap_registration_params* params, ccmap_registration_result* out);
+ccmap_status ccmap_align_delta(const ccmap_map* map, const uint8_t* data, size_t size, int32_t origin_x_cells,
+                               int32_t origin_y_cells, float origin_z_m, const ccmap_registration_params* params,
+                               ccmap_registration_result* out);
 
 /* ---- queries -------------------------------------------------------------------------------- */
 typedef enum ccmap_cell_class {

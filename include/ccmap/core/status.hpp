@@ -23,6 +23,9 @@ enum class Status : std::uint8_t {
   kDuplicate,          ///< map exchange: data already merged (same sender and sequence), or this map's own
   kMisaligned,         ///< map exchange: the grids disagree (cell width, or an origin offset that is not a
                        ///< whole number of the coarsest layer's cells)
+  kInsufficientOverlap,  ///< registration: too few samples on known cells of the map
+  kDegenerateInput,      ///< registration: no usable points, or all of them at one spot
+  kNotConverged,         ///< registration: no solution within the iteration or search bounds
 };
 
 /// Short, stable, lower-case name of a status ("ok", "non_finite_input", ...). Never nullptr.

@@ -44,6 +44,7 @@
 #include "ccmap/map/update/update_path.hpp"
 #include "ccmap/map/types.hpp"
 #include "ccmap/platform/platform.hpp"
+#include "ccmap/registration/types.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap {
@@ -56,6 +57,8 @@ template <typename Config>
 struct PlannerAccess;   // planner/detail/region_walk.hpp: the planner queries read the query view
 template <typename Config>
 struct ExchangeAccess;  // persistence/exchange.hpp: delta export and merge read and fold cells
+template <typename Config>
+struct RegistrationAccess;  // registration/registration.hpp: register_frame(_sensor), public reads only
 }  // namespace detail
 
 template <typename Config>
@@ -239,6 +242,25 @@ class Stack {
     update_.run_sensor(layers_, params_, points, n, pose, frame);
     finish_frame(frame, start, counters);
     return Status::kOk;
+  }
+
+  // -------------------------------------------------------------------------------------------
+  // Registration (registration/registration.hpp; docs/design.md, "Registration")
+  // -------------------------------------------------------------------------------------------
+
+  /// The rigid correction (dx, dy, dz, dyaw about the vertical through sensor_origin) that best
+  /// aligns this frame's map-frame points with the map, with its standard deviations and which
+  /// of the four are observable (registration/types.hpp). Changes nothing in the map; the caller
+  /// applies it to its pose and then updates. Statuses: registration/registration.hpp.
+  [[nodiscard]] RegistrationResult register_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
+                                                  const RegistrationParams& params) const noexcept {
+    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_origin, nullptr, params);
+  }
+  /// The same for sensor-frame points with the sensor pose (rotation centre: the sensor position).
+  [[nodiscard]] RegistrationResult register_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& sensor_pose,
+                                                         const RegistrationParams& params) const noexcept {
+    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_pose.translation,
+                                                              &sensor_pose.rotation[0][0], params);
   }
 
   // -------------------------------------------------------------------------------------------
@@ -459,3 +481,7 @@ class Stack {
 };
 
 }  // namespace ccmap
+
+// Stack::register_frame(_sensor)'s implementation (it includes this header, then defines the
+// templates the two members forward to).
+#include "ccmap/registration/registration.hpp"
