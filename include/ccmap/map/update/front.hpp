@@ -139,7 +139,7 @@ struct FramePose {
   std::int64_t translation_q18[3];  ///< sensor position, map frame (Q18, rounded); sensor frame only
 };
 
-/// Points per front chunk: the chunk is 11 KB (fits a 32 KB L1 data cache beside the cells).
+/// Points per front chunk: a FrontChunk (64 B per point) fits a 32 KB L1 data cache beside the cells.
 inline constexpr std::size_t kFrontChunkPoints = 128U;
 
 /// The front's answer for a chunk of points, structure of arrays (vectorisable), owned by the
