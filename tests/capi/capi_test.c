@@ -654,7 +654,7 @@ static void test_named_refusals(void) {
   q.finest_cell_width_m = 1.0e-4f; /* below 0.19 mm: indices of 1e5 m would leave +-2^29 */
   CHECK_STATUS(ccmap_init(fresh, &q), CCMAP_INVALID_ARGUMENT);
   q = p;
-  q.finest_cell_width_m = 7.0f; /* the 64x wider coarsest layer would have 448 m cells */
+  q.finest_cell_width_m = 7.0f; /* the coarsest layer (16x wider) would have 112 m cells */
   CHECK_STATUS(ccmap_init(fresh, &q), CCMAP_INVALID_ARGUMENT);
   q = p;
   q.noise.lidar_sigma_per_m = (float)INFINITY;
