@@ -785,6 +785,74 @@ static void test_named_refusals(void) {
   }
 }
 
+/* The size and alignment queries and the exchange placement of every preset (and a bad one), an
+ * exchange of each single-layer preset answering, and the inverse-variance weighting accepted by
+ * init. References: the header's constants and the alignment the storage unions give. */
+static void test_every_preset_entry(void) {
+  const ccmap_preset presets[4] = {CCMAP_PRESET_CADRE, CCMAP_PRESET_SINGLE_CCM, CCMAP_PRESET_SINGLE_KALMAN,
+                                   CCMAP_PRESET_SINGLE_OMG};
+  const size_t exchange_bounds[4] = {CCMAP_CADRE_EXCHANGE_STORAGE_SIZE, CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE,
+                                     CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE, CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE};
+  ccmap_params p;
+  ccmap_map* map = NULL;
+  int k;
+  for (k = 0; k < 4; ++k) {
+    const size_t align = ccmap_storage_align(presets[k]);
+    const size_t exchange_align = ccmap_exchange_storage_align(presets[k]);
+    CHECK(align >= 4u && align <= CCMAP_STORAGE_ALIGN && (align & (align - 1u)) == 0u);
+    CHECK(exchange_align >= 4u && exchange_align <= CCMAP_STORAGE_ALIGN && (exchange_align & (exchange_align - 1u)) == 0u);
+    /* The smallest delta: the 88-byte header, 12 bytes per layer, the 4-byte CRC. */
+    CHECK(ccmap_delta_min_size(presets[k]) == 88u + 12u * (k == 0 ? 5u : 1u) + 4u);
+    CHECK(ccmap_exchange_storage_size(presets[k]) <= exchange_bounds[k]);
+    if (ccmap_exchange_storage_size(presets[k]) + CCMAP_STORAGE_ALIGN <= sizeof g_single) {
+      ccmap_exchange* ex = NULL;
+      ccmap_exchange_counters ec;
+      CHECK_STATUS(ccmap_exchange_place(aligned_in_single(0u), ccmap_exchange_storage_size(presets[k]), presets[k], &ex),
+                   CCMAP_OK);
+      CHECK_STATUS(ccmap_exchange_get_counters(ex, &ec), CCMAP_OK);
+      CHECK(ec.deltas_exported == 0u && ec.refused == 0u);
+    }
+  }
+  CHECK(ccmap_storage_align((ccmap_preset)9) == 0u);
+  CHECK(ccmap_exchange_storage_align((ccmap_preset)9) == 0u);
+  CHECK(ccmap_delta_min_size((ccmap_preset)9) == 0u);
+  CHECK(ccmap_delta_max_size((ccmap_preset)9) == 0u);
+
+  /* An OMG map and its exchange side by side in the single-layer storage: bound, exporting. */
+  {
+    const size_t map_size = ccmap_storage_size(CCMAP_PRESET_SINGLE_OMG) + CCMAP_STORAGE_ALIGN;
+    if (map_size + ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_OMG) + CCMAP_STORAGE_ALIGN <= sizeof g_single) {
+      ccmap_exchange* ex = NULL;
+      ccmap_exchange_params ep;
+      uint8_t delta[256];
+      size_t written = 0;
+      CHECK_STATUS(ccmap_place(aligned_in_single(0u), map_size, CCMAP_PRESET_SINGLE_OMG, &map), CCMAP_OK);
+      p = precise_lidar_params(CCMAP_PRESET_SINGLE_OMG);
+      CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
+      CHECK_STATUS(ccmap_exchange_place(aligned_in_single(map_size), ccmap_exchange_storage_size(CCMAP_PRESET_SINGLE_OMG),
+                                        CCMAP_PRESET_SINGLE_OMG, &ex),
+                   CCMAP_OK);
+      ep.rover_id = 5u;
+      ep.session = 1u;
+      ep.origin_x_cells = 0;
+      ep.origin_y_cells = 0;
+      ep.origin_z_m = 0.0f;
+      CHECK_STATUS(ccmap_exchange_init(ex, map, &ep), CCMAP_OK);
+      CHECK_STATUS(ccmap_exchange_export(ex, delta, sizeof delta, 0.0f, 0, &written, NULL), CCMAP_OK);
+      CHECK(written == ccmap_delta_min_size(CCMAP_PRESET_SINGLE_OMG)); /* an empty map: no cell */
+    }
+  }
+
+  /* Inverse-variance weighting: accepted with a positive reference range, refused without one. */
+  CHECK_STATUS(ccmap_place(&g_storage_copy, sizeof g_storage_copy, CCMAP_PRESET_CADRE, &map), CCMAP_OK);
+  p = precise_lidar_params(CCMAP_PRESET_CADRE);
+  p.noise.weight_mode = CCMAP_WEIGHT_INVERSE_VARIANCE;
+  p.noise.reference_range_m = 2.0f;
+  CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
+  p.noise.reference_range_m = 0.0f;
+  CHECK_STATUS(ccmap_init(map, &p), CCMAP_INVALID_ARGUMENT);
+}
+
 /* The whole C API test: one case (capi_case.cpp). CCMAP_TEST_PLATFORM_NAME: the platform
  * library the build links ("posix" or "baremetal"). */
 void ccmap_capi_test(void) {
@@ -804,4 +872,5 @@ void ccmap_capi_test(void) {
   test_single_layer_presets();
   test_exchange();
   test_named_refusals();
+  test_every_preset_entry();
 }

@@ -122,6 +122,26 @@ TEST(Precondition, CellUncheckedOutsideTheWindowIsReportedAndStaysInTheStorage) 
   EXPECT_EQ(hook.reports(), 1) << "an index outside the window must be reported";
   EXPECT_GE(&outside, &storage[0]);
   EXPECT_LE(&outside, &storage[15]) << "the aliased slot must stay inside the storage";
+  const RingGrid<float>& read_only = g;
+  EXPECT_EQ(&read_only.cell_unchecked(CellIndex{-5, 9}), &storage[grid::buffer_offset(CellIndex{-5, 9}, 4)])
+      << "outside the window, the wrapped slot";
+  EXPECT_EQ(hook.reports(), 2) << "the const overload must report too";
+}
+
+TEST(Precondition, CellUncheckedBeforeInitAnswersAScratchCellOutsideAnyMap) {
+  float storage[16] = {};
+  RingGrid<float> g;  // not initialised: no storage, no window
+  RecordingHook hook;
+  float& scratch = g.cell_unchecked(CellIndex{0, 0});
+  EXPECT_EQ(hook.reports(), 1) << "no cell is inside the window of a grid before init";
+  EXPECT_TRUE(&scratch < &storage[0] || &scratch > &storage[15]);
+  scratch = 5.0F;  // a write goes nowhere a map reads
+  const RingGrid<float>& read_only = g;
+  EXPECT_EQ(&read_only.cell_unchecked(CellIndex{3, 3}), &scratch) << "one scratch cell per cell type";
+  EXPECT_EQ(hook.reports(), 2);
+  ASSERT_EQ(g.init(storage, 4, 1.0F, CellIndex{0, 0}), Status::kOk);
+  EXPECT_EQ(g.cell(CellIndex{0, 0}), &storage[grid::buffer_offset(CellIndex{0, 0}, 4)]);
+  EXPECT_EQ(*g.cell(CellIndex{0, 0}), 0.0F) << "the scratch write must not reach a grid's storage";
 }
 
 TEST(Precondition, CcmGridOfANonCcmLayerAnswersAGridInBounds) {
