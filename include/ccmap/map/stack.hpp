@@ -20,7 +20,7 @@
 // Positions are map-frame metres relative to the stack origin (see map/types.hpp).
 //
 // Usage (two-phase life):
-//   static ccmap::Stack<ccmap::CadreConfig> map;     // ~0.6 MB, static storage (.bss)
+//   static ccmap::Stack<ccmap::CadreConfig> map;     // static storage (.bss); sizes: docs/integration.md section 7
 //   if (map.init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) { ...fault... }
 //   map.move_to(robot_x, robot_y);
 //   map.update_frame_sensor(points, n, camera_pose, &counters);

@@ -90,6 +90,7 @@ namespace detail {
 static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 thresholds");
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
+static_assert(kSnapshotHeaderBytes == 4U + 2U + 2U + 4U, "header: magic, version, reserved, size");
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
 inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
@@ -386,7 +387,8 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 459,020 bytes (PaperCell<CadreConfig>: 418,060; docs/integration.md lists every preset).
+/// CadreConfig: CCMAP_CADRE_SNAPSHOT_SIZE of ccmap/ccmap.h (src/capi/capi.cpp asserts it);
+/// docs/integration.md section 7 lists every preset.
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();
