@@ -135,7 +135,7 @@ static_assert(MapExchange<CadreConfig>::max_delta_size() == CCMAP_CADRE_DELTA_MA
 // The smallest CADRE delta, as persistence/exchange.hpp documents it (header, five layer headers, CRC).
 static_assert(MapExchange<CadreConfig>::min_delta_size() == 152U, "the empty CADRE delta is documented as 152 bytes");
 // The KiB figures beside the storage constants in ccmap.h.
-static_assert(CCMAP_CADRE_STORAGE_SIZE == 704U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 2752U * 1024U &&
+static_assert(CCMAP_CADRE_STORAGE_SIZE == 720U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 2752U * 1024U &&
                   CCMAP_SINGLE_KALMAN_STORAGE_SIZE == 3264U * 1024U && CCMAP_SINGLE_OMG_STORAGE_SIZE == 960U * 1024U,
               "ccmap.h: a map storage constant and its KiB comment disagree");
 static_assert(CCMAP_CADRE_EXCHANGE_STORAGE_SIZE == 464U * 1024U &&

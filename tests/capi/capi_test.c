@@ -681,6 +681,8 @@ static void test_registration(ccmap_map* map) {
   CHECK_STATUS(ccmap_align_snapshot(map, g_snapshot, snapshot_size, NULL, &rp, &r), CCMAP_INVALID_ARGUMENT);
   CHECK_STATUS(ccmap_align_delta(map, g_snapshot, 100u, 0, 0, 0.0f, &rp, &r), CCMAP_CORRUPT);
   CHECK_STATUS(ccmap_align_delta(map, g_snapshot, 100u, 0, 0, 0.0f, &rp, NULL), CCMAP_INVALID_ARGUMENT);
+}
+
 /* Every refusal that include/ccmap/ccmap.h names and the tests above do not reach, call by call:
  * the status, and for the counted ones the count. Uses the second CADRE storage and the single-layer
  * storage (free by now). */
