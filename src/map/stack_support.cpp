@@ -39,6 +39,7 @@ void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept {
   total.gated_dropped = saturating_add(total.gated_dropped, frame.gated_dropped);
   total.reseeded_cells = saturating_add(total.reseeded_cells, frame.reseeded_cells);
   total.merged_cells = saturating_add(total.merged_cells, frame.merged_cells);
+  total.skipped_budget = saturating_add(total.skipped_budget, frame.skipped_budget);
   total.corrupted_cells = saturating_add(total.corrupted_cells, frame.corrupted_cells);
   total.corrupted_slots = saturating_add(total.corrupted_slots, frame.corrupted_slots);
 }

@@ -24,6 +24,8 @@
 
 #include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/map/update/held_pool.hpp"
+#include "ccmap/map/update/kalman_batch.hpp"
 #include "ccmap/persistence/exchange.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/planner/footprint.hpp"
@@ -544,6 +546,114 @@ TEST(Integrity, BookkeepingFlipsAreRefusedWithCorrupt) {
   EXPECT_EQ(stack->init(default_stack_params(0.04F)), Status::kOk);
   EXPECT_EQ(stack->state_status(), Status::kOk);
   EXPECT_EQ(stack->query(0.5F, 0.0F).status, Status::kUnknown) << "init must start an empty map";
+}
+
+/// Every byte that init() sets in a value-initialised stack (every other byte stays 0: cells,
+/// checks, counters, scratch, pools) is state a call trusts: parameters, routing, thresholds, the
+/// grids' bindings, widths, kept windows, the initialised word, the seals and the update path's
+/// derived constants (the front, the gate's constants and change rule, the budget, the weight
+/// mode). Every bit of each such byte, flipped, must make the stack refuse with kCorrupt: the
+/// seal covers whatever init() derives, without the test naming the members (so a constant added
+/// to init() and left out of the seal fails here). Returns the bytes swept.
+template <typename Config>
+std::size_t every_byte_init_sets_is_sealed(const char* name, const StackParams& params) {
+  auto stack = std::make_unique<Stack<Config>>();
+  EXPECT_EQ(stack->init(params), Status::kOk) << name;
+  auto* bytes = reinterpret_cast<unsigned char*>(stack.get());
+  std::size_t swept = 0U;
+  std::size_t unsealed = 0U;
+  for (std::size_t at = 0; at < sizeof(Stack<Config>); ++at) {
+    if (bytes[at] == 0U) {
+      continue;
+    }
+    ++swept;
+    for (unsigned bit = 0; bit < 8U; ++bit) {
+      bytes[at] = static_cast<unsigned char>(bytes[at] ^ (1U << bit));
+      const Status status = stack->state_status();
+      bytes[at] = static_cast<unsigned char>(bytes[at] ^ (1U << bit));
+      if (status != Status::kCorrupt && ++unsealed <= 5U) {
+        ADD_FAILURE() << name << ": a flip of bit " << bit << " of byte " << at << " of " << sizeof(Stack<Config>)
+                      << " (set by init) is not refused: " << to_string(status);
+      }
+    }
+  }
+  EXPECT_EQ(unsealed, 0U) << name << ": flips init's state takes without a refusal";
+  EXPECT_EQ(stack->state_status(), Status::kOk) << name << ": the sweep must leave the stack as it was";
+  return swept;
+}
+
+TEST(Integrity, EveryByteInitSetsIsSealed) {
+  StackParams budget = default_stack_params(0.04F);
+  budget.frame_point_budget = 300000U;  // non-zero: the update path's copies of the budget are set
+  budget.frame_time_budget_us = 70000U;
+  StackParams no_gate = default_stack_params(0.04F);
+  no_gate.outlier_gate_sigma = 0.0F;
+  StackParams lidar = default_stack_params(0.04F);
+  lidar.noise = sensor::NoiseModel::lidar(sensor::LidarParams{0.01F, 0.002F});
+  lidar.noise.set_weight_mode(sensor::WeightMode::kInverseVariance, 2.0F);
+  const std::size_t cadre = every_byte_init_sets_is_sealed<CadreConfig>("CADRE, budget", budget);
+  EXPECT_GT(cadre, 300U) << "too few bytes set by init: the sweep tests nothing";
+  (void)every_byte_init_sets_is_sealed<CadreConfig>("CADRE, gate off", no_gate);
+  (void)every_byte_init_sets_is_sealed<CadreConfig>("CADRE, lidar", lidar);
+  (void)every_byte_init_sets_is_sealed<SingleOmgConfig>("single OMG", default_stack_params(0.04F));
+  (void)every_byte_init_sets_is_sealed<WithoutOutlierGate<CadreConfig>>("CADRE without the gate compiled in", no_gate);
+  std::printf("[ integrity ] CADRE: %zu bytes set by init, every bit of each refused when flipped\n", cadre);
+}
+
+TEST(Integrity, IndicesFromScratchStayInsideWhateverTheirBits) {
+  // The Kalman frame records: a slot with any bits names a record of the batch (masked).
+  auto batch = std::make_unique<detail::KalmanBatch<64U>>();
+  batch->clear();
+  const GateConstants gate{9.0F, 1e-4F};
+  for (const std::int32_t slot : {63, 64, 65, 1 << 20, -2, INT32_MAX}) {
+    detail::KalmanBatch<64U>::Run run{};
+    batch->start(run, slot);
+    EXPECT_GE(run.slot, 0) << "slot " << slot;
+    EXPECT_LT(run.slot, 64) << "slot " << slot << " opened a record outside the batch";
+    EXPECT_TRUE(batch->add<false>(run, 1000, 7, gate));
+    batch->flush(run);
+    EXPECT_EQ(batch->sum(static_cast<std::uint32_t>(slot)).count, 1U) << "slot " << slot;
+    batch->template begin_frame<false>(nullptr, gate);
+  }
+  // A held-point pool: a slot whose cell number an upset put out of range is dropped at the end
+  // of the frame (never handed to the change rule to index the cells) and counted.
+  using Pool = detail::HeldPool<CcmCell, 100U, 8U>;
+  auto pool = std::make_unique<Pool>();
+  pool->clear();
+  Pool::Slot* a = pool->hold(3U, CellIndex{3, 0}, 1);
+  Pool::Slot* b = pool->hold(97U, CellIndex{97, 0}, 1);
+  ASSERT_NE(a, nullptr);
+  ASSERT_NE(b, nullptr);
+  b->cell = 100U + (1U << 12);
+  int kept_calls = 0;
+  EXPECT_EQ(pool->end_frame([&](const Pool::Slot& slot) {
+    ++kept_calls;
+    EXPECT_LT(slot.cell, 100U) << "the change rule was handed a cell outside the layers";
+    return true;
+  }), 1U) << "the slot with a cell out of range must be counted";
+  EXPECT_EQ(kept_calls, 1);
+  EXPECT_EQ(pool->used(), 1U);
+  pool->seal();
+  // Between frames: a flip of the slot's bytes drops it; a slot count an upset raised past the
+  // pool drops every slot (not trusted), never reads past them.
+  auto* raw = reinterpret_cast<unsigned char*>(pool.get());
+  const std::size_t slots_at = sizeof(std::uint16_t) * 100U;  // the tags come first
+  raw[slots_at + 2U] = static_cast<unsigned char>(raw[slots_at + 2U] ^ 0x10U);
+  EXPECT_EQ(pool->verify_seals(), 1U) << "a flipped slot must be dropped";
+  EXPECT_EQ(pool->used(), 0U);
+  ASSERT_NE(pool->hold(5U, CellIndex{5, 0}, 1), nullptr);
+  ASSERT_NE(pool->hold(6U, CellIndex{6, 0}, 1), nullptr);
+  EXPECT_EQ(pool->end_frame([](const Pool::Slot&) { return true; }), 0U);
+  pool->seal();
+  std::uint32_t used = 0U;
+  const std::size_t used_at = slots_at + sizeof(Pool::Slot) * 8U;
+  std::memcpy(&used, raw + used_at, sizeof used);
+  ASSERT_EQ(used, 2U) << "the test's picture of HeldPool's layout is stale";
+  used ^= 1U << 30;
+  std::memcpy(raw + used_at, &used, sizeof used);
+  EXPECT_EQ(pool->verify_seals(), 2U) << "a slot count out of range: every slot dropped, counted";
+  EXPECT_EQ(pool->used(), 0U);
+  EXPECT_EQ(pool->end_frame([](const Pool::Slot&) { return true; }), 0U);
 }
 
 TEST(Integrity, UninitialisedStackAnswersNotInitialisedAndAFlipInItsWordIsCorrupt) {

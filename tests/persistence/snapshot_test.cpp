@@ -61,7 +61,7 @@ using test::reseal;
 constexpr std::size_t kVersionAt = 4;
 constexpr std::size_t kSizeAt = 8;
 constexpr std::size_t kParamsAt = detail::kSnapshotHeaderBytes + detail::kSnapshotFingerprintBytes;
-constexpr std::size_t kNoiseKindAt = kParamsAt + 76;
+constexpr std::size_t kNoiseKindAt = kParamsAt + 84;
 constexpr std::size_t kFirstLayerAt = kParamsAt + detail::kSnapshotParamsBytes;
 
 // Terrain with a slope, a 30 cm step and a 12 cm box, sampled by a stereo-like fan in front of
@@ -301,11 +301,11 @@ TEST(SnapshotFormat, SizesHeaderAndCrcAreAsDocumented) {
       << "not the IEEE 802.3 / zlib CRC-32";
   const auto* abc = reinterpret_cast<const std::uint8_t*>("123456789");
   EXPECT_EQ(crc32_update(crc32_update(0U, abc, 4U), abc + 4, 5U), 0xCBF43926U) << "CRC does not continue";
-  EXPECT_EQ(snapshot_size<CadreConfig>(), 459028U);  // docs/integration.md quotes this figure
-  EXPECT_EQ(snapshot_size<PaperCell<CadreConfig>>(), 418068U);
-  EXPECT_EQ(snapshot_size<TinyConfig>(), 236U + 3U * 8U + 16U * 12U + 32U * 40U);
-  static_assert(snapshot_size<SingleCcmConfig>() == 236U + 8U + 65536U * 40U, "single CCM size");
-  static_assert(snapshot_size<PaperCell<SingleCcmConfig>>() == 236U + 8U + 65536U * 36U, "single paper CCM size");
+  EXPECT_EQ(snapshot_size<CadreConfig>(), 459040U);  // docs/integration.md quotes this figure
+  EXPECT_EQ(snapshot_size<PaperCell<CadreConfig>>(), 418080U);
+  EXPECT_EQ(snapshot_size<TinyConfig>(), 248U + 3U * 8U + 16U * 12U + 32U * 40U);
+  static_assert(snapshot_size<SingleCcmConfig>() == 248U + 8U + 65536U * 40U, "single CCM size");
+  static_assert(snapshot_size<PaperCell<SingleCcmConfig>>() == 248U + 8U + 65536U * 36U, "single paper CCM size");
 
   auto stack = make_stack<TinyConfig>(default_stack_params(0.5F));
   ASSERT_EQ(stack->move_to(3.0F, -2.0F), Status::kOk);

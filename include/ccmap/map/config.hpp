@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <type_traits>
 
@@ -91,6 +92,56 @@ struct ConfigCcmCellKind<Config, std::void_t<decltype(Config::kCcmCell)>> {
 template <typename Config>
 inline constexpr CcmCellKind kConfigCcmCell = detail::ConfigCcmCellKind<Config>::value;
 
+namespace detail {
+template <typename Config, typename = void>
+struct ConfigOutlierGate {
+  static constexpr bool value = true;
+};
+template <typename Config>
+struct ConfigOutlierGate<Config, std::void_t<decltype(Config::kOutlierGate)>> {
+  static constexpr bool value = Config::kOutlierGate;
+};
+template <typename Config, typename = void>
+struct ConfigCcmHeldSlots {
+  static constexpr std::size_t value = 0U;  // the update path's default (map/update/held_pool.hpp)
+};
+template <typename Config>
+struct ConfigCcmHeldSlots<Config, std::void_t<decltype(Config::kCcmHeldSlots)>> {
+  static constexpr std::size_t value = Config::kCcmHeldSlots;
+};
+template <typename Config, typename = void>
+struct ConfigFineHeldSlots {
+  static constexpr std::size_t value = 0U;
+};
+template <typename Config>
+struct ConfigFineHeldSlots<Config, std::void_t<decltype(Config::kFineHeldSlots)>> {
+  static constexpr std::size_t value = Config::kFineHeldSlots;
+};
+}  // namespace detail
+
+/// Whether a Config compiles the outlier gate in: its `kOutlierGate` member (bool), true if it
+/// has none. A stack whose Config says false carries none of the gate's memory (the held-point
+/// pools, the per-cell tags) or instructions, and refuses StackParams::outlier_gate_sigma > 0
+/// at init; with the gate compiled in, outlier_gate_sigma = 0 switches it off at run time.
+template <typename Config>
+inline constexpr bool kConfigOutlierGate = detail::ConfigOutlierGate<Config>::value;
+
+/// The held-point slots of a Config with the gate, per pool (the CCM layers', the finest
+/// layer's): its `kCcmHeldSlots` / `kFineHeldSlots` members, or 0 for the update path's defaults
+/// (map/update/held_pool.hpp: kHeldSlots, kFineHeldSlots).
+template <typename Config>
+inline constexpr std::size_t kConfigCcmHeldSlots = detail::ConfigCcmHeldSlots<Config>::value;
+template <typename Config>
+inline constexpr std::size_t kConfigFineHeldSlots = detail::ConfigFineHeldSlots<Config>::value;
+
+/// A configuration without the outlier gate compiled in: WithoutOutlierGate<CadreConfig> is the
+/// CADRE stack that runs the paper's update and carries no gate memory. Everything else of Base
+/// is kept.
+template <typename Base>
+struct WithoutOutlierGate : Base {
+  static constexpr bool kOutlierGate = false;
+};
+
 /// Largest number of layers a stack may have (bounds the per-layer parameter arrays).
 inline constexpr int kMaxLayers = 8;
 
@@ -125,6 +176,16 @@ struct StackParams {
   /// points that are no surface are dropped as outliers.
   float change_min_points = 0.0F;
   float change_share = 0.0F;
+  /// Frame budget (docs/integration.md, "The frame budget"): a frame update processes at most
+  /// frame_point_budget points (0: no limit) and starts no chunk of kFrontChunkPoints (128)
+  /// points once frame_time_budget_us microseconds of the platform's monotonic clock have passed
+  /// since it began (0: no limit; the overrun is at most one chunk). With either limit set the
+  /// points are taken chunk by chunk in an interleaved (bit-reversed) order, so that a frame cut
+  /// short covers the whole field of view at a lower density; each chunk is processed whole or
+  /// not at all, and the points left are counted (FrameCounters::skipped_budget). With both 0
+  /// the chunks are taken in order (the update of earlier versions, bitwise).
+  std::uint32_t frame_point_budget = 0U;
+  std::uint32_t frame_time_budget_us = 0U;
   sensor::NoiseModel noise;           ///< routes points and gives their weight and variance
 };
 

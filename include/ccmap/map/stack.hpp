@@ -20,7 +20,7 @@
 // Positions are map-frame metres relative to the stack origin (see map/types.hpp).
 //
 // Usage (two-phase life):
-//   static ccmap::Stack<ccmap::CadreConfig> map;     // ~0.6 MB, static storage (.bss)
+//   static ccmap::Stack<ccmap::CadreConfig> map;     // static storage (.bss); sizes: docs/integration.md section 7
 //   if (map.init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) { ...fault... }
 //   map.move_to(robot_x, robot_y);
 //   map.update_frame_sensor(points, n, camera_pose, &counters);
@@ -45,6 +45,7 @@
 #include "ccmap/map/update/update_path.hpp"
 #include "ccmap/map/types.hpp"
 #include "ccmap/platform/platform.hpp"
+#include "ccmap/registration/types.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap {
@@ -57,6 +58,8 @@ template <typename Config>
 struct PlannerAccess;   // planner/detail/region_walk.hpp: the planner queries read the query view
 template <typename Config>
 struct ExchangeAccess;  // persistence/exchange.hpp: delta export and merge read and fold cells
+template <typename Config>
+struct RegistrationAccess;  // registration/registration.hpp: register_frame(_sensor), public reads only
 }  // namespace detail
 
 template <typename Config>
@@ -76,6 +79,12 @@ class Stack {
   /// function (ccm_surface, ccm_merge, ccm_pool4, ccm_is_covered, ...) takes both.
   using CcmCellType = typename Layers::CcmCellType;
   static constexpr CcmCellKind kCcmCellKind = kConfigCcmCell<Config>;
+  /// Held-point slots of the outlier gate's pools (CCM layers, finest layer; 0 without the gate
+  /// compiled in): a frame judges at most this many cells of each (docs/design.md section 9).
+  static constexpr std::size_t kCcmHeldSlots =
+      kConfigOutlierGate<Config> ? detail::OutlierGate<Config>::kCcmSlots : std::size_t{0};
+  static constexpr std::size_t kFineHeldSlots =
+      kConfigOutlierGate<Config> && Layers::kHasFine ? detail::OutlierGate<Config>::kFineSlots : std::size_t{0};
 
   Stack() noexcept = default;
   Stack(const Stack&) = delete;
@@ -99,6 +108,9 @@ class Stack {
     const Status status = validate_stack_params(params, kLayerCount);
     if (status != Status::kOk) {
       return status;
+    }
+    if (!kConfigOutlierGate<Config> && params.outlier_gate_sigma > 0.0F) {
+      return Status::kInvalidArgument;  // the gate is not compiled into this Config (map/config.hpp)
     }
     params_ = params;
     if (layers_.init(params.finest_cell_width_m) != Status::kOk) {
@@ -282,6 +294,25 @@ class Stack {
   }
 
   // -------------------------------------------------------------------------------------------
+  // Registration (registration/registration.hpp; docs/design.md, "Registration")
+  // -------------------------------------------------------------------------------------------
+
+  /// The rigid correction (dx, dy, dz, dyaw about the vertical through sensor_origin) that best
+  /// aligns this frame's map-frame points with the map, with its standard deviations and which
+  /// of the four are observable (registration/types.hpp). Changes nothing in the map; the caller
+  /// applies it to its pose and then updates. Statuses: registration/registration.hpp.
+  [[nodiscard]] RegistrationResult register_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
+                                                  const RegistrationParams& params) const noexcept {
+    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_origin, nullptr, params);
+  }
+  /// The same for sensor-frame points with the sensor pose (rotation centre: the sensor position).
+  [[nodiscard]] RegistrationResult register_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& sensor_pose,
+                                                         const RegistrationParams& params) const noexcept {
+    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_pose.translation,
+                                                              &sensor_pose.rotation[0][0], params);
+  }
+
+  // -------------------------------------------------------------------------------------------
   // Queries (const, constant time in map size and point count)
   // -------------------------------------------------------------------------------------------
 
@@ -403,7 +434,7 @@ class Stack {
     return update_.pending_ccm_cells() + update_.pending_fine_cells();
   }
   /// Cells with held points at the end of the last frame, before the change rule decided (the
-  /// held-point slots it took; at most detail::kHeldSlots per pool: CCM layers, finest layer).
+  /// held-point slots it took; at most kCcmHeldSlots + kFineHeldSlots).
   [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
   /// Frame updates accepted since init (wraps at 2^32): the sequence number that map exchange
   /// (persistence/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().
@@ -417,6 +448,21 @@ class Stack {
   }
   /// Raw piece-wise constant layer (uninitialised when the configuration has none).
   [[nodiscard]] const RingGrid<FineCell>& fine_layer() const noexcept { return layers_.fine; }
+  /// For readers of the raw layers (registration, tools): true if `cell`, a cell of this stack's
+  /// layers (a reference from ccm_layer() or fine_layer(), never a copy), agrees with its check
+  /// (map/detail/integrity.hpp). A cell that does not was changed by an upset: read it as never
+  /// observed, as every query does. A reference outside the layers is reported to the assert
+  /// hook and answered false.
+  [[nodiscard]] bool cell_intact(const CcmCellType& cell) const noexcept {
+    const std::size_t at = storage_index(&cell, layers_.ccm_storage, Layers::kCcmCellCount);
+    CCMAP_ASSERT_OR_RETURN(at < Layers::kCcmCellCount, false);
+    return detail::cell_signature(cell) == layers_.checks.ccm[at];
+  }
+  [[nodiscard]] bool cell_intact(const FineCell& cell) const noexcept {
+    const std::size_t at = storage_index(&cell, layers_.fine_storage, Layers::kFineCellCount);
+    CCMAP_ASSERT_OR_RETURN(kHasFine && at < Layers::kFineCellCount, false);
+    return detail::cell_signature(cell) == layers_.checks.fine[at];
+  }
 
   // save_snapshot / load_snapshot read and restore the private state through this friend only;
   // a new map-state member must be added to the snapshot format (persistence/snapshot.hpp) as well.
@@ -430,6 +476,18 @@ class Stack {
   friend struct detail::ExchangeAccess<Config>;
 
  private:
+  /// Index of `cell` in `storage` (`count` cells), or `count` if it is not one of them (compared
+  /// as addresses: no pointer arithmetic across objects).
+  template <typename Cell>
+  [[nodiscard]] static std::size_t storage_index(const Cell* cell, const Cell* storage, std::size_t count) noexcept {
+    const auto at = reinterpret_cast<std::uintptr_t>(cell);
+    const auto begin = reinterpret_cast<std::uintptr_t>(storage);
+    if (at < begin || (at - begin) % sizeof(Cell) != 0U || (at - begin) / sizeof(Cell) >= count) {
+      return count;
+    }
+    return (at - begin) / sizeof(Cell);
+  }
+
   [[nodiscard]] detail::QueryView<Config> view() const noexcept {
     return detail::QueryView<Config>(layers_, params_, thresholds_);
   }
@@ -452,7 +510,7 @@ class Stack {
       too_many = n > 0xFFFFFFFFULL;
     }
     const Status status = ((points == nullptr && n > 0U) || too_many) ? Status::kInvalidArgument
-                                                                      : detail::make_frame_pose(origin, rotation, pose);
+                                                                      : detail::make_frame_pose(origin, rotation, update_.front(), pose);
     if (status != Status::kOk) {
       ++rejected_frames_;
       write_counters(frame, counters);
@@ -549,3 +607,7 @@ class Stack {
 };
 
 }  // namespace ccmap
+
+// Stack::register_frame(_sensor)'s implementation (it includes this header, then defines the
+// templates the two members forward to).
+#include "ccmap/registration/registration.hpp"

@@ -13,9 +13,10 @@
 // Not stored: RingGrid::cells_cleared_by_moves() and Stack::accepted_frames() (restart at 0 on
 // load), map exchange's bookkeeping (a load retires a bound MapExchange, persistence/exchange.hpp) and
 // the outlier gate's held points awaiting the change rule (map/update/held_pool.hpp: at most
-// kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
+// Stack::kCcmHeldSlots / kFineHeldSlots cells; after a load such a cell needs change_min_points
+// held points anew).
 //
-// Format (version 4: version 3 with the single-event-upset counters). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 5: version 4 with the single-event-upset counters). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -31,6 +32,7 @@
 //                   normal_variance_threshold[0..7]
 //                4  finest_max_sigma_m
 //               12  outlier_gate_sigma, change_min_points, change_share
+//                8  frame_point_budget, frame_time_budget_us (uint32 each)
 //               20  noise model: kind (u8), weight mode (u8), 2 reserved 0, stereo k = sigma_d/(f b)
 //                   (1/m), lidar sigma0 (m), lidar sigma per m, reference range (m)
 //   per layer    8  window centre (int32 x, int32 y; global cell indices), then
@@ -39,15 +41,15 @@
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
 //                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
 //                   s_xy for CcmCell (CcmPaperCell has none).
-//   counters    68  total FrameCounters (17 x uint32, in declaration order)
+//   counters    72  total FrameCounters (18 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
 //
 // Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
-// (CcmCell with s_xy); version 3 the outlier gate's parameters and counters; version 4 the
-// counters corrupted_cells and corrupted_slots (docs/integration.md, "Radiation: single-event
-// upsets"). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
+// (CcmCell with s_xy); version 3 the outlier gate's parameters and counters; version 4 the frame
+// budget's; version 5 the counters corrupted_cells and corrupted_slots (docs/integration.md,
+// "Radiation: single-event upsets"). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
 // hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
 //
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
@@ -76,7 +78,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 4U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 5U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -86,13 +88,14 @@ inline constexpr std::uint16_t kSnapshotFormatVersion = 4U;
 
 namespace detail {
 
-static_assert(kMaxLayers == 8, "snapshot format version 4 stores 8 sides and 8 thresholds");
+static_assert(kMaxLayers == 8, "snapshot format version 5 stores 8 sides and 8 thresholds");
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
+static_assert(kSnapshotHeaderBytes == 4U + 2U + 2U + 4U, "header: magic, version, reserved, size");
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
-inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U) + 20U;
+inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
-inline constexpr std::size_t kSnapshotCountersBytes = 17U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotCountersBytes = 18U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
 /// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
@@ -393,7 +396,8 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 459,028 bytes (PaperCell<CadreConfig>: 418,068; docs/integration.md lists every preset).
+/// CadreConfig: CCMAP_CADRE_SNAPSHOT_SIZE of ccmap/ccmap.h (src/capi/capi.cpp asserts it);
+/// docs/integration.md section 7 lists every preset.
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();

@@ -32,8 +32,12 @@
 // kept windows, the initialised word) are sealed by a 128-bit check word (StateHasher) computed
 // whenever they change (init, load, move, exchange binding) and verified at the start of every
 // call that reads or writes the map: a mismatch is refused with Status::kCorrupt, until init()
-// or load_snapshot(). Per-frame state is restored at each frame's start (the update path's
-// restore_between_frames). No heap, no exceptions.
+// or load_snapshot(). The update path's state that lives from frame to frame is restored or
+// verified at each frame's start (UpdatePath::begin_frame: the Kalman frame records rewritten,
+// the held-point slots verified against their seals, the walk's windows copied from the sealed
+// grids), and every index that per-frame scratch holds is masked or bounded where it is used, so
+// that an upset during a frame changes at most that frame's points, inside the storage.
+// No heap, no exceptions.
 #pragma once
 
 #include <cstddef>
@@ -371,19 +375,12 @@ class StateHasher {
   std::uint64_t sum_ = 0U;
 };
 
-/// The update path's state between frames, restored at a frame's start (UpdatePath::begin_frame):
-/// the Kalman frame batches (all zero between frames) zeroed, the touched list emptied, each
-/// held-point pool's slots verified against their seals (HeldPool::verify_seals: a corrupted slot
-/// is dropped and counted in frame.corrupted_slots) and its tags rewritten. An upset between
-/// frames in any of them thus never reaches a cell.
-template <typename Sum, std::size_t kSums, typename CcmPool, typename FinePool>
-inline void restore_frame_state(Sum (&sums)[kSums], std::uint32_t* touched_count, CcmPool& ccm_pool,
-                                FinePool& fine_pool, FrameCounters& frame) noexcept {
-  for (Sum& sum : sums) {
-    sum = Sum{};
-  }
-  *touched_count = 0U;
-  frame.corrupted_slots += ccm_pool.verify_seals() + fine_pool.verify_seals();
+/// Adds a bool to a seal as its byte (never loaded as a bool: a bool an upset changed to a value
+/// other than 0 or 1 is undefined behaviour when loaded, and is refused before it is).
+inline void hash_bool_bytes(StateHasher& h, const bool& value) noexcept {
+  unsigned char byte = 0U;
+  std::memcpy(&byte, &value, 1U);
+  h.add(byte);
 }
 
 /// Adds the bookkeeping of a LayerSet to a seal: every grid's bytes (storage address, side, cell

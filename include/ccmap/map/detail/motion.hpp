@@ -23,9 +23,11 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/detail/layers.hpp"
@@ -47,13 +49,15 @@ void ccm_forget_for_motion(CcmPaperCell& cell, float sigma_sq, float min_weight)
 /// height h, cell width w: central, one-sided, or 0.
 [[nodiscard]] float neighbour_gradient(bool low_seen, float low, bool high_seen, float high, float h, float w) noexcept;
 
-/// Applies the rule to every observed cell of every layer. Precondition: sigma_sq > 0, finite.
+/// Applies the rule to every observed cell of every layer. Precondition: sigma_sq > 0, finite; a
+/// violation is reported to the assert hook and changes no cell (returns 0).
 /// Integrity (map/detail/integrity.hpp): the pass reads every cell, so it checks each one first:
 /// a cell an upset changed is reset to never observed (and neither changed nor read as a
 /// neighbour); returns how many it reset. The cells it changes keep their checks.
 template <typename Config>
 [[nodiscard]] std::uint32_t forget_for_motion(LayerSet<Config>& layers, const StackParams& params,
                                               float sigma_sq) noexcept {
+  CCMAP_ASSERT_OR_RETURN(sigma_sq > 0.0F && sigma_sq <= std::numeric_limits<float>::max(), 0U);
   using Layers = LayerSet<Config>;
   std::uint32_t corrupted = 0U;
   for (int c = 0; c < Layers::kCcmLayerCount; ++c) {

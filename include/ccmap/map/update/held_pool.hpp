@@ -27,9 +27,13 @@
 
 namespace ccmap::detail {
 
-/// Slots of a pool: cells with held points. docs/performance.md ("Outlier gate: what it costs")
-/// gives the slots a CADRE traverse with 1 % of its pixels mismatched takes.
+/// Slots of the CCM layers' pool by default (Config::kCcmHeldSlots overrides it, map/config.hpp):
+/// cells with held points. The CADRE traverse with 1 % of its pixels mismatched (the heaviest
+/// case measured, docs/performance.md "Outlier gate: what it costs") takes at most 356.
 inline constexpr std::size_t kHeldSlots = 512U;
+/// Slots of the finest layer's pool by default (Config::kFineHeldSlots): that traverse takes at
+/// most 866 (with 512 it dropped 76,533 held points for want of a slot).
+inline constexpr std::size_t kFineHeldSlots = 1024U;
 /// A slot whose points have not come to a decision after this many frames is dropped.
 inline constexpr std::uint32_t kMaxHeldFrames = 8U;
 
@@ -79,21 +83,22 @@ class HeldPool {
     return &slot;
   }
 
-  /// Slot of cell `cell`, or nullptr.
-  [[nodiscard]] Slot* find(std::uint32_t cell) noexcept {
-    const std::uint16_t tag = tags_[cell];
-    return (tag & kSlotBit) != 0U ? &slots_[tag & kSlotMask] : nullptr;  // integrity: masked
-  }
-
   /// The end of a frame: keep(slot) for every slot in the order they were taken; a slot is
   /// kept (its frames raised) if keep returns true, freed otherwise. Then every tag is reset
-  /// for the next frame (kept slots keep theirs).
+  /// for the next frame (kept slots keep theirs). Integrity: a slot whose cell number an upset
+  /// during the frame put out of range (>= kCells) is freed without keep(); returns how many
+  /// (FrameCounters::corrupted_slots), so that keep() may index the cells by slot.cell.
   template <typename Keep>
-  void end_frame(Keep&& keep) noexcept {
+  [[nodiscard]] std::uint32_t end_frame(Keep&& keep) noexcept {
     std::uint32_t kept = 0U;
+    std::uint32_t corrupted = 0U;
     const std::uint32_t used = clamped_used();  // integrity
     for (std::uint32_t i = 0; i < used; ++i) {
       Slot& slot = slots_[i];
+      if (slot.cell >= kCells) {  // integrity
+        ++corrupted;
+        continue;
+      }
       if (keep(slot)) {
         ++slot.frames;
         slots_[kept++] = slot;
@@ -101,6 +106,7 @@ class HeldPool {
     }
     used_ = kept;
     retag();
+    return corrupted;
   }
 
   /// Frees every slot for which gone(slot) is true (its cell left its layer's window), in
@@ -166,7 +172,6 @@ class HeldPool {
   }
 
   [[nodiscard]] std::uint32_t used() const noexcept { return used_; }
-  [[nodiscard]] const Slot* slots() const noexcept { return slots_; }
 
  private:
   static constexpr std::uint16_t kSlotBit = 0x8000U;
