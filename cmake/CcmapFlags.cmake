@@ -16,8 +16,8 @@ endif()
 
 # Statement and branch coverage of the core (gcc --coverage, read by tools/coverage with gcovr):
 # every translation unit is instrumented, since most of the core is templates compiled in the
-# tests' own files. The asan preset turns it on, so the coverage is of the sanitized test run
-# (docs/integration.md, "Coverage").
+# tests' own files. The host-coverage preset turns it on, without the sanitizers (together they
+# made the tests five times slower; docs/integration.md section 11).
 if(CCMAP_COVERAGE)
   if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
     message(FATAL_ERROR "CCMAP_COVERAGE needs gcc (gcov data for gcovr), not ${CMAKE_CXX_COMPILER_ID}")

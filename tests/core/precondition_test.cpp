@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/core/assert.hpp"
 #include "ccmap/grid/ring_grid.hpp"
 #include "ccmap/grid/ring_index.hpp"
@@ -23,6 +24,7 @@
 #include "ccmap/map/query/answers.hpp"
 #include "ccmap/map/query/pooling.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/map/update/gate.hpp"
 #include "ccmap/persistence/exchange.hpp"
 
 namespace ccmap {
@@ -260,6 +262,35 @@ TEST(Precondition, ExchangeWriteLayersWithoutSettleOrRoomWritesNothing) {
         << "an empty map writes the five layer headers only";
   }
   EXPECT_EQ(report.cells_written, 0U);
+}
+
+TEST(Precondition, KalmanFuseOfABadVarianceLeavesTheCellAlone) {
+  KalmanCell cell{};
+  detail::kalman_fuse(cell, 0.25F, 1e-4F, 1.0F, 1e-8F);  // valid: the first measurement
+  const KalmanCell before = cell;
+  for (const float bad : {0.0F, -1e-4F, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    RecordingHook hook;
+    detail::kalman_fuse(cell, 0.5F, bad, 1.0F, 1e-8F);
+    EXPECT_EQ(hook.reports(), 1) << "variance " << bad << " must be reported";
+    EXPECT_TRUE(same_bytes(cell, before)) << "variance " << bad << " must not change the cell";
+  }
+  RecordingHook hook;
+  detail::kalman_fuse(cell, 0.5F, 1e-4F, 1.0F, 0.0F);  // a floor of 0
+  EXPECT_EQ(hook.reports(), 1);
+  EXPECT_TRUE(same_bytes(cell, before));
+}
+
+TEST(Precondition, TheFinerCheckOfTheFinestLayerContradictsNothing) {
+  // The finer-layer check of the outlier gate has no finer layer for layer 0: reported, false.
+  Layers layers{};
+  ASSERT_EQ(layers.init(0.04F), Status::kOk);
+  detail::LayerWalk<CadreConfig> walk{};
+  walk.begin_frame(layers);
+  detail::OutlierGate<CadreConfig> gate{};
+  gate.init(default_stack_params(0.04F), std::vector<float>(5, 100.0F).data(), layers);
+  RecordingHook hook;
+  EXPECT_FALSE(gate.contradicted_by_finer(layers, walk, 0, 0, 0, -5.0F));
+  EXPECT_EQ(hook.reports(), 1);
 }
 
 }  // namespace

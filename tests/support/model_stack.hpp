@@ -609,7 +609,8 @@ class ModelStack {
   bool occluded(int k, double x, double y, double z) {
     const double mx = 0.5 * (x + sight_origin_[0]), my = 0.5 * (y + sight_origin_[1]);
     const double line = 0.5 * (z + sight_origin_[2]);
-    // The midpoint's cell: ambiguous within 10 um of a finest-layer edge (the stack forms it in Q18).
+    // The midpoint's cell: ambiguous within 10 um of a finest-layer edge (the stack forms it in
+    // float cells from the anchor: map/update/line_of_sight.hpp).
     const double w0 = layers_[0].width;
     for (const double v : {mx, my}) {
       const double f = v / w0 - std::floor(v / w0);

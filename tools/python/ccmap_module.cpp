@@ -510,6 +510,29 @@ bool sensor_keyword(const std::string& key, py::handle value, SensorArgs* s) {
   return true;
 }
 
+/// The unsigned 32-bit members of StackParams settable by name (the frame budget).
+struct CountField {
+  const char* name;
+  std::uint32_t StackParams::*member;
+};
+constexpr CountField kCountFields[] = {
+    {"frame_point_budget", &StackParams::frame_point_budget},
+    {"frame_time_budget_us", &StackParams::frame_time_budget_us},
+};
+
+/// A Python int in [0, 2^32) (not a bool, not a float): TypeError or ValueError otherwise.
+std::uint32_t count_arg(py::handle value, const std::string& name) {
+  if (PyBool_Check(value.ptr()) || !PyLong_Check(value.ptr())) {
+    throw py::type_error(name + " must be an int");
+  }
+  int overflow = 0;
+  const long long v = PyLong_AsLongLongAndOverflow(value.ptr(), &overflow);
+  if (overflow != 0 || v < 0 || v > 0xFFFFFFFFLL) {
+    throw py::value_error(name + " must lie in [0, 2^32)");
+  }
+  return static_cast<std::uint32_t>(v);
+}
+
 /// default_stack_params(width) with the keywords applied.
 StackParams build_params(const Preset& preset, py::handle cell_width, const py::kwargs& kwargs) {
   const float width = cell_width.is_none() ? preset.default_cell_width_m : number_arg(cell_width, "cell_width");
@@ -521,6 +544,12 @@ StackParams build_params(const Preset& preset, py::handle cell_width, const py::
     for (const ParamField& f : kParamFields) {
       if (key == f.name) {
         params.*f.member = number_arg(item.second, key);
+        known = true;
+      }
+    }
+    for (const CountField& f : kCountFields) {
+      if (key == f.name) {
+        params.*f.member = count_arg(item.second, key);
         known = true;
       }
     }
@@ -844,6 +873,7 @@ class Map {
     py::dict d;
     d["cell_width"] = p.finest_cell_width_m;
     for (const ParamField& f : kParamFields) d[f.name] = p.*f.member;
+    for (const CountField& f : kCountFields) d[f.name] = p.*f.member;
     d["normal_variance_threshold"] = std::vector<float>(p.normal_variance_threshold.begin(), p.normal_variance_threshold.end());
     const sensor::NoiseModel& n = p.noise;
     if (n.kind() == sensor::SensorKind::kLidar) {
@@ -945,7 +975,8 @@ PYBIND11_MODULE(ccmap, m) {
                   "  params: StackParams by name: weight_limit, coverage_tau, min_weight,\n"
                   "          obstacle_fraction, max_inclination, kalman_min_variance,\n"
                   "          finest_max_sigma_m, outlier_gate_sigma (0 = off), change_min_points,\n"
-                  "          change_share, normal_variance_threshold (sequence, <= 0 calibrates);\n"
+                  "          change_share, normal_variance_threshold (sequence, <= 0 calibrates),\n"
+                  "          frame_point_budget, frame_time_budget_us (ints; 0 = no limit);\n"
                   "          sensor='stereo' (default: CADRE stereo; focal_px, baseline_m,\n"
                   "          disparity_sigma_px) or 'lidar' (lidar_sigma_m = 0.005, lidar_sigma_per_m = 0);\n"
                   "          weight_mode='constant' | 'inverse_variance', reference_range_m.\n"

@@ -11,10 +11,10 @@
 //
 // Where the work is done (integrators need not read these):
 //   map/detail/layers.hpp       the layers' storage and windows
-//   map/update/front.hpp        the integer front: validation, transform, range, routing, index
-//   map/update/update_path.hpp  the per-point back half and the Kalman frame batches
-//   map/query/pooling.hpp      pooling at query time
-//   map/query/answers.hpp      answers, classes, the roughness filter baseline
+//   map/update/front.hpp        the float front: validation, transform, range, routing, index
+//   map/update/update_path.hpp  the chunk loop; the Kalman batch, the walk, the gate beside it
+//   map/query/pooling.hpp       pooling at query time
+//   map/query/answers.hpp       answers, classes, the roughness filter baseline
 //   map/detail/motion.hpp       what an uncertain move does to the cells
 //
 // Positions are map-frame metres relative to the stack origin (see map/types.hpp).

@@ -66,6 +66,19 @@ class Construction(unittest.TestCase):
         self.assertGreater(calibrated, 0.0)
         self.assertNotEqual(calibrated, m.normal_variance_thresholds[0])
 
+    def test_frame_budget_by_name(self):
+        m = ccmap.Map("cadre", frame_point_budget=1000, frame_time_budget_us=0)
+        self.assertEqual(m.params["frame_point_budget"], 1000)
+        pts = np.array([[0.5 + 0.001 * i, 0.0, 0.0] for i in range(3000)], dtype=np.float32)
+        counts = m.update(pts, SENSOR)
+        # Whole chunks of 128 points while the next one fits: 7 chunks of 128 = 896 points.
+        self.assertEqual(counts["skipped_budget"], 3000 - 896)
+        self.assertEqual(counts["received"], 3000)
+        with self.assertRaises(TypeError):
+            ccmap.Map("cadre", frame_point_budget=1.5)
+        with self.assertRaises(ValueError):
+            ccmap.Map("cadre", frame_time_budget_us=-1)
+
     def test_sensor_choice(self):
         self.assertEqual(ccmap.Map().params["sensor"], "stereo")
         self.assertAlmostEqual(ccmap.Map().params["stereo_sigma_per_range_sq"], 1 / 300, places=9)  # CADRE

@@ -25,6 +25,7 @@
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/cell/outlier_gate.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/detail/layers.hpp"
@@ -243,7 +244,6 @@ class OutlierGate {
   [[nodiscard]] std::uint32_t last_frame_slots() const noexcept { return last_frame_slots_; }
   void note_frame_slots() noexcept { last_frame_slots_ = ccm_held_.used() + fine_held_.used(); }
 
- private:
   /// The two range-error checks of a coarse layer's point: the next finer layer's cell, then
   /// the line of sight.
   [[nodiscard]] GateOutcome range_error(const Layers& layers, const LayerWalk<Config>& walk, int layer,
@@ -263,11 +263,12 @@ class OutlierGate {
   /// lies outside that cell's gate with the constants of the point's own layer (its range noise
   /// class). A point routed by its range to a coarse layer while a finer layer knows the ground
   /// there is, when the two disagree, a range error: the finer cell, made of more precise points,
-  /// is the better judge. Precondition: layer >= 1. Consecutive points of a stereo row mostly
+  /// is the better judge. Precondition: layer >= 1 (asserted; false if not). Consecutive points of a stereo row mostly
   /// share the finer cell: its number is kept from the last point (windows do not move within
   /// a frame, so the same index names the same cell).
   [[nodiscard]] bool contradicted_by_finer(const Layers& layers, const LayerWalk<Config>& walk, int layer,
                                            std::int32_t ix0, std::int32_t iy0, float z) noexcept {
+    CCMAP_ASSERT_OR_RETURN(layer >= 1, false);  // no finer layer: nothing contradicts
     const int finer = layer - 1;
     const std::int32_t fx = ix0 >> finer;
     const std::int32_t fy = iy0 >> finer;
@@ -305,6 +306,7 @@ class OutlierGate {
     bool holds = false;
   };
 
+ private:
   // ---- zero-initialised (a static stack lives in .bss); derived at init ----
   CcmPool ccm_held_{};                         ///< held points of CCM cells
   FinePool fine_held_{};                       ///< held points of finest-layer cells

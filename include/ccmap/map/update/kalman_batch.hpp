@@ -36,10 +36,12 @@ namespace ccmap::detail {
   return q > 0.0F ? std::int32_t{2147483647} : std::int32_t{-2147483647 - 1};
 }
 
-/// floor(v 2^14) of a gate half-width v >= 0 (m), saturated at 2^31 - 1 units (131 km).
+/// floor(v 2^14) of a gate half-width v >= 0 (m), saturated at 2^31 - 128 units (131 km). The
+/// conversion is to int32 (a float -> int64 conversion is a soft-double call on 32-bit Arm: no
+/// double may enter the core's image, tests/baremetal link.no_soft_double).
 [[nodiscard]] inline std::int64_t q14_half_width(float v) noexcept {
   const float units = v * 16384.0F;
-  return units < 2147483520.0F ? static_cast<std::int64_t>(units) : std::int64_t{0x7FFFFFFF};
+  return units < 2147483520.0F ? std::int64_t{static_cast<std::int32_t>(units)} : std::int64_t{2147483520};
 }
 
 /// The gate's interval of one cell for one frame in Q14: [low, low + span], clamped to int32
