@@ -37,25 +37,34 @@ namespace {
 
 using test::hash_unit;
 
-// ---- the bit-level model of the check (docs/integration.md, map/detail/integrity.hpp) -----------
-// Bit b of 32-bit word k (little-endian) lies at position p = b + 32 (k mod 2) of 64-bit lane
-// j = k / 2; the lane is rotated right by 3j (p -> p - 3j mod 64); the high half of the result is
-// rotated right by 2 and XORed onto the low half (h -> h - 2 mod 32), and the 32 bits are folded
-// to 16 (f -> f mod 16). The check is the XOR of the check bits of the cell's set bits.
+// ---- the bit-level models of the check (docs/integration.md, map/detail/integrity.hpp) ----------
+// 64-bit form: bit b of 32-bit word k (little-endian) lies at position p = b + 32 (k mod 2) of
+// 64-bit lane j = k / 2; the lane is rotated right by 3j (p -> p - 3j mod 64); the high half of
+// the result is rotated right by 2 and XORed onto the low half (h -> h - 2 mod 32), and the 32
+// bits are folded to 16 (f -> f mod 16).
+// 32-bit form: word k is rotated right by 3k mod 32 (b -> b - 3k mod 32), folded to 16 bits.
+// The check is the XOR of the check bits of the cell's set bits.
+template <unsigned kLaneBits>
 int model_check_bit(std::size_t word, std::size_t bit) {
-  const std::size_t lane = word / 2U;
-  const std::size_t p = bit + 32U * (word % 2U);
-  const std::size_t q = (p + 64U * 4U - 3U * lane) % 64U;
-  const std::size_t f = q < 32U ? q : (q - 32U + 32U - 2U) % 32U;
-  return static_cast<int>(f % 16U);
+  if constexpr (kLaneBits == 64U) {
+    const std::size_t lane = word / 2U;
+    const std::size_t p = bit + 32U * (word % 2U);
+    const std::size_t q = (p + 64U * 4U - 3U * lane) % 64U;
+    const std::size_t f = q < 32U ? q : (q - 32U + 32U - 2U) % 32U;
+    return static_cast<int>(f % 16U);
+  } else {
+    const std::size_t f = (bit + 32U * 64U - (3U * word) % 32U) % 32U;
+    return static_cast<int>(f % 16U);
+  }
 }
 
+template <unsigned kLaneBits = detail::kCheckLaneBits>
 std::uint16_t model_check(const void* data, std::size_t bytes) {
   const auto* b = static_cast<const unsigned char*>(data);
   std::uint32_t check = 0U;
   for (std::size_t i = 0; i < bytes * 8U; ++i) {
     if (((b[i / 8U] >> (i % 8U)) & 1U) != 0U) {
-      check ^= 1U << model_check_bit(i / 32U, i % 32U);
+      check ^= 1U << model_check_bit<kLaneBits>(i / 32U, i % 32U);
     }
   }
   return static_cast<std::uint16_t>(check);
@@ -82,63 +91,81 @@ Cell flipped(const Cell& cell, std::size_t bit) {
   return out;
 }
 
-template <typename Cell>
+template <typename Cell, unsigned kLaneBits>
 void signature_matches_the_model(const char* name) {
-  EXPECT_EQ(detail::cell_signature(Cell{}), 0U) << name << ": the never-observed cell must have check 0";
+  EXPECT_EQ(detail::cell_signature<kLaneBits>(Cell{}), 0U) << name << ": the never-observed cell must have check 0";
   for (std::uint32_t seed = 1; seed <= 200; ++seed) {
     const Cell cell = random_cell<Cell>(seed);
-    ASSERT_EQ(detail::cell_signature(cell), model_check(&cell, sizeof cell)) << name << ": check of random cell " << seed;
+    ASSERT_EQ(detail::cell_signature<kLaneBits>(cell), model_check<kLaneBits>(&cell, sizeof cell))
+        << name << " (" << kLaneBits << "-bit form): check of random cell " << seed;
+    // The incremental form a writer uses: fold(wide(a) ^ wide(b)) = check(a) ^ check(b).
+    const Cell other = random_cell<Cell>(seed + 1000U);
+    ASSERT_EQ(detail::fold_signature(detail::cell_signature_wide<kLaneBits>(cell) ^
+                                     detail::cell_signature_wide<kLaneBits>(other)),
+              static_cast<std::uint16_t>(model_check<kLaneBits>(&cell, sizeof cell) ^
+                                         model_check<kLaneBits>(&other, sizeof other)))
+        << name << " (" << kLaneBits << "-bit form): the writers' update of the check is not linear";
   }
 }
 
 TEST(Integrity, CheckMatchesTheBitLevelModel) {
-  signature_matches_the_model<CcmCell>("CcmCell");
-  signature_matches_the_model<CcmPaperCell>("CcmPaperCell");
-  signature_matches_the_model<KalmanCell>("KalmanCell");
-  signature_matches_the_model<OmgCell>("OmgCell");
+  static_assert(detail::kCheckLaneBits == (sizeof(void*) == 8U ? 64U : 32U), "the form follows the register width");
+  signature_matches_the_model<CcmCell, 64>("CcmCell");
+  signature_matches_the_model<CcmPaperCell, 64>("CcmPaperCell");
+  signature_matches_the_model<KalmanCell, 64>("KalmanCell");
+  signature_matches_the_model<OmgCell, 64>("OmgCell");
+  // The 32-bit targets' form, checked here too (the library suite does not run on them).
+  signature_matches_the_model<CcmCell, 32>("CcmCell");
+  signature_matches_the_model<CcmPaperCell, 32>("CcmPaperCell");
+  signature_matches_the_model<KalmanCell, 32>("KalmanCell");
+  signature_matches_the_model<OmgCell, 32>("OmgCell");
 }
 
-template <typename Cell>
+template <typename Cell, unsigned kLaneBits>
 void every_single_flip_is_detected(const char* name) {
   for (std::uint32_t seed = 1; seed <= 20; ++seed) {
     const Cell cell = random_cell<Cell>(seed);
-    const std::uint16_t check = model_check(&cell, sizeof cell);
+    const std::uint16_t check = model_check<kLaneBits>(&cell, sizeof cell);
     for (std::size_t bit = 0; bit < sizeof(Cell) * 8U; ++bit) {
-      const std::uint16_t now = detail::cell_signature(flipped(cell, bit));
+      const std::uint16_t now = detail::cell_signature<kLaneBits>(flipped(cell, bit));
       ASSERT_NE(now, check) << name << ": a flip of bit " << bit % 32U << " of word " << bit / 32U << " went unseen";
       const std::uint32_t changed = static_cast<std::uint32_t>(now ^ check);
       EXPECT_EQ(changed & (changed - 1U), 0U) << name << ": one flipped bit must change exactly one check bit";
     }
     for (int bit = 0; bit < 16; ++bit) {  // an upset in the check itself
       const auto stored = static_cast<std::uint16_t>(check ^ (1U << bit));
-      EXPECT_NE(detail::cell_signature(cell), stored) << name << ": a flip of check bit " << bit << " went unseen";
+      EXPECT_NE(detail::cell_signature<kLaneBits>(cell), stored) << name << ": a flip of check bit " << bit << " went unseen";
     }
   }
 }
 
 TEST(Integrity, EverySingleBitFlipOfEveryCellKindIsDetected) {
-  every_single_flip_is_detected<CcmCell>("CcmCell");
-  every_single_flip_is_detected<CcmPaperCell>("CcmPaperCell");
-  every_single_flip_is_detected<KalmanCell>("KalmanCell");
-  every_single_flip_is_detected<OmgCell>("OmgCell");
+  every_single_flip_is_detected<CcmCell, 64>("CcmCell");
+  every_single_flip_is_detected<CcmPaperCell, 64>("CcmPaperCell");
+  every_single_flip_is_detected<KalmanCell, 64>("KalmanCell");
+  every_single_flip_is_detected<OmgCell, 64>("OmgCell");
+  every_single_flip_is_detected<CcmCell, 32>("CcmCell");
+  every_single_flip_is_detected<CcmPaperCell, 32>("CcmPaperCell");
+  every_single_flip_is_detected<KalmanCell, 32>("KalmanCell");
+  every_single_flip_is_detected<OmgCell, 32>("OmgCell");
 }
 
-template <typename Cell>
+template <typename Cell, unsigned kLaneBits>
 double double_flips(const char* name) {
   const Cell cell = random_cell<Cell>(3U);
-  const std::uint16_t check = detail::cell_signature(cell);
+  const std::uint16_t check = detail::cell_signature<kLaneBits>(cell);
   constexpr std::size_t kBits = sizeof(Cell) * 8U;
   constexpr std::size_t kWords = sizeof(Cell) / 4U;
   // Adjacent bits (inside a word and across word boundaries) and the same bit of words up to
   // three apart: what a multiple-bit upset of neighbouring SRAM cells flips.
   for (std::size_t bit = 0; bit + 1U < kBits; ++bit) {
-    EXPECT_NE(detail::cell_signature(flipped(flipped(cell, bit), bit + 1U)), check)
+    EXPECT_NE(detail::cell_signature<kLaneBits>(flipped(flipped(cell, bit), bit + 1U)), check)
         << name << ": adjacent bits " << bit << ", " << bit + 1U << " cancel";
   }
   for (std::size_t distance = 1; distance <= 3; ++distance) {
     for (std::size_t word = 0; word + distance < kWords; ++word) {
       for (std::size_t b = 0; b < 32U; ++b) {
-        EXPECT_NE(detail::cell_signature(flipped(flipped(cell, 32U * word + b), 32U * (word + distance) + b)), check)
+        EXPECT_NE(detail::cell_signature<kLaneBits>(flipped(flipped(cell, 32U * word + b), 32U * (word + distance) + b)), check)
             << name << ": bit " << b << " of words " << word << " and " << word + distance << " cancel";
       }
     }
@@ -148,23 +175,29 @@ double double_flips(const char* name) {
   for (std::size_t a = 0; a < kBits; ++a) {
     for (std::size_t b = a + 1U; b < kBits; ++b) {
       ++pairs;
-      seen += model_check_bit(a / 32U, a % 32U) != model_check_bit(b / 32U, b % 32U) ? 1U : 0U;
+      seen += model_check_bit<kLaneBits>(a / 32U, a % 32U) != model_check_bit<kLaneBits>(b / 32U, b % 32U) ? 1U : 0U;
     }
   }
   return static_cast<double>(seen) / static_cast<double>(pairs);
 }
 
-TEST(Integrity, AdjacentDoubleFlipsAreDetected) {
-  const double full = double_flips<CcmCell>("CcmCell");
-  const double paper = double_flips<CcmPaperCell>("CcmPaperCell");
-  const double kalman = double_flips<KalmanCell>("KalmanCell");
-  std::printf("[ integrity ] double flips detected: CcmCell %.4f, CcmPaperCell %.4f, KalmanCell/OmgCell %.4f\n", full,
-              paper, kalman);
+template <unsigned kLaneBits>
+void adjacent_double_flips_are_detected() {
+  const double full = double_flips<CcmCell, kLaneBits>("CcmCell");
+  const double paper = double_flips<CcmPaperCell, kLaneBits>("CcmPaperCell");
+  const double kalman = double_flips<KalmanCell, kLaneBits>("KalmanCell");
+  std::printf("[ integrity ] %u-bit form: double flips detected: CcmCell %.4f, CcmPaperCell %.4f, KalmanCell/OmgCell %.4f\n",
+              kLaneBits, full, paper, kalman);
   // Each bit lands on one of 16 check bits, about evenly: about 1 - (n/16 - 1) / (n - 1) of the
   // pairs of n bits (0.941 for 320 bits, 0.947 for 96).
-  EXPECT_GT(full, 0.94) << "share of double flips detected in a 10-float cell";
+  EXPECT_GT(full, 0.94) << kLaneBits << "-bit form: share of double flips detected in a 10-float cell";
   EXPECT_GT(paper, 0.94);
   EXPECT_GT(kalman, 0.94);
+}
+
+TEST(Integrity, AdjacentDoubleFlipsAreDetected) {
+  adjacent_double_flips_are_detected<64>();
+  adjacent_double_flips_are_detected<32>();
 }
 
 /// Two CCM cells and their checks, the members the writer hooks use of a LayerSet.
@@ -181,7 +214,7 @@ TEST(Integrity, AnUpsetStaysVisibleAfterMoreWritesToTheCell) {
   TwoCells layers;
   CcmCell& cell = layers.ccm_storage[1];
   for (int i = 0; i < 20; ++i) {
-    const std::uint64_t before = detail::cell_signature_wide(cell);
+    const detail::WideSignature before = detail::cell_signature_wide(cell);
     detail::ccm_update_unchecked(cell, 0.01F * static_cast<float>(i % 5), -0.02F, 0.3F + 0.001F * static_cast<float>(i), 1.0F,
                          1000.0F);
     detail::rewrite_check(layers, cell, before);

@@ -585,7 +585,7 @@ struct ExchangeAccess {
       return Status::kOutOfRange;
     }
     if (commit) {
-      const std::uint64_t before = cell_signature_wide(cell);  // integrity hook: the check follows
+      const WideSignature before = cell_signature_wide(cell);  // integrity hook: the check follows
       cell = merged;
       rewrite_check(layers, cell, before);
       if (copy != nullptr) {

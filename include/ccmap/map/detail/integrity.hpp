@@ -4,13 +4,22 @@
 //
 // Cells. Every cell of every layer has a 16-bit check in parallel arrays beside the layers'
 // storage (CellChecks, a member of LayerSet): the cell types, snapshots' cell records and the C
-// API's records are unchanged. The check is a linear function of the cell's bits (XOR, no carry):
+// API's records are unchanged. The check is a linear function of the cell's bits (XOR, no carry),
+// in one of two forms, chosen by the target's register width (kCheckLaneBits):
 //
+//   64-bit cores (x86-64, aarch64):
 //   wide(cell)  = XOR over the cell's 64-bit lanes L_j (bytes 8j .. 8j+7; an odd last 32-bit word
 //                 is a lane of its own, zero-extended) of ror64(L_j, 3j)
 //   check(cell) = fold(wide(cell)): f = lo32 ^ ror32(hi32, 2), then lo16(f) ^ hi16(f)
 //
-// so every bit of the cell lands on exactly one of the 16 check bits, and check(0) = 0: a static
+//   32-bit cores (Cortex-M7, where a 64-bit rotation takes six instructions and a 32-bit one is
+//   free in the XOR's operand):
+//   wide(cell)  = XOR over the cell's 32-bit words w_k of ror32(w_k, 3k mod 32)
+//   check(cell) = lo16(wide) ^ hi16(wide)
+//
+// Checks never leave the stack (snapshots, deltas and the C API's records hold none; a load
+// recomputes them), so the two forms may differ between targets. In either form every bit of the
+// cell lands on exactly one of the 16 check bits, and check(0) = 0: a static
 // stack in .bss and every cleared cell are consistent with no work. Writers keep the check with
 //   check ^= fold(wide(old) ^ wide(new))
 // (no compare on the update path), which keeps D = check ^ check(cell) constant over writes: an
@@ -22,10 +31,10 @@
 // What the check sees (tests/map/integrity_test.cpp proves each against a brute-force
 // recomputation): every single-bit upset of a cell or of its check; every odd number of upsets in
 // one cell; every two upsets in adjacent bits of a cell (within a 32-bit word and across word
-// boundaries) and in the same bit of two words up to three words apart (the rotations 3j and 2
-// were chosen for that: SRAM interleaves the same bit of neighbouring words side by side). Two
-// upsets that land on the same check bit cancel: of all pairs of bits of a 10-float CCM cell,
-// 94 % are detected.
+// boundaries) and in the same bit of two words up to three words apart (the rotations were
+// chosen for that: SRAM interleaves the same bit of neighbouring words side by side). Two upsets
+// that land on the same check bit cancel: of all pairs of bits of a 10-float CCM cell, 94 % are
+// detected (both forms spread a cell's bits evenly over the 16 check bits).
 //
 // Bookkeeping (state_seal): the values that index memory or give the cells their meaning (the
 // parameters, every derived constant, each grid's storage pointer, side, widths and window, the
@@ -53,6 +62,14 @@ namespace ccmap::detail {
 /// Check of one cell (16 bits), kept in CellChecks beside the cells.
 using CellCheck = std::uint16_t;
 
+/// Lane width of the signatures on this target: 64 where pointers are 64-bit (the core has
+/// 64-bit registers), else 32 (the file comment gives both forms).
+inline constexpr unsigned kCheckLaneBits = UINTPTR_MAX > 0xFFFFFFFFU ? 64U : 32U;
+/// The wide signature of one form (64 or 32 bits), and this target's.
+template <unsigned kLaneBits>
+using SignatureOf = std::conditional_t<kLaneBits == 64U, std::uint64_t, std::uint32_t>;
+using WideSignature = SignatureOf<kCheckLaneBits>;
+
 [[nodiscard]] constexpr std::uint64_t rotr64(std::uint64_t v, unsigned r) noexcept {
   return (v >> (r & 63U)) | (v << ((64U - r) & 63U));
 }
@@ -60,45 +77,62 @@ using CellCheck = std::uint16_t;
   return (v >> (r & 31U)) | (v << ((32U - r) & 31U));
 }
 
-/// The wide (64-bit) signature of `size` bytes (a multiple of 4): lane j (bytes 8j .. 8j+7, or a
-/// last lone 32-bit word, zero-extended) rotated right by 3j bits, XORed. Linear over XOR:
-/// wide(a ^ b) = wide(a) ^ wide(b), and wide(0) = 0. Every bit maps to one bit.
-template <std::size_t kBytes>
-[[nodiscard]] inline std::uint64_t bytes_signature_wide(const unsigned char* bytes) noexcept {
+/// The wide signature of `kBytes` bytes (a multiple of 4), form kLaneBits. 64: lane j (bytes
+/// 8j .. 8j+7, or a last lone 32-bit word, zero-extended) rotated right by 3j bits, XORed; 32:
+/// word k rotated right by 3k mod 32 bits, XORed. Linear over XOR: wide(a ^ b) = wide(a) ^
+/// wide(b), and wide(0) = 0. Every bit maps to one bit.
+template <std::size_t kBytes, unsigned kLaneBits = kCheckLaneBits>
+[[nodiscard]] inline SignatureOf<kLaneBits> bytes_signature_wide(const unsigned char* bytes) noexcept {
   static_assert(kBytes % 4U == 0U, "signatures run over whole 32-bit words");
-  constexpr std::size_t kLanes = kBytes / 8U;
-  std::uint64_t s = 0U;
-  for (std::size_t lane = 0; lane < kLanes; ++lane) {
-    std::uint64_t u = 0U;
-    std::memcpy(&u, bytes + 8U * lane, sizeof u);
-    s ^= rotr64(u, static_cast<unsigned>(3U * lane));
+  static_assert(kLaneBits == 64U || kLaneBits == 32U, "a signature runs over 64- or 32-bit lanes");
+  if constexpr (kLaneBits == 64U) {
+    constexpr std::size_t kLanes = kBytes / 8U;
+    std::uint64_t s = 0U;
+    for (std::size_t lane = 0; lane < kLanes; ++lane) {
+      std::uint64_t u = 0U;
+      std::memcpy(&u, bytes + 8U * lane, sizeof u);
+      s ^= rotr64(u, static_cast<unsigned>(3U * lane));
+    }
+    if constexpr (kBytes % 8U != 0U) {
+      std::uint32_t w = 0U;
+      std::memcpy(&w, bytes + 8U * kLanes, sizeof w);
+      s ^= rotr64(std::uint64_t{w}, static_cast<unsigned>(3U * kLanes));
+    }
+    return s;
+  } else {
+    std::uint32_t s = 0U;
+    for (std::size_t word = 0; word < kBytes / 4U; ++word) {
+      std::uint32_t w = 0U;
+      std::memcpy(&w, bytes + 4U * word, sizeof w);
+      s ^= rotr32(w, static_cast<unsigned>((3U * word) % 32U));
+    }
+    return s;
   }
-  if constexpr (kBytes % 8U != 0U) {
-    std::uint32_t w = 0U;
-    std::memcpy(&w, bytes + 8U * kLanes, sizeof w);
-    s ^= rotr64(std::uint64_t{w}, static_cast<unsigned>(3U * kLanes));
-  }
-  return s;
 }
 
-/// The wide signature of a cell (any trivially copyable type of whole 32-bit words).
-template <typename T>
-[[nodiscard]] inline std::uint64_t cell_signature_wide(const T& value) noexcept {
+/// The wide signature of a cell (any trivially copyable type of whole 32-bit words), form
+/// kLaneBits (this target's unless named).
+template <unsigned kLaneBits = kCheckLaneBits, typename T>
+[[nodiscard]] inline SignatureOf<kLaneBits> cell_signature_wide(const T& value) noexcept {
   static_assert(std::is_trivially_copyable<T>::value, "signatures read the bytes of a value");
-  return bytes_signature_wide<sizeof(T)>(reinterpret_cast<const unsigned char*>(&value));
+  return bytes_signature_wide<sizeof(T), kLaneBits>(reinterpret_cast<const unsigned char*>(&value));
 }
 
-/// The 16-bit check of a wide signature: lo32 ^ ror32(hi32, 2), then lo16 ^ hi16 (linear, and a
-/// single changed bit of the wide signature changes exactly one bit of the check).
+/// The 16-bit check of a wide signature. 64-bit form: lo32 ^ ror32(hi32, 2), then lo16 ^ hi16;
+/// 32-bit form: lo16 ^ hi16 (linear, and a single changed bit of the wide signature changes
+/// exactly one bit of the check).
 [[nodiscard]] constexpr CellCheck fold_signature(std::uint64_t wide) noexcept {
   const std::uint32_t f = static_cast<std::uint32_t>(wide) ^ rotr32(static_cast<std::uint32_t>(wide >> 32U), 2U);
   return static_cast<CellCheck>((f ^ (f >> 16U)) & 0xFFFFU);
 }
+[[nodiscard]] constexpr CellCheck fold_signature(std::uint32_t wide) noexcept {
+  return static_cast<CellCheck>((wide ^ (wide >> 16U)) & 0xFFFFU);
+}
 
-/// The check a consistent cell has.
-template <typename T>
+/// The check a consistent cell has (form kLaneBits: this target's unless named).
+template <unsigned kLaneBits = kCheckLaneBits, typename T>
 [[nodiscard]] inline CellCheck cell_signature(const T& value) noexcept {
-  return fold_signature(cell_signature_wide(value));
+  return fold_signature(cell_signature_wide<kLaneBits>(value));
 }
 
 /// The per-cell checks of a LayerSet: fine[i] belongs to fine_storage[i], ccm[i] to
@@ -145,7 +179,7 @@ template <typename Layers, typename Cell>
 /// Writer hook, second half: after a write of `cell` whose wide signature before the write was
 /// `before`, carries the change into the cell's check (check ^= fold(before ^ wide(now))).
 template <typename Layers, typename Cell>
-inline void rewrite_check(Layers& layers, const Cell& cell, std::uint64_t before) noexcept {
+inline void rewrite_check(Layers& layers, const Cell& cell, WideSignature before) noexcept {
   check_of(layers, cell) ^= fold_signature(before ^ cell_signature_wide(cell));
 }
 
@@ -178,7 +212,7 @@ class CheckRun {
 
  private:
   Cell* cell_ = nullptr;
-  std::uint64_t before_ = 0U;
+  WideSignature before_ = 0U;
 };
 
 /// The runs of one chunk: CCM cells and piece-wise constant (OMG) cells.

@@ -97,7 +97,7 @@ template <typename Config>
       const auto height = [](const FineCell* n) { return n != nullptr ? n->height : 0.0F; };
       const float gx = neighbour_gradient(seen(west), height(west), seen(east), height(east), cell.height, w);
       const float gy = neighbour_gradient(seen(south), height(south), seen(north), height(north), cell.height, w);
-      const std::uint64_t before = cell_signature_wide(cell);
+      const WideSignature before = cell_signature_wide(cell);
       if constexpr (Config::kFineKind == FineKind::kOmg) {
         // Mixture variance s / W grows by g^2 sigma^2.
         const float variance = cell.s / cell.weight;

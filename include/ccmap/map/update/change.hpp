@@ -67,7 +67,7 @@ void apply_change_rule(OutlierGate<Config>& gate, LayerSet<Config>& layers, cons
     frame.corrupted_slots += gate.ccm_pool().end_frame([&](const auto& slot) {
       auto& cell = layers.ccm_storage[slot.cell];
       const bool tight = held_is_tight(slot.held.s_zz, slot.held.weight, gate.constants(layer_of(slot)));
-      const std::uint64_t before = cell_signature_wide(cell);  // integrity hook
+      const WideSignature before = cell_signature_wide(cell);  // integrity hook
       switch (counted_verdict(slot, tight, rule, frame)) {
         case ChangeVerdict::kReseed:
           cell = slot.held;  // the held points folded into an empty cell, limiter included
@@ -98,7 +98,7 @@ void apply_change_rule(OutlierGate<Config>& gate, LayerSet<Config>& layers, cons
       const ChangeVerdict v = counted_verdict(slot, tight, rule, frame);
       if (v == ChangeVerdict::kReseed || v == ChangeVerdict::kMerge) {
         auto& cell = layers.fine_storage[slot.cell];
-        const std::uint64_t before = cell_signature_wide(cell);  // integrity hook
+        const WideSignature before = cell_signature_wide(cell);  // integrity hook
         if (v == ChangeVerdict::kReseed) {
           cell = typename Gate::FineCell{};
         }

@@ -454,7 +454,7 @@ class UpdatePath {
     if constexpr (kKalman) {
       KalmanCell* cells = layers.fine_storage;
       batch_.fuse([&](std::uint32_t slot, const KalmanFrameSum& sum) {
-        const std::uint64_t before = cell_signature_wide(cells[slot]);  // integrity hook
+        const WideSignature before = cell_signature_wide(cells[slot]);  // integrity hook
         fuse_sums(cells[slot], params, sum.sum_height_q14, sum.sum_range_key, sum.count);
         rewrite_check(layers, cells[slot], before);  // integrity hook
       });
