@@ -128,7 +128,8 @@ inline constexpr bool kConfigOutlierGate = detail::ConfigOutlierGate<Config>::va
 
 /// The held-point slots of a Config with the gate, per pool (the CCM layers', the finest
 /// layer's): its `kCcmHeldSlots` / `kFineHeldSlots` members, or 0 for the update path's defaults
-/// (map/update/held_pool.hpp: kHeldSlots, kFineHeldSlots).
+/// (map/update/held_pool.hpp: kHeldSlots, kFineHeldSlots). A power of two (held_pool.hpp asserts
+/// it: slot indices are masked to the pool, map/detail/integrity.hpp).
 template <typename Config>
 inline constexpr std::size_t kConfigCcmHeldSlots = detail::ConfigCcmHeldSlots<Config>::value;
 template <typename Config>

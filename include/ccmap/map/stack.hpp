@@ -149,7 +149,7 @@ class Stack {
   /// binding and window) matches the seals taken when it last changed; kNotInitialised before
   /// init; kCorrupt if an upset changed any of it (every call then answers kCorrupt, changing
   /// nothing, until init() or load_snapshot()). Every call that reads or writes cells checks it
-  /// first (docs/performance.md section 11: its cost).
+  /// first (docs/performance.md section 12: its cost).
   [[nodiscard]] Status state_status() const noexcept {
     const Status status = query_status();
     if (status != Status::kOk || update_seal() == update_seal_) {
