@@ -252,6 +252,55 @@ TEST(Front, ChunksOfManyPointsEqualOnePointAtATimeBitForBit) {
   EXPECT_GT(compared, 2000);
 }
 
+TEST(Front, EveryLayerCountRoutesAsTheFloatTable) {
+  // Stacks of 1 .. 8 layers: the chunk functions are instantiated per layer count; each must
+  // route every point as RoutingTable::select on the double range (bounds doubling from 1 m^2,
+  // the last one unbounded for some counts, points near a bound left out).
+  test::Rng rng(21);
+  for (int layers = 1; layers <= kFrontMaxLayers; ++layers) {
+    std::vector<float> bounds;
+    for (int k = 0; k < layers; ++k) {
+      bounds.push_back(layers % 2 == 0 && k == layers - 1 ? std::numeric_limits<float>::infinity()
+                                                           : static_cast<float>(1 << k));
+    }
+    FrontConfig config{};
+    ASSERT_EQ(make_front_config(0.05F, bounds.data(), layers, &config), Status::kOk);
+    FramePose map_pose{};
+    ASSERT_EQ(make_frame_pose(PointXYZ{0.5F, -0.5F, 0.2F}, nullptr, config, &map_pose), Status::kOk);
+    const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    FramePose sensor_pose{};
+    ASSERT_EQ(make_frame_pose(PointXYZ{0.5F, -0.5F, 0.2F}, identity, config, &sensor_pose), Status::kOk);
+    std::vector<PointXYZ> map_points, sensor_points;
+    for (int i = 0; i < 64; ++i) {
+      const PointXYZ s{static_cast<float>(rng.uniform(-12.0, 12.0)), static_cast<float>(rng.uniform(-12.0, 12.0)),
+                       static_cast<float>(rng.uniform(-1.0, 1.0))};
+      sensor_points.push_back(s);
+      map_points.push_back(PointXYZ{s.x + 0.5F, s.y - 0.5F, s.z + 0.2F});
+    }
+    auto chunk = std::make_unique<FrontChunk>();
+    for (const bool sensor : {false, true}) {
+      if (sensor) {
+        front_sensor_chunk(sensor_points.data(), sensor_points.size(), sensor_pose, config, FineWindow{}, *chunk);
+      } else {
+        front_map_chunk(map_points.data(), map_points.size(), map_pose, config, FineWindow{}, *chunk);
+      }
+      for (std::size_t i = 0; i < sensor_points.size(); ++i) {
+        const PointXYZ& s = sensor_points[i];
+        const double r2 = double{s.x} * s.x + double{s.y} * s.y + double{s.z} * s.z;
+        bool near = false;
+        int expected = -1;
+        for (int k = 0; k < layers; ++k) {
+          near = near || std::fabs(r2 - double{bounds[static_cast<std::size_t>(k)]}) < 1e-4;
+          if (expected < 0 && r2 <= double{bounds[static_cast<std::size_t>(k)]}) expected = k;
+        }
+        if (near) continue;
+        ASSERT_EQ(chunk->code[i] == std::int32_t{kFrontTooNoisy} ? -1 : chunk->code[i], expected)
+            << layers << " layers, " << (sensor ? "sensor" : "map") << " frame, r^2 = " << r2;
+      }
+    }
+  }
+}
+
 TEST(Front, FinestIndexEqualsWhatQueriesLocateAtEveryEdge) {
   // The update path and grid::index_of_position (RingGrid::locate) must name the same cell for
   // every map-frame float, including the floats right at and around every cell edge.

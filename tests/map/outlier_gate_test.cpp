@@ -260,6 +260,8 @@ TEST(OutlierGateStack, APoseJumpReseedsAPoolOfCellsPerFrame) {
     const FrameCounters c = fold(*stack, frame(1.6F, w, 8, raised, 0.0F, 100U + f));
     EXPECT_LE(c.reseeded_cells, Stack<SingleCcmConfig>::kCcmHeldSlots);
     if (f == 0) {
+      EXPECT_EQ(stack->last_frame_held_cells(), Stack<SingleCcmConfig>::kCcmHeldSlots)
+          << "the frame ended with its pool full";
       EXPECT_EQ(c.reseeded_cells, Stack<SingleCcmConfig>::kCcmHeldSlots);
       EXPECT_GT(c.gated_pool_full, 0U);
     }
