@@ -70,10 +70,10 @@ typedef enum ccmap_preset {
  * versions (the library checks at build time that its map fits); ccmap_storage_size() gives
  * the exact figure. The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
-#define CCMAP_CADRE_STORAGE_SIZE 720896u          /* 704 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2818048u    /* 2752 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3342336u /* 3264 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 983040u     /* 960 KiB */
+#define CCMAP_CADRE_STORAGE_SIZE 851968u          /* 832 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3145728u    /* 3072 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3670016u /* 3584 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1310720u    /* 1280 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \
@@ -95,10 +95,10 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 459020u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621676u
-#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786668u
-#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786668u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 516404u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2883860u
+#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 1048852u
+#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 1048852u
 
 /* ---- the map handle ------------------------------------------------------------------------- */
 typedef struct ccmap_map ccmap_map; /* opaque: lives at the start of the caller's storage */
@@ -146,6 +146,11 @@ typedef struct ccmap_params {
                                  point trusted, the paper's update (docs/design.md) */
   float change_min_points;    /* change rule: held points (and those inside the gate) are a surface */
   float change_share;         /* of their own with this many points and this share of the cell's */
+  float free_space_rays;      /* lines of sight walked per frame (whole number, 0..65535); 0 = no
+                                 free space: no ghost cleared, no drop-off (docs/design.md) */
+  float free_space_clear_frames; /* frames of rays clearly below a surface before it is cleared (1..255) */
+  float sensor_view_axis[3];  /* the sensor's viewing direction in its own frame (all 0: not given);
+                                 sensor-frame points behind it cast no line of sight */
   ccmap_noise_params noise;
 } ccmap_params;
 
@@ -177,6 +182,11 @@ typedef struct ccmap_frame_counters {
   uint32_t gated_dropped;    /* held points it dropped as outliers (or whose cell left the map) */
   uint32_t reseeded_cells;   /* cells replaced by their held points */
   uint32_t merged_cells;     /* cells that took their held points in beside their own */
+  uint32_t free_rays;        /* lines of sight walked (free space; not points) */
+  uint32_t free_rays_refused; /* sampled points whose line of sight was refused (bad point, behind
+                                 the sensor, sensor outside the map): they change nothing */
+  uint32_t cleared_cells;    /* cells emptied: lines of sight passed clearly below their surface */
+  uint32_t drop_cells;       /* unobserved cells that became drop-offs */
 } ccmap_frame_counters;
 
 /* Re-centres every layer on the robot at (x, y) (m). Refused (counted): non-finite or
@@ -213,10 +223,12 @@ typedef enum ccmap_cell_class {
   CCMAP_CLASS_UNKNOWN = 0,
   CCMAP_CLASS_TRAVERSABLE = 1,
   CCMAP_CLASS_OBSTACLE = 2,
-  CCMAP_CLASS_STEEP = 3
+  CCMAP_CLASS_STEEP = 3,
+  CCMAP_CLASS_DROP = 4  /* unobserved, lines of sight passed far below the ground before it: a
+                           crater, ditch or ledge; a hazard (docs/design.md, free space) */
 } ccmap_cell_class;
 
-/* "unknown", "traversable", "obstacle", "steep"; never NULL. */
+/* "unknown", "traversable", "obstacle", "steep", "drop"; never NULL. */
 const char* ccmap_cell_class_string(int32_t cell_class);
 
 /* Answer of a point query (ccmap::QueryResult). On status != CCMAP_OK the numbers are 0. */

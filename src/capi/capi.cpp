@@ -43,6 +43,7 @@ static_assert(static_cast<int>(CCMAP_CLASS_UNKNOWN) == static_cast<int>(CellClas
 static_assert(static_cast<int>(CCMAP_CLASS_TRAVERSABLE) == static_cast<int>(CellClass::kTraversable), "class");
 static_assert(static_cast<int>(CCMAP_CLASS_OBSTACLE) == static_cast<int>(CellClass::kObstacle), "class");
 static_assert(static_cast<int>(CCMAP_CLASS_STEEP) == static_cast<int>(CellClass::kSteep), "class");
+static_assert(static_cast<int>(CCMAP_CLASS_DROP) == static_cast<int>(CellClass::kDropOff), "class");
 static_assert(CCMAP_MAX_LAYERS == kMaxLayers, "CCMAP_MAX_LAYERS != kMaxLayers");
 static_assert(sizeof(ccmap_frame_counters) == sizeof(FrameCounters), "ccmap_frame_counters != FrameCounters");
 
@@ -294,6 +295,11 @@ void params_to_c(const StackParams& p, ccmap_params* out) noexcept {
   out->outlier_gate_sigma = p.outlier_gate_sigma;
   out->change_min_points = p.change_min_points;
   out->change_share = p.change_share;
+  out->free_space_rays = p.free_space_rays;
+  out->free_space_clear_frames = p.free_space_clear_frames;
+  for (std::size_t i = 0; i < 3U; ++i) {
+    out->sensor_view_axis[i] = p.sensor_view_axis[i];
+  }
   // default_stack_params uses the CADRE stereo model (sensor::cadre_stereo()).
   out->noise.sensor = CCMAP_SENSOR_STEREO;
   out->noise.stereo_focal_px = sensor::kCadreStereoParams.focal_px;
@@ -321,6 +327,11 @@ Status params_from_c(const ccmap_params& c, StackParams* out) noexcept {
   p.outlier_gate_sigma = c.outlier_gate_sigma;
   p.change_min_points = c.change_min_points;
   p.change_share = c.change_share;
+  p.free_space_rays = c.free_space_rays;
+  p.free_space_clear_frames = c.free_space_clear_frames;
+  for (std::size_t i = 0; i < 3U; ++i) {
+    p.sensor_view_axis[i] = c.sensor_view_axis[i];
+  }
   if (c.noise.sensor == CCMAP_SENSOR_STEREO) {
     p.noise = sensor::NoiseModel::stereo(sensor::StereoParams{
         c.noise.stereo_focal_px, c.noise.stereo_baseline_m, c.noise.stereo_disparity_sigma_px});
@@ -377,7 +388,7 @@ FootprintResult footprint_from_c(const ccmap_footprint_result& c) noexcept {
   FootprintResult r{};
   r.status = c.status >= 0 && c.status <= static_cast<std::int32_t>(CCMAP_VERSION_MISMATCH) ? static_cast<Status>(c.status)
                                                                                            : Status::kInvalidArgument;
-  r.worst_class = c.worst_class >= CCMAP_CLASS_UNKNOWN && c.worst_class <= CCMAP_CLASS_STEEP
+  r.worst_class = c.worst_class >= CCMAP_CLASS_UNKNOWN && c.worst_class <= CCMAP_CLASS_DROP
                       ? static_cast<CellClass>(c.worst_class)
                       : CellClass::kUnknown;
   r.unknown_share = c.unknown_share;
@@ -412,7 +423,9 @@ void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
                               f.rejected_out_of_range, f.rejected_weight, f.outside_map,
                               f.too_noisy,     f.gated_finer,   f.gated_occluded,
                               f.gated_held,    f.gated_pool_full, f.gated_admitted,
-                              f.gated_dropped, f.reseeded_cells, f.merged_cells};
+                              f.gated_dropped, f.reseeded_cells, f.merged_cells,
+                              f.free_rays,     f.free_rays_refused, f.cleared_cells,
+                              f.drop_cells};
 }
 
 }  // namespace
@@ -431,7 +444,7 @@ const char* ccmap_status_string(ccmap_status status) {
 }
 
 const char* ccmap_cell_class_string(int32_t cell_class) {
-  if (cell_class < CCMAP_CLASS_UNKNOWN || cell_class > CCMAP_CLASS_STEEP) {
+  if (cell_class < CCMAP_CLASS_UNKNOWN || cell_class > CCMAP_CLASS_DROP) {
     return "unknown";
   }
   return ccmap::to_string(static_cast<ccmap::CellClass>(cell_class));

@@ -29,11 +29,11 @@ constexpr std::array<std::uint32_t, 256> kCrcTable = make_crc_table();
 
 // The format (snapshot.hpp) lists every field of these types; a new field needs a new format
 // version, not a silent omission.
-static_assert(sizeof(FrameCounters) == 15U * sizeof(std::uint32_t),
+static_assert(sizeof(FrameCounters) == 19U * sizeof(std::uint32_t),
               "FrameCounters changed: update the snapshot format and kSnapshotFormatVersion");
 static_assert(sizeof(sensor::NoiseModel) == 4U + 5U * sizeof(float),
               "NoiseModel changed: update the snapshot format and kSnapshotFormatVersion");
-static_assert(sizeof(StackParams) == (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U) * sizeof(float) +
+static_assert(sizeof(StackParams) == (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 5U) * sizeof(float) +
                                          sizeof(sensor::NoiseModel),
               "StackParams changed: update the snapshot format and kSnapshotFormatVersion");
 
@@ -232,6 +232,11 @@ void snapshot_write_params(SnapshotWriter& w, const StackParams& p) noexcept {
   w.f32(p.outlier_gate_sigma);
   w.f32(p.change_min_points);
   w.f32(p.change_share);
+  w.f32(p.free_space_rays);
+  w.f32(p.free_space_clear_frames);
+  for (const float a : p.sensor_view_axis) {
+    w.f32(a);
+  }
   w.u8(static_cast<std::uint8_t>(p.noise.kind()));
   w.u8(static_cast<std::uint8_t>(p.noise.weight_mode()));
   w.u16(0U);
@@ -269,6 +274,11 @@ Status snapshot_read_params(SnapshotReader& r, int layer_count, bool has_fine, S
   p.outlier_gate_sigma = finite_f32();
   p.change_min_points = finite_f32();
   p.change_share = finite_f32();
+  p.free_space_rays = finite_f32();
+  p.free_space_clear_frames = finite_f32();
+  for (float& a : p.sensor_view_axis) {
+    a = finite_f32();
+  }
   const std::uint8_t kind = r.u8();
   const std::uint8_t mode = r.u8();
   const std::uint16_t reserved = r.u16();
@@ -406,6 +416,18 @@ bool snapshot_read_cell(SnapshotReader& r, OmgCell* out) noexcept {
   return r.ok() && all_finite(f, 3U) && f[0] >= 0.0F;
 }
 
+// ---- free-space records ----
+void snapshot_write_record(SnapshotWriter& w, const FreeSpaceCell& c) noexcept {
+  w.u16(c.bound_code);
+  w.u8(c.evidence);
+  w.u8(c.state);
+}
+void snapshot_read_record(SnapshotReader& r, FreeSpaceCell* out) noexcept {
+  out->bound_code = r.u16();
+  out->evidence = r.u8();
+  out->state = r.u8();
+}
+
 // ---- counters, trailer ----
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uint32_t rejected_moves,
                              std::uint32_t rejected_frames, std::uint64_t last_update_ns) noexcept {
@@ -414,7 +436,8 @@ void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uin
                                   t.too_noisy,       t.gated_finer,    t.gated_occluded,
                                   t.gated_held,      t.gated_pool_full, t.gated_admitted,
                                   t.gated_dropped,   t.reseeded_cells, t.merged_cells,
-                                  rejected_moves,    rejected_frames};
+                                  t.free_rays,       t.free_rays_refused, t.cleared_cells,
+                                  t.drop_cells,      rejected_moves,   rejected_frames};
   for (const std::uint32_t v : values) {
     w.u32(v);
   }
@@ -438,6 +461,10 @@ void snapshot_read_counters(SnapshotReader& r, FrameCounters* t, std::uint32_t* 
   t->gated_dropped = r.u32();
   t->reseeded_cells = r.u32();
   t->merged_cells = r.u32();
+  t->free_rays = r.u32();
+  t->free_rays_refused = r.u32();
+  t->cleared_cells = r.u32();
+  t->drop_cells = r.u32();
   *rejected_moves = r.u32();
   *rejected_frames = r.u32();
   *last_update_ns = r.u64();

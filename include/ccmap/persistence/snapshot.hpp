@@ -15,7 +15,8 @@
 // the outlier gate's held points awaiting the change rule (map/update/held_pool.hpp: at most
 // kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
 //
-// Format (version 3: version 2 with the outlier gate's parameters and counters). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 4: version 3 with free space from lines of sight: its parameters, counters and
+// per-cell records). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -26,11 +27,14 @@
 //               32  side of each layer, finest first (uint32 x kMaxLayers, 0 past the last layer)
 //                2  bytes per fine cell on the wire (12), 2 bytes per CCM cell (40 for CcmCell,
 //                   36 for CcmPaperCell: the cell kind is part of the shape)
+//   free space   2  bytes per free-space record (4, or 0 for a Config without free space: part of
+//                   the shape), 2 reserved 0
 //   params      60  StackParams floats: finest_cell_width_m, weight_limit, coverage_tau,
 //                   min_weight, obstacle_fraction, max_inclination, kalman_min_variance,
 //                   normal_variance_threshold[0..7]
 //                4  finest_max_sigma_m
 //               12  outlier_gate_sigma, change_min_points, change_share
+//               20  free_space_rays, free_space_clear_frames, sensor_view_axis[0..2]
 //               20  noise model: kind (u8), weight mode (u8), 2 reserved 0, stereo k = sigma_d/(f b)
 //                   (1/m), lidar sigma0 (m), lidar sigma per m, reference range (m)
 //   per layer    8  window centre (int32 x, int32 y; global cell indices), then
@@ -39,22 +43,28 @@
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
 //                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
 //                   s_xy for CcmCell (CcmPaperCell has none).
-//   counters    60  total FrameCounters (15 x uint32, in declaration order)
+//   records         with free space, per layer (finest first) side*side free-space records in the
+//                   same window order: bound code (uint16), evidence (uint8), state (uint8)
+//                   (map/visibility/free_space_cell.hpp); nothing without free space
+//   counters    76  total FrameCounters (19 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
 //
 // Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
-// (CcmCell with s_xy). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
-// hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
+// (CcmCell with s_xy); version 3 the outlier gate; version 4 free space. A version-1 snapshot is
+// refused with kVersionMismatch: its 9-float cells hold no lateral covariance, and a full-cell map
+// rebuilt from them would answer differently. Versions 2 and 3 are refused likewise (a map
+// without the records would answer no drop-off the saved one answered).
 //
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
 //   kInvalidArgument  data == nullptr
 //   kCorrupt          shorter than the header, wrong magic, a non-zero reserved header field
 //   kVersionMismatch  another format version (also version 1, before the cell kinds)
 //   kCorrupt          size field != size (truncated or trailing bytes), CRC mismatch
-//   kVersionMismatch  fingerprint of another stack configuration (another preset or another CCM
-//                     cell kind): the data is intact but describes another map shape
+//   kVersionMismatch  fingerprint of another stack configuration (another preset, another CCM
+//                     cell kind, with or without free space): the data is intact but describes
+//                     another map shape
 //   kCorrupt          anything inside that a save could not have written: parameters that
 //                     init() would refuse, a non-finite float (weight_limit may be +inf, the
 //                     "no limit" value), a negative cell weight, an odd or out-of-range window
@@ -74,7 +84,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 3U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 4U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -88,9 +98,11 @@ static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 t
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
-inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U) + 20U;
+inline constexpr std::size_t kSnapshotFreeSpaceShapeBytes = 4U;
+inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 5U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
-inline constexpr std::size_t kSnapshotCountersBytes = 15U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotFreeSpaceRecordBytes = 4U;
+inline constexpr std::size_t kSnapshotCountersBytes = 19U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
 /// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
@@ -188,6 +200,9 @@ void snapshot_write_cell(SnapshotWriter& w, const OmgCell& c) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, CcmPaperCell* out) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, KalmanCell* out) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, OmgCell* out) noexcept;
+void snapshot_write_record(SnapshotWriter& w, const FreeSpaceCell& c) noexcept;
+/// Every bit pattern of a record is one a stack can hold: never refused.
+void snapshot_read_record(SnapshotReader& r, FreeSpaceCell* out) noexcept;
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& totals, std::uint32_t rejected_moves,
                              std::uint32_t rejected_frames, std::uint64_t last_update_ns) noexcept;
 void snapshot_read_counters(SnapshotReader& r, FrameCounters* totals, std::uint32_t* rejected_moves,
@@ -202,13 +217,15 @@ struct SnapshotAccess {
   using CcmCellType = typename StackType::CcmCellType;
   static constexpr int kLayers = StackType::kLayerCount;
   static constexpr std::size_t kCcmCellBytes = kSnapshotCcmCellBytes<CcmCellType>;
+  static constexpr bool kFreeSpace = kConfigFreeSpace<Config>;
+  static constexpr std::uint16_t kRecordBytes = kFreeSpace ? static_cast<std::uint16_t>(kSnapshotFreeSpaceRecordBytes) : 0U;
 
   [[nodiscard]] static constexpr std::size_t size() noexcept {
-    std::size_t total = kSnapshotHeaderBytes + kSnapshotFingerprintBytes + kSnapshotParamsBytes +
-                        kSnapshotCountersBytes + kSnapshotTrailerBytes;
+    std::size_t total = kSnapshotHeaderBytes + kSnapshotFingerprintBytes + kSnapshotFreeSpaceShapeBytes +
+                        kSnapshotParamsBytes + kSnapshotCountersBytes + kSnapshotTrailerBytes;
     for (int layer = 0; layer < kLayers; ++layer) {
       const std::size_t cell_bytes = StackType::layer_is_ccm(layer) ? kCcmCellBytes : kSnapshotFineCellBytes;
-      total += kSnapshotLayerHeaderBytes + StackType::layer_capacity(layer) * cell_bytes;
+      total += kSnapshotLayerHeaderBytes + StackType::layer_capacity(layer) * (cell_bytes + kRecordBytes);
     }
     return total;
   }
@@ -241,6 +258,8 @@ struct SnapshotAccess {
     }
     SnapshotWriter w(buffer, capacity);
     snapshot_write_header(w, size(), fingerprint());
+    w.u16(kRecordBytes);
+    w.u16(0U);
     snapshot_write_params(w, stack.params_);
     for (int layer = 0; layer < kLayers; ++layer) {
       if (StackType::layer_is_ccm(layer)) {
@@ -250,6 +269,11 @@ struct SnapshotAccess {
       } else {
         snapshot_write_centre(w, stack.layers_.fine.centre());
         stack.layers_.fine.for_each([&w](CellIndex, const typename StackType::FineCell& cell) { snapshot_write_cell(w, cell); });
+      }
+    }
+    if constexpr (kFreeSpace) {
+      for (int layer = 0; layer < kLayers; ++layer) {
+        stack.free_space_.records(layer)->for_each([&w](CellIndex, const FreeSpaceCell& c) { snapshot_write_record(w, c); });
       }
     }
     snapshot_write_counters(w, stack.totals_, stack.rejected_moves_, stack.rejected_frames_, stack.last_update_ns_);
@@ -282,6 +306,14 @@ struct SnapshotAccess {
     if (shape != Status::kOk) {
       return shape;
     }
+    const std::uint16_t record_bytes = r.u16();
+    const std::uint16_t reserved = r.u16();
+    if (!r.ok() || reserved != 0U) {
+      return Status::kCorrupt;
+    }
+    if (record_bytes != kRecordBytes) {
+      return Status::kVersionMismatch;  // saved by a stack with (or without) free space
+    }
     if (data_size != size()) {
       return Status::kCorrupt;
     }
@@ -302,6 +334,14 @@ struct SnapshotAccess {
         } else {
           typename StackType::FineCell cell{};
           valid = snapshot_read_cell(r, &cell);
+        }
+      }
+    }
+    if constexpr (kFreeSpace) {
+      for (int layer = 0; layer < kLayers; ++layer) {
+        for (std::size_t i = 0; i < StackType::layer_capacity(layer); ++i) {
+          FreeSpaceCell record{};
+          snapshot_read_record(r, &record);
         }
       }
     }
@@ -374,6 +414,13 @@ struct SnapshotAccess {
         grid.for_each([&r](CellIndex, typename StackType::FineCell& cell) { (void)snapshot_read_cell(r, &cell); });
       }
     }
+    if constexpr (kFreeSpace) {
+      for (int layer = 0; layer < kLayers; ++layer) {
+        RingGrid<FreeSpaceCell>& records = *stack.free_space_.records(layer);
+        (void)records.init(records.storage(), records.side(), records.cell_width(), stack.layers_.centre(layer));
+        records.for_each([&r](CellIndex, FreeSpaceCell& c) { snapshot_read_record(r, &c); });
+      }
+    }
     snapshot_read_counters(r, &stack.totals_, &stack.rejected_moves_, &stack.rejected_frames_,
                            &stack.last_update_ns_);
     return Status::kOk;
@@ -383,7 +430,9 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 459,020 bytes (PaperCell<CadreConfig>: 418,060; docs/integration.md lists every preset).
+/// CadreConfig: 516,404 bytes (PaperCell<CadreConfig>: 475,444; WithFreeSpace<CadreConfig, false>:
+/// 459,060;
+/// docs/integration.md lists every preset).
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();
