@@ -306,7 +306,7 @@ typedef struct ccmap_footprint {
 /* Answer of a footprint query (ccmap::FootprintResult). */
 typedef struct ccmap_footprint_result {
   int32_t status;          /* CCMAP_OK, CCMAP_OUTSIDE_MAP (no layer holds any part), or the refusal */
-  int32_t worst_class;     /* ccmap_cell_class of the known parts (obstacle > steep > traversable);
+  int32_t worst_class;     /* ccmap_cell_class of the known parts (drop > obstacle > steep > traversable);
                               CCMAP_CLASS_UNKNOWN if none is known */
   float unknown_share;     /* [0, 1] of the area */
   float max_step_m;        /* height range over the known parts, or 4 sigma_s relief if larger */

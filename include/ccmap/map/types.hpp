@@ -44,8 +44,9 @@ enum class CellClass : std::uint8_t {
   kDropOff = 4,
 };
 
-/// True for the classes a rover must not drive into: obstacle, steep, drop-off.
-[[nodiscard]] constexpr bool is_hazard(CellClass c) noexcept {
+/// True for the classes a rover must not drive into (lethal in the cost raster): obstacle, steep,
+/// drop-off.
+[[nodiscard]] constexpr bool is_lethal(CellClass c) noexcept {
   return c == CellClass::kObstacle || c == CellClass::kSteep || c == CellClass::kDropOff;
 }
 

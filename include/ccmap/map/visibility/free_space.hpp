@@ -24,11 +24,15 @@
 //    model's range error at the point's range r): before that the ray is the line of sight to the
 //    true point, which clears the terrain by definition, unless the range error exceeds 3 sigma;
 //    no cell holding the point itself is judged by its ray;
-//  - a surface is contradicted only where it stands above the ray by more than
-//    clear_margin = max(obstacle_fraction w, kRangeSigmas sigma_k, for a constant cell
-//    kRangeSigmas sqrt(V_k)), sigma_k the largest range error the layer receives and V_k the
-//    outlier gate's floor variance (range error and the steepest traversable plane across the
-//    cell), and, for a CCM cell, by more than kRangeSigmas standard deviations of its own heights.
+//  - a surface is contradicted only where its top (a CCM cell: mean + sqrt(3) sigma_zz; a
+//    constant cell: its height) stands above the ray by more than clear_margin =
+//    max(obstacle_fraction w, kRangeSigmas sigma_k, for a constant cell kRangeSigmas sqrt(V_k)),
+//    sigma_k the largest range error the layer receives and V_k the outlier gate's floor variance
+//    (range error and the steepest traversable plane across the cell): the layer's obstacle
+//    height, more than the steepest traversable plane rises across a cell (0.36 w), and three
+//    range errors;
+//  - a point confirms the surface of its cell (and cancels the evidence against it) when it lies
+//    no more than kRangeSigmas sigma_k below the cell's mean.
 //
 // The coupling to the front is one adapter, ray_end_of(): the fields of a FrontChunk entry this
 // stage reads (routing code, Q18 position, squared range).
@@ -189,34 +193,36 @@ class FreeSpace<Config, true> {
     bool dirty;          ///< the ray passed below a known surface: it proves no bound beyond
   };
 
-  /// Height (m), weight and, for CCM cells, the height co-moment S_zz of a cell.
+  /// Weight, height (m) and height co-moment of a cell: a CCM cell's mean height and S_zz, a
+  /// constant cell's height (and 0: a 4 cm cell is one surface).
   struct CellView {
     float weight;
     float height;
     float s_zz;
-    bool ccm;
   };
 
   [[nodiscard]] CellView view_of(const Layers& layers, int layer, CellIndex index) const noexcept {
     if (Layers::is_ccm(layer)) {
       const CcmCellType& c = layers.ccm_grid(layer).cell_unchecked(index);
-      return CellView{c.weight, c.mean_z, c.s_zz, true};
+      return CellView{c.weight, c.mean_z, c.s_zz};
     }
     if constexpr (Layers::kHasFine) {
       const FineCell& c = layers.fine.cell_unchecked(index);
-      return CellView{c.weight, c.height, 0.0F, false};
+      return CellView{c.weight, c.height, 0.0F};
     } else {
-      return CellView{0.0F, 0.0F, 0.0F, false};
+      return CellView{0.0F, 0.0F, 0.0F};
     }
   }
 
-  /// True if a surface of `cell` lies more than the layer's margin (and, CCM, kRangeSigmas of
-  /// its own height spread) away from height z: above it when `above`, on either side otherwise.
-  [[nodiscard]] bool beyond_margin(const CellView& cell, int layer, float d) const noexcept {
-    if (!(d > consts_[layer].clear_margin_m)) {
-      return false;
-    }
-    return !cell.ccm || d * d * cell.weight > kRangeSigmas * kRangeSigmas * cell.s_zz;
+  /// True if the top of the cell's surface stands above height z (m) by more than the layer's
+  /// clear margin. The top of a CCM cell is mean + sqrt(3) sigma_zz (sigma_zz^2 = S_zz / W): the
+  /// highest point of heights spread evenly about the mean, so a vertical face whose cell also
+  /// holds the ground in front of it (a rover seen from the side, mean half its height) counts
+  /// with its top; a flat cell's top is its mean plus its noise, a plane's its uphill edge.
+  /// Compared squared: no square root.
+  [[nodiscard]] bool top_above(const CellView& cell, int layer, float z) const noexcept {
+    const float gap = z + consts_[layer].clear_margin_m - cell.height;  // the top must exceed mean + gap
+    return gap < 0.0F || gap * gap * cell.weight < 3.0F * cell.s_zz;
   }
 
   void run(Layers& layers, const StackParams& params, const FrontConfig& front, const PointXYZ* points,
@@ -350,8 +356,8 @@ class FreeSpace<Config, true> {
   }
 
   /// The point confirms the surface of the cell it was folded into (the first layer from its
-  /// routed one whose window holds it) when it lies on it (within the layer's margin or, CCM,
-  /// kRangeSigmas of the cell's own height spread).
+  /// routed one whose window holds it) when it lies on or above it: above the cell's mean less
+  /// kRangeSigmas range errors of the layer.
   void confirm_end(const Layers& layers, std::int32_t code, const RayState& ray, float z) noexcept {
     for (int layer = code; layer < kLayerCount; ++layer) {
       if (!windows_.contains(layer, ray.end[layer])) {
@@ -359,8 +365,9 @@ class FreeSpace<Config, true> {
       }
       const CellView cell = view_of(layers, layer, ray.end[layer]);
       if (cell.weight > 0.0F) {
-        const float d = z > cell.height ? z - cell.height : cell.height - z;
-        if (!beyond_margin(cell, layer, d)) {
+        // On its surface: not below the cell's mean by more than the range noise (a point on the
+        // ground beneath a vanished rover lies below it and confirms nothing).
+        if (z > cell.height - consts_[layer].rise_margin_m * kRangeSigmas) {
           FreeSpaceCell& rec = grids_[layer].cell_unchecked(ray.end[layer]);
           (void)touch(rec, stamp_);
           confirm(rec);
@@ -383,7 +390,7 @@ class FreeSpace<Config, true> {
     const CellView cell = view_of(layers, layer, v.index);
     FreeSpaceCell& rec = grids_[layer].cell_unchecked(v.index);
     if (cell.weight > 0.0F) {
-      if (beyond_margin(cell, layer, cell.height - z_hi)) {
+      if (top_above(cell, layer, z_hi)) {
         (void)touch(rec, stamp_);
         if (frame_contradictions(rec) == 0U) {
           remember(layer, v.index);  // listed once per frame: at its first contradiction

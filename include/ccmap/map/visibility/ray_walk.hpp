@@ -13,7 +13,9 @@
 // interval [t_in, t_out] of the ray parameter t in [0, 1] (t = 0 at the origin, 1 at the end).
 // Visits are emitted in the order the ray leaves the cells (increasing t_out; at a shared
 // boundary finer layers first). A visit is flagged `walk_layer` when its layer is the finest
-// whose window holds that stretch of the ray: the layer a query there would ask first.
+// whose window holds the ray where the crossing ends: the layer a query there would ask first.
+// (A cell whose layer became the finest on the way, because the finer window ended inside it,
+// keeps its whole crossing: walk-layer visits cover the ray in order and overlap only there.)
 //   - Cells the segment only touches (a corner, or the origin or end lying on a boundary) are
 //     not reported: their crossing has zero length. At an exact corner the walk steps diagonally.
 //   - Layers finer than the finest holding the origin, and layers whose window does not hold
@@ -68,7 +70,7 @@ struct RayVisit {
   CellIndex index;
   float t_in;
   float t_out;
-  bool walk_layer;  ///< the finest layer whose window holds this stretch of the ray
+  bool walk_layer;  ///< its layer is the finest whose window holds the ray at t_out
 };
 
 /// U coordinate of a Q18 position for the front's index constants (FrontConfig::index_mult,

@@ -214,8 +214,10 @@ class RegionWalk {
     return false;
   }
 
-  /// The answer of the leaf at layer k: the first known cell on its path up; else the unknown
-  /// answer of the finest layer holding it (layer -1: none does).
+  /// The answer of the leaf at layer k: the first known cell on its path up; else, as
+  /// Stack::query, a drop-off answer of the first layer on the path whose unobserved cell is a
+  /// drop-off (map/visibility/free_space.hpp); else the unknown answer of the finest layer
+  /// holding it (layer -1: none does).
   [[nodiscard]] const RegionAnswer& resolve(int k) noexcept {
     const RegionAnswer* unknown = nullptr;
     for (int j = k; j < kLayers; ++j) {
@@ -227,6 +229,20 @@ class RegionWalk {
         return a;
       }
       unknown = unknown == nullptr ? &a : unknown;
+    }
+    for (int j = k; j < kLayers; ++j) {
+      if (layers_.contains(j, path_[j]) && view_.unobserved_drop(j, path_[j])) {
+        reads_.add(1U);
+        drop_ = unknown_answer(j);
+        const QueryResult q = view_.drop_answer(j, path_[j]);
+        drop_.known = true;
+        drop_.cell_class = CellClass::kDropOff;
+        drop_.index = path_[j];
+        drop_.centre_x = grid::cell_centre(path_[j].x, layers_.widths[j]);
+        drop_.centre_y = grid::cell_centre(path_[j].y, layers_.widths[j]);
+        drop_.mean_z = q.height_m;  // the upper bound: the terrain lies at or below it
+        return drop_;
+      }
     }
     if (unknown == nullptr) {
       outside_ = unknown_answer(-1);
@@ -312,6 +328,7 @@ class RegionWalk {
   bool answered_[Layers::kLayerSlots]{};
   RegionAnswer answers_[Layers::kLayerSlots]{};
   RegionAnswer outside_{};  ///< the answer of a piece no layer holds
+  RegionAnswer drop_{};     ///< the answer of a piece no layer knows but a drop-off holds
   Polygon polygon_{};
   ReadCount reads_{};
   std::uint32_t nodes_ = 0U;
