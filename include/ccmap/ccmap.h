@@ -95,10 +95,10 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 516404u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2883860u
-#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 1048852u
-#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 1048852u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 516408u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2883864u
+#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 1048856u
+#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 1048856u
 
 /* ---- the map handle ------------------------------------------------------------------------- */
 typedef struct ccmap_map ccmap_map; /* opaque: lives at the start of the caller's storage */

@@ -3,7 +3,7 @@
 // the byte-exact output of tests/support/exchange_seeds.hpp, loads or merges into the fuzz
 // targets' receiver, and so starts the fuzzer inside the format rather than at its magic.
 // After an intended format change, regenerate them:
-//   CCMAP_WRITE_FUZZ_SEEDS=1 build/host-release/tests/map/ccmap_test_fuzz_seeds
+//   CCMAP_WRITE_FUZZ_SEEDS=1 build/host-release/tests/persistence/ccmap_test_fuzz_seeds
 #include <gtest/gtest.h>
 
 #include <cstdlib>

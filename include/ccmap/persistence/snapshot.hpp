@@ -29,6 +29,8 @@
 //                   36 for CcmPaperCell: the cell kind is part of the shape)
 //   free space   2  bytes per free-space record (4, or 0 for a Config without free space: part of
 //                   the shape), 2 reserved 0
+//                4  frames the free-space stage has seen (uint32; its sampling phase and the
+//                   records' frame stamps follow it, so a loaded stack goes on as the saved one)
 //   params      60  StackParams floats: finest_cell_width_m, weight_limit, coverage_tau,
 //                   min_weight, obstacle_fraction, max_inclination, kalman_min_variance,
 //                   normal_variance_threshold[0..7]
@@ -98,7 +100,7 @@ static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 t
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
-inline constexpr std::size_t kSnapshotFreeSpaceShapeBytes = 4U;
+inline constexpr std::size_t kSnapshotFreeSpaceShapeBytes = 8U;
 inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 5U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
 inline constexpr std::size_t kSnapshotFreeSpaceRecordBytes = 4U;
@@ -260,6 +262,7 @@ struct SnapshotAccess {
     snapshot_write_header(w, size(), fingerprint());
     w.u16(kRecordBytes);
     w.u16(0U);
+    w.u32(stack.free_space_.frames());
     snapshot_write_params(w, stack.params_);
     for (int layer = 0; layer < kLayers; ++layer) {
       if (StackType::layer_is_ccm(layer)) {
@@ -308,11 +311,15 @@ struct SnapshotAccess {
     }
     const std::uint16_t record_bytes = r.u16();
     const std::uint16_t reserved = r.u16();
+    const std::uint32_t frames = r.u32();
     if (!r.ok() || reserved != 0U) {
       return Status::kCorrupt;
     }
     if (record_bytes != kRecordBytes) {
       return Status::kVersionMismatch;  // saved by a stack with (or without) free space
+    }
+    if (!kFreeSpace && frames != 0U) {
+      return Status::kCorrupt;  // a stack without free space counts no frames
     }
     if (data_size != size()) {
       return Status::kCorrupt;
@@ -400,6 +407,8 @@ struct SnapshotAccess {
     if (init_status != Status::kOk) {
       return init_status;  // not reachable: the parameters were validated as init() does
     }
+    r.seek(kSnapshotHeaderBytes + kSnapshotFingerprintBytes + 4U);
+    stack.free_space_.set_frames(r.u32());
     r.seek(layers_begin);
     for (int layer = 0; layer < kLayers; ++layer) {
       CellIndex centre{};
@@ -430,8 +439,8 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 516,404 bytes (PaperCell<CadreConfig>: 475,444; WithFreeSpace<CadreConfig, false>:
-/// 459,060;
+/// CadreConfig: 516,408 bytes (PaperCell<CadreConfig>: 475,448; WithFreeSpace<CadreConfig, false>:
+/// 459,064;
 /// docs/integration.md lists every preset).
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {

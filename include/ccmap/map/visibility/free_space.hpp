@@ -101,6 +101,8 @@ class FreeSpace<Config, false> {
                   FrameCounters&) noexcept {}
   [[nodiscard]] const RingGrid<FreeSpaceCell>* records(int) const noexcept { return nullptr; }
   [[nodiscard]] RingGrid<FreeSpaceCell>* records(int) noexcept { return nullptr; }
+  [[nodiscard]] std::uint32_t frames() const noexcept { return 0U; }
+  void set_frames(std::uint32_t) noexcept {}
 };
 
 template <typename Config>
@@ -174,6 +176,10 @@ class FreeSpace<Config, true> {
   [[nodiscard]] RingGrid<FreeSpaceCell>* records(int layer) noexcept {
     return (layer >= 0 && layer < kLayerCount) ? &grids_[layer] : nullptr;
   }
+  /// Frames this stage has seen since init (wraps at 2^32): its sampling phase and the records'
+  /// frame stamps follow it. Map state (snapshots store it).
+  [[nodiscard]] std::uint32_t frames() const noexcept { return frames_; }
+  void set_frames(std::uint32_t frames) noexcept { frames_ = frames; }
 
  private:
   using CcmCellType = typename Layers::CcmCellType;
