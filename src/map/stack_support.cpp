@@ -69,7 +69,7 @@ StackParams default_stack_params(float finest_cell_width_m) noexcept {
   p.change_share = 0.08F;
   // Free space from lines of sight, chosen by measurement (docs/design.md, "Free space from
   // lines of sight"; docs/performance.md and docs/evaluation.md give the cost and the effect).
-  p.free_space_rays = 1024.0F;
+  p.free_space_rays = 512.0F;
   p.free_space_clear_frames = 3.0F;
   p.sensor_view_axis = {0.0F, 0.0F, 0.0F};
   p.noise = sensor::cadre_stereo();

@@ -278,15 +278,20 @@ TEST(FreeSpace, ADitchSeenFrom17cmIsADropOffWhereTheRaysProveItAndNowhereElse) {
       const double cy0 = std::floor(y / w) * w;
       const bool overlaps = cx0 < d.x1 && cx0 + w > d.x0 && cy0 < d.y1 && cy0 + w > d.y0;
       wrong += overlaps ? 0 : 1;
-      // Its height is an upper bound of the hidden floor and lies below the rim by the step.
-      EXPECT_LT(q.height_m, -0.75F * q.cell_width_m + 1e-3F) << "at (" << x << ", " << y << ")";
+      // Its height is an upper bound of the hidden floor, above the true floor and no higher than
+      // the rays that cross the rim to the far wall's top pass over the rim: 0.175 (1 - 1.2 / 2.2)
+      // = 8 cm (near the rim a cell is a drop-off as part of the run of unobserved cells a ray
+      // proved one in further on, so its own bound may lie within a step of the rim).
+      EXPECT_LT(q.height_m, 0.175F * (1.0F - 1.2F / 2.2F) + 0.005F) << "at (" << x << ", " << y << ")";
       EXPECT_GT(q.height_m, -d.depth) << "the bound is above the true floor";
     }
   }
   EXPECT_GT(drops, 0);
   EXPECT_EQ(wrong, 0) << "drop-off answers in cells that do not overlap the ditch";
-  // Before the rim nothing is a drop, and the 30 cm nearest the rim inside it are not proved.
+  // Before the rim nothing is a drop; right behind it, the run of unobserved cells a ray proved a
+  // drop in further on is one (the planner must stop at the rim, not 40 cm inside the ditch).
   EXPECT_FALSE(any_class(*map, -1.0, -1.4, 1.18, 1.4, CellClass::kDropOff));
+  EXPECT_TRUE(any_class(*map, 1.21, -0.3, 1.30, 0.3, CellClass::kDropOff)) << "the ditch's near edge is no drop-off";
 }
 
 TEST(FreeSpace, PlannerQueriesTreatADropOffAsLethal) {

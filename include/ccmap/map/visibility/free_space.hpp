@@ -6,10 +6,12 @@
 //    frame, in free_space_clear_frames frames with no ray ending on the surface in between, is
 //    emptied (a rover that drove on, a ghost of a bad pose) and counted (cleared_cells);
 //  - an unobserved cell gets an upper bound on its terrain (FreeSpaceCell), and is a drop-off when
-//    kDropRays rays passed over it more than its layer's obstacle height below the ground they
-//    crossed last (a crater, a ditch, the far side of a ledge); the ground follows the known cells
-//    along the ray and climbs at most max_inclination: a rock is not ground, so its shadow is not
-//    a drop (drop_cells; CellClass::kDropOff in queries).
+//    kDropRays rays proved one in it: a ray passed over it, or over a later cell of the same run
+//    of unobserved cells (the same layer, no known cell in between), more than its layer's
+//    obstacle height below the ground it crossed last (a crater, a ditch, the far side of a
+//    ledge); the ground follows the known cells along the ray and climbs at most
+//    max_inclination: a rock is not ground, so its shadow is not a drop (drop_cells;
+//    CellClass::kDropOff in queries).
 // Owned by Stack<Config> beside the layers; one record per cell of every layer, moved with the
 // windows (a cell that leaves a window loses its record exactly as the cell is cleared). A
 // Config with kFreeSpace = false gets FreeSpace<Config, false>: no storage, no work.
@@ -64,6 +66,9 @@ inline constexpr float kRangeSigmas = 3.0F;
 /// Cells whose first contradiction of a frame is remembered for the frame's end (beyond it, the
 /// frame's further contradicted cells wait for a later frame).
 inline constexpr std::size_t kMaxContradictedCells = 1024U;
+/// Unobserved cells of one run along a ray that a drop-off proved further along the run can mark
+/// (the nearest ones first; a longer run's later cells are marked only by their own bound).
+inline constexpr std::size_t kMaxRunCells = 64U;
 
 /// The end of a sampled point's line of sight, as the front computed it.
 struct RayEnd {
@@ -197,6 +202,14 @@ class FreeSpace<Config, true> {
     bool has_ground;
     bool on_obstacle;    ///< the known cells rose faster than a traversable slope since the ground
     bool dirty;          ///< the ray passed below a known surface: it proves no bound beyond
+    std::uint32_t run;   ///< unobserved cells since the last known stretch (entries of run_)
+  };
+
+  /// An unobserved cell of the current run (see mark_run).
+  struct RunCell {
+    FreeSpaceCell* record;
+    std::int32_t layer;
+    bool marked;  ///< this ray counted a drop-off in it already
   };
 
   /// Weight, height (m) and height co-moment of a cell: a CCM cell's mean height and S_zz, a
@@ -383,17 +396,22 @@ class FreeSpace<Config, true> {
     }
   }
 
-  /// One cell a ray crosses (every layer): contradiction of a surface, bound and drop-off of an
-  /// unobserved cell, ground tracking on the walk layer.
+  /// One cell a ray crosses: contradiction of a surface (a cell of any layer holding points);
+  /// bound and drop-off of an unobserved cell and ground tracking on the walk layer only (a
+  /// coarser layer's empty cell under a finer window is skipped: the finer record speaks for the
+  /// stretch, and rays from farther away bound the coarse cell once the finer window has moved on).
   void visit(Layers& layers, const RayVisit& v, RayState& ray, FrameCounters& frame) noexcept {
     const int layer = v.layer;
     if (v.index.x == ray.end[layer].x && v.index.y == ray.end[layer].y) {
       return;  // the ray ends in this cell: it says nothing about it
     }
+    const CellView cell = view_of(layers, layer, v.index);
+    if (!v.walk_layer && !(cell.weight > 0.0F)) {
+      return;  // a coarser layer's empty cell under a finer window: the walk layer's record speaks
+    }
     const float z_in = ray.z0 + v.t_in * ray.dz;
     const float z_out = ray.z0 + v.t_out * ray.dz;
     const float z_hi = z_in > z_out ? z_in : z_out;
-    const CellView cell = view_of(layers, layer, v.index);
     FreeSpaceCell& rec = grids_[layer].cell_unchecked(v.index);
     if (cell.weight > 0.0F) {
       if (top_above(cell, layer, z_hi)) {
@@ -406,14 +424,9 @@ class FreeSpace<Config, true> {
       }
       if (v.walk_layer) {
         track_ground(layer, cell.height, v.t_out, ray);
+        ray.run = 0U;  // observed here: a new run starts after it
       }
       return;
-    }
-    if (!ray.dirty) {
-      lower_bound(rec, z_hi);
-      if (ray.has_ground && z_hi < ray.ground_m - consts_[layer].step_m && add_drop_ray(rec)) {
-        ++frame.drop_cells;
-      }
     }
     if (v.walk_layer) {
       // The stack's view here: the first coarser layer holding data at this stretch.
@@ -425,8 +438,35 @@ class FreeSpace<Config, true> {
         const CellView coarse = view_of(layers, j, c);
         if (coarse.weight > 0.0F) {
           track_ground(j, coarse.height, v.t_out, ray);
+          ray.run = 0U;  // observed here: a new run starts after it
           break;
         }
+      }
+    }
+    if (ray.dirty) {
+      return;
+    }
+    lower_bound(rec, z_hi);
+    const bool proves_drop = ray.has_ground && z_hi < ray.ground_m - consts_[layer].step_m;
+    if (ray.run < kMaxRunCells) {
+      run_[ray.run++] = RunCell{&rec, layer, proves_drop};
+    }
+    if (proves_drop) {
+      frame.drop_cells += add_drop_ray(rec) ? 1U : 0U;
+      mark_run(layer, ray, frame);
+    }
+  }
+
+  /// A drop-off proved in a cell of `layer` marks the unobserved cells of the same layer before
+  /// it on the same run (the same stretch the ray crossed without meeting anything since the last
+  /// ground): they lie behind the same rim, inside the same drop. The near edge of a ditch, whose
+  /// bound is still within a step of the rim, is then a drop-off too, not an unknown gap.
+  void mark_run(int layer, RayState& ray, FrameCounters& frame) noexcept {
+    for (std::uint32_t k = 0; k < ray.run; ++k) {
+      RunCell& c = run_[k];
+      if (c.layer == layer && !c.marked) {
+        c.marked = true;
+        frame.drop_cells += add_drop_ray(*c.record) ? 1U : 0U;
       }
     }
   }
@@ -509,6 +549,7 @@ class FreeSpace<Config, true> {
   RayWindows windows_{};
   std::int64_t origin_u_[2]{};
   std::uint32_t contradicted_[kMaxContradictedCells]{};
+  RunCell run_[kMaxRunCells]{};
   std::uint32_t contradicted_count_ = 0U;
   std::uint32_t batch_index_[kFrontChunkPoints]{};
   PointXYZ batch_points_[kFrontChunkPoints]{};

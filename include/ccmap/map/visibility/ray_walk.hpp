@@ -164,7 +164,7 @@ void walk_ray(const RayWindows& windows, const RayU& ray, Sink&& sink) noexcept 
       const int down = j - walk;
       const CellIndex nj{next.x >> down, next.y >> down};
       if (nj.x == cur[j].x && nj.y == cur[j].y) {
-        continue;
+        break;  // cells nest: an unchanged cell of layer j leaves every coarser one unchanged
       }
       if (t > t_in[j]) {
         sink(RayVisit{j, cur[j], t_in[j], t, j == walk});
