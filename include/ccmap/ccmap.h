@@ -70,9 +70,9 @@ typedef enum ccmap_preset {
  * versions (the library checks at build time that its map fits); ccmap_storage_size() gives
  * the exact figure. The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
-#define CCMAP_CADRE_STORAGE_SIZE 851968u          /* 832 KiB */
+#define CCMAP_CADRE_STORAGE_SIZE 786432u          /* 768 KiB */
 #define CCMAP_SINGLE_CCM_STORAGE_SIZE 3145728u    /* 3072 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3670016u /* 3584 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3342336u /* 3264 KiB */
 #define CCMAP_SINGLE_OMG_STORAGE_SIZE 1310720u    /* 1280 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
@@ -95,10 +95,10 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 516408u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2883864u
-#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 1048856u
-#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 1048856u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 516420u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2883876u
+#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 1048868u
+#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 1048868u
 
 /* ---- the map handle ------------------------------------------------------------------------- */
 typedef struct ccmap_map ccmap_map; /* opaque: lives at the start of the caller's storage */
@@ -146,6 +146,9 @@ typedef struct ccmap_params {
                                  point trusted, the paper's update (docs/design.md) */
   float change_min_points;    /* change rule: held points (and those inside the gate) are a surface */
   float change_share;         /* of their own with this many points and this share of the cell's */
+  uint32_t frame_point_budget;   /* frame budget: at most this many points per frame (0: all) */
+  uint32_t frame_time_budget_us; /* and no new 128-point chunk after this many us (0: no limit);
+                                    docs/integration.md, "The frame budget" */
   float free_space_rays;      /* lines of sight walked per frame (whole number, 0..65535); 0 = no
                                  free space: no ghost cleared, no drop-off (docs/design.md) */
   float free_space_clear_frames; /* frames of rays clearly below a surface before it is cleared (1..255) */
@@ -182,6 +185,7 @@ typedef struct ccmap_frame_counters {
   uint32_t gated_dropped;    /* held points it dropped as outliers (or whose cell left the map) */
   uint32_t reseeded_cells;   /* cells replaced by their held points */
   uint32_t merged_cells;     /* cells that took their held points in beside their own */
+  uint32_t skipped_budget;   /* not processed: the frame budget was spent */
   uint32_t free_rays;        /* lines of sight walked (free space; not points) */
   uint32_t free_rays_refused; /* sampled points whose line of sight was refused (bad point, behind
                                  the sensor, sensor outside the map): they change nothing */

@@ -295,6 +295,8 @@ void params_to_c(const StackParams& p, ccmap_params* out) noexcept {
   out->outlier_gate_sigma = p.outlier_gate_sigma;
   out->change_min_points = p.change_min_points;
   out->change_share = p.change_share;
+  out->frame_point_budget = p.frame_point_budget;
+  out->frame_time_budget_us = p.frame_time_budget_us;
   out->free_space_rays = p.free_space_rays;
   out->free_space_clear_frames = p.free_space_clear_frames;
   for (std::size_t i = 0; i < 3U; ++i) {
@@ -327,6 +329,8 @@ Status params_from_c(const ccmap_params& c, StackParams* out) noexcept {
   p.outlier_gate_sigma = c.outlier_gate_sigma;
   p.change_min_points = c.change_min_points;
   p.change_share = c.change_share;
+  p.frame_point_budget = c.frame_point_budget;
+  p.frame_time_budget_us = c.frame_time_budget_us;
   p.free_space_rays = c.free_space_rays;
   p.free_space_clear_frames = c.free_space_clear_frames;
   for (std::size_t i = 0; i < 3U; ++i) {
@@ -424,8 +428,8 @@ void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
                               f.too_noisy,     f.gated_finer,   f.gated_occluded,
                               f.gated_held,    f.gated_pool_full, f.gated_admitted,
                               f.gated_dropped, f.reseeded_cells, f.merged_cells,
-                              f.free_rays,     f.free_rays_refused, f.cleared_cells,
-                              f.drop_cells};
+                              f.skipped_budget, f.free_rays,   f.free_rays_refused,
+                              f.cleared_cells, f.drop_cells};
 }
 
 }  // namespace

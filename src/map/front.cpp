@@ -1,132 +1,63 @@
 #include "ccmap/map/update/front.hpp"
 
 #include <cmath>
+#include <limits>
 
 namespace ccmap::detail {
 namespace {
 
-/// round(v * 2^frac_bits) (half away from zero) of a finite float with |v * 2^frac_bits| < 2^62,
-/// exact, in integer operations. Per-frame constants only (not the per-point path).
-std::int64_t fixed_round(float v, int frac_bits) noexcept {
-  const std::uint32_t bits = bits_of(v);
-  const std::uint32_t biased = (bits >> 23) & 0xFFU;
-  const std::int64_t significand = static_cast<std::int64_t>((bits & 0x7FFFFFU) | (biased != 0U ? 0x800000U : 0U));
-  const std::int32_t exponent = static_cast<std::int32_t>(biased) + (biased == 0U ? 1 : 0);
-  // v * 2^frac = significand * 2^(exponent - 150 + frac)
-  const std::int32_t up = exponent - 150 + frac_bits;
-  std::int64_t magnitude = 0;
-  if (up >= 0) {
-    magnitude = significand << up;  // precondition: < 2^62
-  } else if (up > -63) {
-    const std::int32_t down = -up;
-    magnitude = (significand + (std::int64_t{1} << (down - 1))) >> down;
-  }
-  return (bits >> 31) != 0U ? -magnitude : magnitude;
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+/// The finest cell of a map-frame coordinate x and its position inside it: floor(x * c) of the
+/// exact product and the exact product minus that floor, rounded once (in [0, 1]). From the
+/// rounded product p = fl(x c), i = floor(p), and the remainder r = x c - i rounded once (one
+/// fused multiply-add). For |p| < 2^23 the exact product lies in [i - 1, i + 1) (p is within half
+/// an ulp <= 1/2 of it, and p >= i + 1 if it were >= i + 1), so the floor is i - 1 iff the exact
+/// remainder is negative, which the sign bit of r says even when r underflows to -0; the
+/// fraction is then r + 1. |p| >= 2^23 (cells narrower than 12 mm far from the origin) is left to
+/// exact_cell: the result is 1 then (0 otherwise).
+inline std::uint32_t floor_and_fraction(float x, float c, std::int32_t* index, float* fraction) noexcept {
+  const float p = x * c;
+  const std::int32_t whole = floor_to_int32(p);
+  // + float(-whole): an exact zero remainder is +0 (never -0, whose sign bit would read "negative").
+  const float rest = std::fma(x, c, static_cast<float>(-whole));  // exact product - whole, one rounding
+  const auto negative = static_cast<std::int32_t>(bits_of(rest) >> 31U);
+  const float wrapped = rest + 1.0F;  // computed unconditionally: no float operation under a branch
+  *index = whole - negative;
+  *fraction = negative != 0 ? wrapped : rest;
+  const bool near = (p < 8388608.0F) & (p > -8388608.0F);
+  return near ? 0U : 1U;
 }
 
-}  // namespace
-
-Status make_front_config(float finest_width_m, const float* max_range_sq_m2, int layers, FrontConfig* out) noexcept {
-  if (out == nullptr || max_range_sq_m2 == nullptr || layers < 1 || layers > kFrontMaxLayers ||
-      !(finest_width_m > 0.0F) || !std::isfinite(finest_width_m)) {
-    return Status::kInvalidArgument;
+/// The same exactly, in integer operations, for any finite x and positive normal c with
+/// |x c| < 2^31: the product of the two 24-bit significands in 64 bits, floored by an
+/// arithmetic shift, the remainder converted once. Per-frame constants and rare points only.
+inline void exact_cell(float x, float c, std::int32_t* index, float* fraction) noexcept {
+  const std::uint32_t xb = bits_of(x);
+  const std::uint32_t cb = bits_of(c);
+  const std::uint32_t x_biased = (xb >> 23U) & 0xFFU;
+  const std::uint64_t xs = (xb & 0x7FFFFFU) | (x_biased != 0U ? 0x800000U : 0U);
+  const std::int32_t xe = static_cast<std::int32_t>(x_biased) + (x_biased == 0U ? 1 : 0);
+  const std::uint64_t cs = (cb & 0x7FFFFFU) | 0x800000U;
+  const auto ce = static_cast<std::int32_t>((cb >> 23U) & 0xFFU);
+  // x c = xs cs 2^(xe + ce - 300); shift = 300 - xe - ce >= 0 for |x c| < 2^31 (xs cs >= 2^46).
+  const std::int32_t shift = 300 - xe - ce;
+  const std::int64_t sign = -static_cast<std::int64_t>(xb >> 31U);
+  const std::int64_t product = (static_cast<std::int64_t>(xs * cs) ^ sign) - sign;
+  if (shift > 62) {  // |x c| < 2^-14: the floor is 0 or -1
+    const float tiny = x * c;
+    *index = product < 0 ? -1 : 0;
+    *fraction = product < 0 ? tiny + 1.0F : tiny;
+    return;
   }
-  const float inv_w0 = 1.0F / finest_width_m;  // the value RingGrid::init computes
-  // Index of |x| <= kMaxAbsCoordinateM within +-2^30, and the product q18 * mult below 2^63:
-  // 1/w_0 in [1e-3, 2^30 / 1e5]; validate_stack_params accepts only widths inside.
-  if (!(inv_w0 >= 1.0e-3F) || !(inv_w0 * kMaxAbsCoordinateM < 1073741824.0F)) {
-    return Status::kInvalidArgument;
-  }
-  FrontConfig f{};
-  const std::uint32_t inv_bits = bits_of(inv_w0);
-  f.index_mult = static_cast<std::int32_t>((inv_bits & 0x7FFFFFU) | 0x800000U);
-  // q * 2^-18 * mult * 2^(e - 150) = (q * mult) * 2^-(168 - e)
-  f.index_shift = 168 - static_cast<std::int32_t>((inv_bits >> 23) & 0xFFU);
-  for (std::int64_t& bound : f.max_range_sq) {
-    bound = INT64_MAX;
-  }
-  for (int k = 0; k < layers; ++k) {
-    const float units = max_range_sq_m2[k] * 4294967296.0F;  // m^2 -> 2^-32 m^2 (exact scale)
-    // A bound beyond int64 (including the +inf of an unbounded model) never refuses.
-    f.max_range_sq[k] = !(units < 9.0e18F) ? INT64_MAX : (units < 1.0F ? 0 : floor_to_int64(units));
-  }
-  for (int k = 0; k < kFrontMaxLayers; ++k) {
-    f.max_range_key[k] = route_key_of(f.max_range_sq[k]);
-  }
-  f.layers = static_cast<std::uint32_t>(layers);
-  *out = f;
-  return Status::kOk;
+  const std::int64_t whole = product >> (shift < 0 ? 0 : shift);  // arithmetic shift: floor
+  const std::int64_t rest = product - (whole << (shift < 0 ? 0 : shift));  // in [0, 2^shift)
+  std::uint32_t scale_bits = static_cast<std::uint32_t>(127 - shift) << 23U;  // 2^-shift, normal for shift <= 62
+  float scale = 0.0F;
+  std::memcpy(&scale, &scale_bits, sizeof scale);
+  *index = static_cast<std::int32_t>(whole);
+  *fraction = static_cast<float>(rest) * scale;
 }
-
-Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, FramePose* out) noexcept {
-  if (out == nullptr) {
-    return Status::kInvalidArgument;
-  }
-  const Status origin_status = ccm_check_point(origin.x, origin.y, origin.z);
-  if (origin_status != Status::kOk) {
-    return origin_status;
-  }
-  FramePose pose{};
-  const float o[3] = {origin.x, origin.y, origin.z};
-  for (int a = 0; a < 3; ++a) {
-    pose.origin_q18[a] = q18_floor(bits_of(o[a]));
-    pose.translation_q18[a] = fixed_round(o[a], kPositionFracBits);
-  }
-  if (rotation_row_major != nullptr) {
-    const float* r = rotation_row_major;
-    for (int i = 0; i < 9; ++i) {
-      if (!std::isfinite(r[i])) {
-        return Status::kNonFiniteInput;
-      }
-      if (std::fabs(r[i]) > 1.001F) {
-        return Status::kInvalidArgument;
-      }
-    }
-    // R^T R = I within 1e-3: a rigid transform, not a scaling or shear (the Q30 format and the
-    // range taken in the sensor frame assume it).
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) {
-        const float dot = r[i] * r[j] + r[3 + i] * r[3 + j] + r[6 + i] * r[6 + j];
-        const float expected = i == j ? 1.0F : 0.0F;
-        if (std::fabs(dot - expected) > 1.0e-3F) {
-          return Status::kInvalidArgument;
-        }
-      }
-    }
-    for (int i = 0; i < 9; ++i) {
-      pose.rotation_q30[i] = static_cast<std::int32_t>(fixed_round(r[i], kRotationFracBits));
-    }
-    for (int row = 0; row < 3; ++row) {
-      // Rounding to Q18 (+ half a Q48 -> Q18 step) and the mean of the floor in the Q18
-      // conversion of each coordinate (+ half a unit, rotated): unbiased results.
-      const std::size_t first = 3U * static_cast<std::size_t>(row);
-      const std::int64_t row_sum = std::int64_t{pose.rotation_q30[first]} + pose.rotation_q30[first + 1U] +
-                                   pose.rotation_q30[first + 2U];
-      pose.rotation_bias_q48[row] = (std::int64_t{1} << (kRotationFracBits - 1)) + (row_sum >> 1);
-    }
-  }
-  *out = pose;
-  return Status::kOk;
-}
-
-}  // namespace ccmap::detail
-
-// ---------------------------------------------------------------------------------------------
-// The chunk functions. Plain loops over structure-of-arrays scratch, integer operations only,
-// written so that gcc vectorises them: NEON on aarch64 (armv8-a baseline); on x86-64 the
-// baseline (SSE2) lacks per-lane variable shifts and 32 x 32 -> 64 signed multiplies, so gcc
-// also emits an AVX2 clone, chosen at load time (ifunc) on CPUs that have it. Every clone
-// computes the same integers (integer arithmetic is exact): results are bitwise equal on every
-// target, which tests/map/front_test.cpp and the golden hash check.
-// ---------------------------------------------------------------------------------------------
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__gnu_linux__)
-#define CCMAP_FRONT_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define CCMAP_FRONT_CLONES
-#endif
-
-namespace ccmap::detail {
-namespace {
 
 constexpr std::uint32_t kAbsMask = 0x7FFFFFFFU;
 constexpr std::uint32_t kInfBits = 0x7F800000U;
@@ -144,180 +75,280 @@ inline std::int32_t validity(std::uint32_t bx, std::uint32_t by, std::uint32_t b
   return refused ? reason : 0;
 }
 
-/// Routing code of a routing key (route_key_of): the number of bound keys it exceeds (bounds are
-/// non-decreasing, unused slots saturated), i.e. the first layer that holds it; too noisy beyond
-/// the last layer. Written out for the 8 slots (kFrontMaxLayers) so that the vectoriser sees
-/// straight-line code in 32-bit lanes. (The sensor itself, range 0, is marked too noisy where the
-/// range is formed: at_sensor_code.)
-inline std::int32_t route(std::uint32_t key, const std::uint32_t (&bound)[kFrontMaxLayers], std::int32_t layers) noexcept {
-  static_assert(kFrontMaxLayers == 8, "route() is written out for 8 bounds");
-  const std::int32_t layer = static_cast<std::int32_t>(key > bound[0]) + static_cast<std::int32_t>(key > bound[1]) +
-                             static_cast<std::int32_t>(key > bound[2]) + static_cast<std::int32_t>(key > bound[3]) +
-                             static_cast<std::int32_t>(key > bound[4]) + static_cast<std::int32_t>(key > bound[5]) +
-                             static_cast<std::int32_t>(key > bound[6]) + static_cast<std::int32_t>(key > bound[7]);
-  return layer >= layers ? std::int32_t{kFrontTooNoisy} : layer;
+}  // namespace
+
+Status make_front_config(float finest_width_m, const float* max_range_sq_m2, int layers, FrontConfig* out) noexcept {
+  if (out == nullptr || max_range_sq_m2 == nullptr || layers < 1 || layers > kFrontMaxLayers ||
+      !(finest_width_m > 0.0F) || !std::isfinite(finest_width_m)) {
+    return Status::kInvalidArgument;
+  }
+  const float inv_w0 = 1.0F / finest_width_m;  // the value RingGrid::init computes
+  // Index of |x| <= kMaxAbsCoordinateM within +-2^30 (validate_stack_params accepts only such widths).
+  if (!(inv_w0 >= 1.0e-3F) || !(inv_w0 * kMaxAbsCoordinateM < 1073741824.0F)) {
+    return Status::kInvalidArgument;
+  }
+  FrontConfig f{};
+  f.inv_width = inv_w0;
+  f.width = finest_width_m;
+  for (float& bound : f.max_range_sq) {
+    bound = kInfinity;
+  }
+  for (int k = 0; k < layers; ++k) {
+    const float bound = max_range_sq_m2[k];
+    if (std::isnan(bound) || bound < 0.0F || (k > 0 && bound < f.max_range_sq[k - 1])) {
+      return Status::kInvalidArgument;
+    }
+    f.max_range_sq[k] = bound;
+  }
+  f.layers = static_cast<std::uint32_t>(layers);
+  *out = f;
+  return Status::kOk;
 }
 
-/// The code of a point whose refusal code so far is `code`: too noisy if it is the sensor itself
-/// (range 0: no direction, no noise model), else unchanged.
-inline std::int32_t at_sensor_code(std::int32_t code, std::int64_t range_sq) noexcept {
-  return ((range_sq == 0) && (code == 0)) ? std::int32_t{kFrontTooNoisy} : code;
+Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, const FrontConfig& config,
+                       FramePose* out) noexcept {
+  if (out == nullptr || !(config.inv_width > 0.0F) || config.layers == 0U) {
+    return Status::kInvalidArgument;
+  }
+  const Status origin_status = ccm_check_point(origin.x, origin.y, origin.z);
+  if (origin_status != Status::kOk) {
+    return origin_status;
+  }
+  FramePose pose{};
+  pose.origin[0] = origin.x;
+  pose.origin[1] = origin.y;
+  pose.origin[2] = origin.z;
+  exact_cell(origin.x, config.inv_width, &pose.anchor.x, &pose.anchor_fraction[0]);
+  exact_cell(origin.y, config.inv_width, &pose.anchor.y, &pose.anchor_fraction[1]);
+  // Within 2^11 m * sqrt(3) (3548 m) of the limit on some axis: check sensor points one by one.
+  constexpr float kNear = kMaxAbsCoordinateM - 3548.0F;
+  pose.near_limit = std::fabs(origin.x) > kNear || std::fabs(origin.y) > kNear || std::fabs(origin.z) > kNear;
+  if (rotation_row_major != nullptr) {
+    const float* r = rotation_row_major;
+    for (int i = 0; i < 9; ++i) {
+      if (!std::isfinite(r[i])) {
+        return Status::kNonFiniteInput;
+      }
+      if (std::fabs(r[i]) > 1.001F) {
+        return Status::kInvalidArgument;
+      }
+    }
+    // R^T R = I within 1e-3: a rigid transform, not a scaling or shear (the range is taken in
+    // the sensor frame, which assumes it).
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        const float dot = r[i] * r[j] + r[3 + i] * r[3 + j] + r[6 + i] * r[6 + j];
+        const float expected = i == j ? 1.0F : 0.0F;
+        if (std::fabs(dot - expected) > 1.0e-3F) {
+          return Status::kInvalidArgument;
+        }
+      }
+    }
+    for (int i = 0; i < 9; ++i) {
+      pose.rotation[i] = r[i];
+    }
+    for (int i = 0; i < 6; ++i) {
+      pose.rotation_cells[i] = r[i] * config.inv_width;
+    }
+  }
+  *out = pose;
+  return Status::kOk;
 }
 
-inline std::int64_t square_sum_q16(std::int32_t dx, std::int32_t dy, std::int32_t dz) noexcept {
-  // Q18 -> Q16 (floor); |r| < 2^27: the sum stays < 2^56. 32 x 32 -> 64 multiplies (vectorised).
-  const std::int32_t rx = dx >> 2;
-  const std::int32_t ry = dy >> 2;
-  const std::int32_t rz = dz >> 2;
-  return static_cast<std::int64_t>(rx) * rx + static_cast<std::int64_t>(ry) * ry + static_cast<std::int64_t>(rz) * rz;
+}  // namespace ccmap::detail
+
+// ---------------------------------------------------------------------------------------------
+// The chunk functions. Plain loops over structure-of-arrays, written so that gcc vectorises
+// them: NEON on aarch64 (armv8-a baseline); on x86-64 gcc also emits an AVX2+FMA clone, chosen
+// at load time (ifunc) on CPUs that have it (the baseline clone calls fmaf). Every clone
+// computes the same floats: single IEEE operations in the same order, the fused multiply-add
+// written out (std::fma rounds once everywhere). tests/map/front_test.cpp and the golden hashes
+// check it.
+// ---------------------------------------------------------------------------------------------
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__gnu_linux__)
+#define CCMAP_FRONT_CLONES __attribute__((target_clones("arch=haswell", "default")))
+#else
+#define CCMAP_FRONT_CLONES
+#endif
+
+namespace ccmap::detail {
+namespace {
+
+/// Routing code of a squared range for a stack of kLayers layers: the number of bounds it
+/// exceeds (bounds are non-decreasing), i.e. the first layer that holds it; too noisy beyond
+/// the last one and for the sensor itself (range 0: no direction, no noise model).
+template <int kLayers>
+inline std::int32_t route(float range_sq, const float (&bound)[kFrontMaxLayers]) noexcept {
+  // Every comparison unconditional (| not ||): a float operation under a branch would keep the
+  // loop from being vectorised (gcc does not speculate it under -ftrapping-math).
+  std::int32_t layer = 0;
+  for (int k = 0; k < kLayers; ++k) {
+    layer += range_sq > bound[k] ? 1 : 0;
+  }
+  const bool at_sensor = !(range_sq > 0.0F);
+  return ((layer >= kLayers) | at_sensor) ? std::int32_t{kFrontTooNoisy} : layer;
+}
+
+/// Writes entry i from its validity code, finest index, height and squared range: routing, the
+/// Kalman slot, the Q14 height and the range key. Inlined into each chunk loop.
+struct FineSlot {
+  std::uint32_t side;  ///< 0: no slot
+  std::uint32_t mask;
+  std::uint32_t log2_side;
+  std::uint32_t min_x;
+  std::uint32_t min_y;
+};
+inline FineSlot fine_slot_of(const FineWindow& fine) noexcept {
+  const auto side = static_cast<std::uint32_t>(fine.side);
+  return FineSlot{side, side - 1U, static_cast<std::uint32_t>(fine.log2_side), static_cast<std::uint32_t>(fine.min.x),
+                  static_cast<std::uint32_t>(fine.min.y)};
+}
+
+/// The entries derived from code, index, height and range (second loop of a chunk: gcc does not
+/// vectorise the routing's float compares in one loop with the transform): routing, the Kalman
+/// slot, the Q14 height and the range key.
+template <int kLayers>
+void finish_entries(std::size_t n, const float (&bounds)[kFrontMaxLayers], const FineSlot& fine,
+                    FrontChunk& __restrict out) noexcept {
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t valid = out.code[i];
+    const float r2 = out.range_sq[i];
+    const std::int32_t routed = route<kLayers>(r2, bounds);
+    const std::int32_t code = valid != 0 ? valid : routed;
+    out.code[i] = code;
+    const auto ux = static_cast<std::uint32_t>(out.ix0[i]);
+    const auto uy = static_cast<std::uint32_t>(out.iy0[i]);
+    // All ones iff routed to layer 0 and inside the window (unsigned wrap: one compare per axis).
+    const std::uint32_t ok =
+        0U - static_cast<std::uint32_t>(((ux - fine.min_x) < fine.side) & ((uy - fine.min_y) < fine.side) & (code == 0));
+    const std::uint32_t slot = ((uy & fine.mask) << fine.log2_side) | (ux & fine.mask);
+    out.fine_slot[i] = static_cast<std::int32_t>((slot & ok) | ~ok);  // the slot, or -1
+    out.height_q14[i] = floor_to_int32(out.z[i] * 16384.0F);          // |z| <= 1.04e5 m: < 2^31
+    out.range_key[i] = floor_to_int32((r2 < 524287.0F ? r2 : 524287.0F) * 4096.0F);
+  }
+}
+
+// __restrict: the caller's points and the chunk never overlap (the chunk is the update path's
+// own scratch), which lets the loops vectorise without run-time alias checks.
+template <int kLayers>
+void map_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
+               const FineWindow& window, FrontChunk& __restrict out) noexcept {
+  const std::uint32_t limit_bits = bits_of(kMaxAbsCoordinateM);
+  const float inv = config.inv_width;
+  const float ox = pose.origin[0];
+  const float oy = pose.origin[1];
+  const float oz = pose.origin[2];
+  const FineSlot fine = fine_slot_of(window);
+  std::uint32_t far = 0U;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t valid = validity(bits_of(points[i].x), bits_of(points[i].y), bits_of(points[i].z), limit_bits, true);
+    // Refused lanes compute on zeros: every conversion below stays in range.
+    const float x = valid == 0 ? points[i].x : 0.0F;
+    const float y = valid == 0 ? points[i].y : 0.0F;
+    const float z = valid == 0 ? points[i].z : 0.0F;
+    const float dx = x - ox;
+    const float dy = y - oy;
+    const float dz = z - oz;
+    out.code[i] = valid;
+    out.z[i] = z;
+    out.range_sq[i] = dx * dx + dy * dy + dz * dz;
+    far |= floor_and_fraction(x, inv, &out.ix0[i], &out.fx[i]);
+    far |= floor_and_fraction(y, inv, &out.iy0[i], &out.fy[i]);
+  }
+  if (far != 0U) {
+    // Products of 2^23 cells or more (cells narrower than 12 mm far from the origin): exactly,
+    // and the Kalman slot from the exact index.
+    for (std::size_t i = 0; i < n; ++i) {
+      if (out.code[i] == 0) {
+        exact_cell(points[i].x, inv, &out.ix0[i], &out.fx[i]);
+        exact_cell(points[i].y, inv, &out.iy0[i], &out.fy[i]);
+      }
+    }
+  }
+  finish_entries<kLayers>(n, config.max_range_sq, fine, out);
+}
+
+template <int kLayers>
+void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
+                  const FineWindow& window, FrontChunk& __restrict out) noexcept {
+  constexpr std::uint32_t kLimitBits = 0x45000000U;  // bits_of(2048.0F), exclusive
+  const float c[6] = {pose.rotation_cells[0], pose.rotation_cells[1], pose.rotation_cells[2],
+                      pose.rotation_cells[3], pose.rotation_cells[4], pose.rotation_cells[5]};
+  const float r[9] = {pose.rotation[0], pose.rotation[1], pose.rotation[2], pose.rotation[3], pose.rotation[4],
+                      pose.rotation[5], pose.rotation[6], pose.rotation[7], pose.rotation[8]};
+  const float fx0 = pose.anchor_fraction[0];
+  const float fy0 = pose.anchor_fraction[1];
+  const std::int32_t ax = pose.anchor.x;
+  const std::int32_t ay = pose.anchor.y;
+  const float oz = pose.origin[2];
+  const FineSlot fine = fine_slot_of(window);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t valid = validity(bits_of(points[i].x), bits_of(points[i].y), bits_of(points[i].z), kLimitBits, false);
+    const float sx = valid == 0 ? points[i].x : 0.0F;
+    const float sy = valid == 0 ? points[i].y : 0.0F;
+    const float sz = valid == 0 ? points[i].z : 0.0F;
+    // Offset from the anchor cell's corner in cells (|u| < 2^11 m * sqrt(3) * 1.001 / w_0 + 1 < 2^31).
+    const float ux = c[0] * sx + c[1] * sy + c[2] * sz + fx0;
+    const float uy = c[3] * sx + c[4] * sy + c[5] * sz + fy0;
+    const float z = r[6] * sx + r[7] * sy + r[8] * sz + oz;
+    const std::int32_t wx = floor_to_int32(ux);
+    const std::int32_t wy = floor_to_int32(uy);
+    out.code[i] = valid;
+    out.z[i] = z;
+    out.range_sq[i] = sx * sx + sy * sy + sz * sz;
+    out.ix0[i] = ax + wx;  // |A| <= 2^30 + 1: no overflow
+    out.iy0[i] = ay + wy;
+    out.fx[i] = ux - static_cast<float>(wx);  // exact (Sterbenz)
+    out.fy[i] = uy - static_cast<float>(wy);
+  }
+  if (pose.near_limit) {
+    // The map-frame position must lie within kMaxAbsCoordinateM on every axis.
+    for (std::size_t i = 0; i < n; ++i) {
+      if (out.code[i] != 0) {
+        continue;
+      }
+      const PointXYZ& s = points[i];
+      const float mx = r[0] * s.x + r[1] * s.y + r[2] * s.z + pose.origin[0];
+      const float my = r[3] * s.x + r[4] * s.y + r[5] * s.z + pose.origin[1];
+      const float mz = out.z[i];
+      if (std::fabs(mx) > kMaxAbsCoordinateM || std::fabs(my) > kMaxAbsCoordinateM || std::fabs(mz) > kMaxAbsCoordinateM) {
+        out.code[i] = std::int32_t{kFrontOutOfRange};
+      }
+    }
+  }
+  finish_entries<kLayers>(n, config.max_range_sq, fine, out);
 }
 
 }  // namespace
 
 CCMAP_FRONT_CLONES
 void front_map_chunk(const PointXYZ* points, std::size_t n, const FramePose& pose, const FrontConfig& config,
-                     FrontChunk& out) noexcept {
-  const std::uint32_t limit_bits = bits_of(kMaxAbsCoordinateM);
-  std::int64_t* const qx = out.q18[0];
-  std::int64_t* const qy = out.q18[1];
-  std::int64_t* const qz = out.q18[2];
-  std::int32_t* const dx32 = out.scratch_i32[0];
-  std::int32_t* const dy32 = out.scratch_i32[1];
-  std::int32_t* const dz32 = out.scratch_i32[2];
-  const std::int64_t origin[3] = {pose.origin_q18[0], pose.origin_q18[1], pose.origin_q18[2]};
-  std::int32_t far_points = 0;
-  // Loop 1: validation, Q18 position, offset from the sensor (int32 unless 2^11 m away: far).
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t bx = bits_of(points[i].x);
-    const std::uint32_t by = bits_of(points[i].y);
-    const std::uint32_t bz = bits_of(points[i].z);
-    out.code[i] = validity(bx, by, bz, limit_bits, true);
-    const std::int64_t x = q18_floor(bx);
-    const std::int64_t y = q18_floor(by);
-    const std::int64_t z = q18_floor(bz);
-    qx[i] = x;
-    qy[i] = y;
-    qz[i] = z;
-    const std::int64_t dx = x - origin[0];
-    const std::int64_t dy = y - origin[1];
-    const std::int64_t dz = z - origin[2];
-    constexpr auto kSpan = static_cast<std::uint64_t>(2 * kMaxSensorOffsetQ18);
-    const bool far = (static_cast<std::uint64_t>(dx + kMaxSensorOffsetQ18) | static_cast<std::uint64_t>(dy + kMaxSensorOffsetQ18) |
-                      static_cast<std::uint64_t>(dz + kMaxSensorOffsetQ18)) >= kSpan;
-    dx32[i] = static_cast<std::int32_t>(dx);
-    dy32[i] = static_cast<std::int32_t>(dy);
-    dz32[i] = static_cast<std::int32_t>(dz);
-    out.range_sq[i] = far ? INT64_MAX : 0;  // the far flag, completed by loop 2
-    far_points += far ? 1 : 0;
-  }
-  // Loop 2: range, routing, index = floor(q * mult * 2^-shift) = ((q - o) * mult + o * mult) >> shift
-  // (a 32 x 32 -> 64 multiply; far points are fixed below), height.
-  const std::int32_t mult = config.index_mult;
-  const std::int64_t ox_mult = origin[0] * mult;
-  const std::int64_t oy_mult = origin[1] * mult;
-  const std::int32_t shift = config.index_shift;
-  const std::uint32_t (&bounds)[kFrontMaxLayers] = config.max_range_key;
-  const auto layers = static_cast<std::int32_t>(config.layers);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int64_t near_range_sq = square_sum_q16(dx32[i], dy32[i], dz32[i]);
-    const std::int64_t range_sq = out.range_sq[i] != 0 ? INT64_MAX : near_range_sq;
-    out.range_sq[i] = range_sq;
-    out.range_key[i] = route_key_of(range_sq);
-    out.code[i] = at_sensor_code(out.code[i], range_sq);
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t routed = route(out.range_key[i], bounds, layers);
-    const std::int32_t valid = out.code[i];
-    out.code[i] = valid != 0 ? valid : routed;
-    out.ix0[i] = static_cast<std::int32_t>((static_cast<std::int64_t>(dx32[i]) * mult + ox_mult) >> shift);
-    out.iy0[i] = static_cast<std::int32_t>((static_cast<std::int64_t>(dy32[i]) * mult + oy_mult) >> shift);
-    out.height_q14[i] = static_cast<std::int32_t>(qz[i] >> (kPositionFracBits - kHeightFracBits));
-  }
-  if (far_points > 0) {
-    // Points 2^11 m or more from the sensor (rare: only layers of unbounded range take them):
-    // the index from the full Q18 position (|q| < 2^35, mult < 2^24: the product fits int64).
-    for (std::size_t i = 0; i < n; ++i) {
-      if (out.range_sq[i] == INT64_MAX) {
-        out.ix0[i] = static_cast<std::int32_t>((qx[i] * mult) >> shift);
-        out.iy0[i] = static_cast<std::int32_t>((qy[i] * mult) >> shift);
-      }
-    }
+                     const FineWindow& fine, FrontChunk& out) noexcept {
+  static_assert(kFrontMaxLayers == 8, "one instance per layer count");
+  switch (config.layers) {
+    case 1U: map_chunk<1>(points, n, pose, config, fine, out); break;
+    case 2U: map_chunk<2>(points, n, pose, config, fine, out); break;
+    case 3U: map_chunk<3>(points, n, pose, config, fine, out); break;
+    case 4U: map_chunk<4>(points, n, pose, config, fine, out); break;
+    case 5U: map_chunk<5>(points, n, pose, config, fine, out); break;
+    case 6U: map_chunk<6>(points, n, pose, config, fine, out); break;
+    case 7U: map_chunk<7>(points, n, pose, config, fine, out); break;
+    default: map_chunk<8>(points, n, pose, config, fine, out); break;
   }
 }
 
 CCMAP_FRONT_CLONES
 void front_sensor_chunk(const PointXYZ* points, std::size_t n, const FramePose& pose, const FrontConfig& config,
-                        FrontChunk& out) noexcept {
-  constexpr std::uint32_t kLimitBits = 0x45000000U;  // bits_of(2048.0F), exclusive
-  std::int32_t* const sx = out.scratch_i32[0];
-  std::int32_t* const sy = out.scratch_i32[1];
-  std::int32_t* const sz = out.scratch_i32[2];
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t bx = bits_of(points[i].x);
-    const std::uint32_t by = bits_of(points[i].y);
-    const std::uint32_t bz = bits_of(points[i].z);
-    out.code[i] = validity(bx, by, bz, kLimitBits, false);
-    sx[i] = q18_floor_small(bx);
-    sy[i] = q18_floor_small(by);
-    sz[i] = q18_floor_small(bz);
-  }
-  std::int32_t r[9];
-  for (int k = 0; k < 9; ++k) {
-    r[k] = pose.rotation_q30[k];
-  }
-  const std::int64_t bias[3] = {pose.rotation_bias_q48[0], pose.rotation_bias_q48[1], pose.rotation_bias_q48[2]};
-  const std::int64_t t[3] = {pose.translation_q18[0], pose.translation_q18[1], pose.translation_q18[2]};
-  const std::int32_t mult = config.index_mult;
-  const std::int64_t tx_mult = pose.translation_q18[0] * mult;
-  const std::int64_t ty_mult = pose.translation_q18[1] * mult;
-  const std::int32_t shift = config.index_shift;
-  const std::uint32_t (&bounds)[kFrontMaxLayers] = config.max_range_key;
-  const auto layers = static_cast<std::int32_t>(config.layers);
-  constexpr std::int64_t kMaxQ18 = std::int64_t{100000} << kPositionFracBits;
-  // Loop 1: rotation and range (32 x 32 -> 64 multiply-accumulates).
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t x = sx[i];
-    const std::int32_t y = sy[i];
-    const std::int32_t z = sz[i];
-    // |r| <= 2^30 * 1.001 and |s| < 2^29: each product < 2^59.01, the sum of three < 2^60.6;
-    // the rotated offset |d| < 2^29 * sqrt(3) * 1.001 < 2^30 fits int32.
-    out.q18[0][i] = (std::int64_t{r[0]} * x + std::int64_t{r[1]} * y + std::int64_t{r[2]} * z + bias[0]) >> 30;
-    out.q18[1][i] = (std::int64_t{r[3]} * x + std::int64_t{r[4]} * y + std::int64_t{r[5]} * z + bias[1]) >> 30;
-    out.q18[2][i] = (std::int64_t{r[6]} * x + std::int64_t{r[7]} * y + std::int64_t{r[8]} * z + bias[2]) >> 30;
-    const std::int64_t range_sq = square_sum_q16(x, y, z);
-    out.range_sq[i] = range_sq;
-    out.range_key[i] = route_key_of(range_sq);
-    out.code[i] = at_sensor_code(out.code[i], range_sq);
-  }
-  // Loop 2: the map-frame position, routing, index, height.
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto dx = static_cast<std::int32_t>(out.q18[0][i]);  // |offset| < 2^30 (see above)
-    const auto dy = static_cast<std::int32_t>(out.q18[1][i]);
-    const std::int64_t mx = dx + t[0];
-    const std::int64_t my = dy + t[1];
-    const std::int64_t mz = out.q18[2][i] + t[2];
-    out.q18[0][i] = mx;
-    out.q18[1][i] = my;
-    out.q18[2][i] = mz;
-    const std::int32_t routed = route(out.range_key[i], bounds, layers);
-    const std::int32_t valid = out.code[i];
-    out.code[i] = valid != 0 ? valid : routed;
-    out.ix0[i] = static_cast<std::int32_t>((static_cast<std::int64_t>(dx) * mult + tx_mult) >> shift);
-    out.iy0[i] = static_cast<std::int32_t>((static_cast<std::int64_t>(dy) * mult + ty_mult) >> shift);
-    out.height_q14[i] = static_cast<std::int32_t>(mz >> (kPositionFracBits - kHeightFracBits));
-  }
-  // The map-frame range check (|m| <= 1e5 m on every axis) can only refuse a point when the
-  // sensor is within 2^11 m * sqrt(3) (< 2^30 Q18) of that limit on some axis.
-  const auto near_limit = [](std::int64_t v) { return (v < 0 ? -v : v) > kMaxQ18 - (std::int64_t{1} << 30); };
-  if (near_limit(t[0]) || near_limit(t[1]) || near_limit(t[2])) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::int64_t mx = out.q18[0][i];
-      const std::int64_t my = out.q18[1][i];
-      const std::int64_t mz = out.q18[2][i];
-      const bool outside = mx > kMaxQ18 || mx < -kMaxQ18 || my > kMaxQ18 || my < -kMaxQ18 || mz > kMaxQ18 || mz < -kMaxQ18;
-      const bool refused = out.code[i] >= std::int32_t{kFrontNonFinite} && out.code[i] != std::int32_t{kFrontTooNoisy};
-      out.code[i] = outside && !refused ? std::int32_t{kFrontOutOfRange} : out.code[i];
-    }
+                        const FineWindow& fine, FrontChunk& out) noexcept {
+  switch (config.layers) {
+    case 1U: sensor_chunk<1>(points, n, pose, config, fine, out); break;
+    case 2U: sensor_chunk<2>(points, n, pose, config, fine, out); break;
+    case 3U: sensor_chunk<3>(points, n, pose, config, fine, out); break;
+    case 4U: sensor_chunk<4>(points, n, pose, config, fine, out); break;
+    case 5U: sensor_chunk<5>(points, n, pose, config, fine, out); break;
+    case 6U: sensor_chunk<6>(points, n, pose, config, fine, out); break;
+    case 7U: sensor_chunk<7>(points, n, pose, config, fine, out); break;
+    default: sensor_chunk<8>(points, n, pose, config, fine, out); break;
   }
 }
 

@@ -40,6 +40,7 @@ void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept {
   total.gated_dropped = saturating_add(total.gated_dropped, frame.gated_dropped);
   total.reseeded_cells = saturating_add(total.reseeded_cells, frame.reseeded_cells);
   total.merged_cells = saturating_add(total.merged_cells, frame.merged_cells);
+  total.skipped_budget = saturating_add(total.skipped_budget, frame.skipped_budget);
   total.free_rays = saturating_add(total.free_rays, frame.free_rays);
   total.free_rays_refused = saturating_add(total.free_rays_refused, frame.free_rays_refused);
   total.cleared_cells = saturating_add(total.cleared_cells, frame.cleared_cells);

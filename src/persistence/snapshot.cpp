@@ -29,11 +29,11 @@ constexpr std::array<std::uint32_t, 256> kCrcTable = make_crc_table();
 
 // The format (snapshot.hpp) lists every field of these types; a new field needs a new format
 // version, not a silent omission.
-static_assert(sizeof(FrameCounters) == 19U * sizeof(std::uint32_t),
+static_assert(sizeof(FrameCounters) == 20U * sizeof(std::uint32_t),
               "FrameCounters changed: update the snapshot format and kSnapshotFormatVersion");
 static_assert(sizeof(sensor::NoiseModel) == 4U + 5U * sizeof(float),
               "NoiseModel changed: update the snapshot format and kSnapshotFormatVersion");
-static_assert(sizeof(StackParams) == (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 5U) * sizeof(float) +
+static_assert(sizeof(StackParams) == (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U + 5U) * sizeof(float) +
                                          sizeof(sensor::NoiseModel),
               "StackParams changed: update the snapshot format and kSnapshotFormatVersion");
 
@@ -232,6 +232,8 @@ void snapshot_write_params(SnapshotWriter& w, const StackParams& p) noexcept {
   w.f32(p.outlier_gate_sigma);
   w.f32(p.change_min_points);
   w.f32(p.change_share);
+  w.u32(p.frame_point_budget);
+  w.u32(p.frame_time_budget_us);
   w.f32(p.free_space_rays);
   w.f32(p.free_space_clear_frames);
   for (const float a : p.sensor_view_axis) {
@@ -274,6 +276,8 @@ Status snapshot_read_params(SnapshotReader& r, int layer_count, bool has_fine, S
   p.outlier_gate_sigma = finite_f32();
   p.change_min_points = finite_f32();
   p.change_share = finite_f32();
+  p.frame_point_budget = r.u32();
+  p.frame_time_budget_us = r.u32();
   p.free_space_rays = finite_f32();
   p.free_space_clear_frames = finite_f32();
   for (float& a : p.sensor_view_axis) {
@@ -436,8 +440,9 @@ void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uin
                                   t.too_noisy,       t.gated_finer,    t.gated_occluded,
                                   t.gated_held,      t.gated_pool_full, t.gated_admitted,
                                   t.gated_dropped,   t.reseeded_cells, t.merged_cells,
-                                  t.free_rays,       t.free_rays_refused, t.cleared_cells,
-                                  t.drop_cells,      rejected_moves,   rejected_frames};
+                                  t.skipped_budget,  t.free_rays,       t.free_rays_refused,
+                                  t.cleared_cells,   t.drop_cells,      rejected_moves,
+                                  rejected_frames};
   for (const std::uint32_t v : values) {
     w.u32(v);
   }
@@ -461,6 +466,7 @@ void snapshot_read_counters(SnapshotReader& r, FrameCounters* t, std::uint32_t* 
   t->gated_dropped = r.u32();
   t->reseeded_cells = r.u32();
   t->merged_cells = r.u32();
+  t->skipped_budget = r.u32();
   t->free_rays = r.u32();
   t->free_rays_refused = r.u32();
   t->cleared_cells = r.u32();

@@ -1,8 +1,9 @@
-// The integer front of the update path (map/update/front.hpp) against independent references:
-// exact conversions against double arithmetic, the fixed-point sensor -> map transform against
-// the double-precision transform of the same float inputs (the documented error bound), the
-// finest index against grid::index_of_position (what queries use) at cell edges, routing against
-// the float RoutingTable::select on double ranges, and the refusals of make_frame_pose.
+// The front of the update path (map/update/front.hpp) against independent references: floor
+// conversions and the map-frame index and fraction against the exact product in double, the
+// float sensor -> map transform against the double-precision transform of the same float inputs
+// (the documented error bounds), the finest index against grid::index_of_position (what queries
+// use) at cell edges, routing against the float RoutingTable::select on double ranges, the Kalman
+// slot against grid::buffer_offset, and the refusals of make_frame_pose.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,23 +23,25 @@
 namespace ccmap::detail {
 namespace {
 
-/// One point through a chunk function (the chunk is 18 KB: heap, not the test's stack).
+/// One point through a chunk function (the chunk lives on the heap, not the test's stack).
 struct One {
   std::int32_t code;
   std::int32_t ix0, iy0;
-  std::int64_t range_sq;
-  std::int64_t q18[3];  ///< sensor-frame input only
+  float fx, fy, z;
+  float range_sq;
+  std::int32_t fine_slot, height_q14, range_key;
 };
-One front_one(bool sensor, const PointXYZ& p, const FramePose& pose, const FrontConfig& config) {
+One front_one(bool sensor, const PointXYZ& p, const FramePose& pose, const FrontConfig& config,
+              const FineWindow& fine = FineWindow{{0, 0}, 0, 0}) {
   static std::unique_ptr<FrontChunk> chunk = std::make_unique<FrontChunk>();
   if (sensor) {
-    front_sensor_chunk(&p, 1, pose, config, *chunk);
+    front_sensor_chunk(&p, 1, pose, config, fine, *chunk);
   } else {
-    front_map_chunk(&p, 1, pose, config, *chunk);
+    front_map_chunk(&p, 1, pose, config, fine, *chunk);
   }
-  One o{chunk->code[0], chunk->ix0[0], chunk->iy0[0], chunk->range_sq[0], {0, 0, 0}};
-  for (int a = 0; a < 3; ++a) o.q18[a] = chunk->q18[a][0];
-  return o;
+  const FrontChunk& c = *chunk;
+  return One{c.code[0], c.ix0[0], c.iy0[0], c.fx[0], c.fy[0], c.z[0], c.range_sq[0], c.fine_slot[0], c.height_q14[0],
+             c.range_key[0]};
 }
 
 float from_bits(std::uint32_t u) {
@@ -47,48 +50,57 @@ float from_bits(std::uint32_t u) {
   return v;
 }
 
-/// floor(v * 2^18) in double (exact: a float times a power of two fits a double).
-std::int64_t reference_q18(float v) { return static_cast<std::int64_t>(std::floor(std::ldexp(double{v}, 18))); }
-
-TEST(Front, FloorToInt64EqualsTheCompilersConversion) {
-  // 1 <= v < 2^63: biased exponents 127 .. 189, with mantissas from the edges and between.
-  const std::uint32_t mantissas[] = {0x000000U, 0x000001U, 0x2AAAAAU, 0x400000U, 0x555555U, 0x7FFFFEU, 0x7FFFFFU};
+TEST(Front, FloorToInt32IsTheFloorInDouble) {
+  // |v| < 2^31: every exponent, both signs, mantissas random and at the edges.
+  test::Rng rng(1);
   int checked = 0;
-  for (std::uint32_t exponent = 127U; exponent <= 189U; ++exponent) {
-    for (const std::uint32_t mantissa : mantissas) {
-      const float v = from_bits((exponent << 23) | mantissa);
-      ASSERT_EQ(floor_to_int64(v), static_cast<std::int64_t>(v)) << "v = " << v;
+  for (std::uint32_t exponent = 0U; exponent < 127U + 31U; ++exponent) {
+    for (int k = 0; k < 400; ++k) {
+      const std::uint32_t mantissa = k < 3 ? (k == 0 ? 0U : (k == 1 ? 1U : 0x7FFFFFU))
+                                           : static_cast<std::uint32_t>(rng.next() & 0x7FFFFFU);
+      for (const std::uint32_t sign : {0U, 0x80000000U}) {
+        const float v = from_bits(sign | (exponent << 23) | mantissa);
+        ASSERT_EQ(std::int64_t{floor_to_int32(v)}, static_cast<std::int64_t>(std::floor(double{v}))) << "v = " << v;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100000);
+}
+
+/// The map-frame index and fraction of x against the exact product in double (a float times a
+/// float is exact in double).
+void expect_exact_map_cell(const One& f, float x, float inv, bool y_axis) {
+  const double exact = double{x} * double{inv};
+  const auto index = static_cast<std::int64_t>(std::floor(exact));
+  const double fraction = exact - static_cast<double>(index);
+  ASSERT_EQ(y_axis ? f.iy0 : f.ix0, index) << "x = " << x;
+  // The fraction is the exact remainder rounded once (|remainder| < 2: within 2^-23).
+  ASSERT_NEAR(y_axis ? f.fy : f.fx, fraction, 1.2e-7) << "x = " << x;
+}
+
+TEST(Front, MapFrameIndexAndFractionAreTheExactProduct) {
+  test::Rng rng(2);
+  int checked = 0;
+  for (const float width : {0.04F, 0.05F, 0.1F, 0.3F, 0.0002F, 1.0F, 3.0F}) {
+    const float bounds[1] = {std::numeric_limits<float>::infinity()};
+    FrontConfig config{};
+    ASSERT_EQ(make_front_config(width, bounds, 1, &config), Status::kOk);
+    FramePose pose{};
+    ASSERT_EQ(make_frame_pose(PointXYZ{0.0F, 0.0F, 1.0F}, nullptr, config, &pose), Status::kOk);
+    for (int i = 0; i < 30000; ++i) {
+      // Uniform in log scale over the map's range, both signs.
+      const double magnitude = std::pow(10.0, rng.uniform(-6.0, 5.0));
+      const auto x = static_cast<float>(rng.uniform(0.0, 1.0) < 0.5 ? -magnitude : magnitude);
+      const float y = -x;
+      const One f = front_one(false, PointXYZ{x, y, 0.5F}, pose, config);
+      ASSERT_EQ(f.code, 0);
+      expect_exact_map_cell(f, x, config.inv_width, false);
+      expect_exact_map_cell(f, y, config.inv_width, true);
       ++checked;
     }
   }
-  EXPECT_EQ(checked, 63 * 7);
-  EXPECT_EQ(floor_to_int64(1.0F), 1);
-  EXPECT_EQ(floor_to_int64(2.75F), 2);
-  EXPECT_EQ(floor_to_int64(8388607.5F), 8388607);  // 2^23 - 0.5: exact in float
-  EXPECT_EQ(floor_to_int64(9.0e18F), static_cast<std::int64_t>(9.0e18F));
-}
-
-TEST(Front, Q18ConversionIsTheExactFloor) {
-  test::Rng rng(1);
-  std::vector<float> values = {0.0F, -0.0F, 1e-45F, -1e-45F, 1.17549435e-38F, -3.0e-6F, 3.8146973e-6F,
-                               -3.8146973e-6F, 0.04F, -0.04F, 1.0F, -1.0F, 2047.9999F, -2047.9999F, 99999.99F,
-                               -1.0e5F, 1.0e5F, 131071.99F, -131071.99F};
-  for (int i = 0; i < 200000; ++i) {
-    // Random bit patterns over every exponent below 2^17 (uniform in log scale), both signs.
-    const auto exponent = static_cast<std::uint32_t>(rng.next() % 144U);  // biased 0..143
-    const auto mantissa = static_cast<std::uint32_t>(rng.next() & 0x7FFFFFU);
-    const std::uint32_t sign = static_cast<std::uint32_t>(rng.next() & 1U) << 31;
-    values.push_back(from_bits(sign | (exponent << 23) | mantissa));
-  }
-  int small_checked = 0;
-  for (const float v : values) {
-    ASSERT_EQ(q18_floor(bits_of(v)), reference_q18(v)) << "v = " << v;
-    if (std::fabs(v) < 2048.0F) {
-      ASSERT_EQ(q18_floor_small(bits_of(v)), reference_q18(v)) << "v = " << v;
-      ++small_checked;
-    }
-  }
-  EXPECT_GT(small_checked, 100000);
+  EXPECT_EQ(checked, 7 * 30000);
 }
 
 /// A random rotation (unit quaternion in double, rounded to float entries).
@@ -124,8 +136,10 @@ FrontConfig unbounded_front(float width) {
   return config;
 }
 
-/// Largest per-axis error (m) of the fixed-point transform against double over random poses
-/// and sensor points within `radius` m of the sensor; also the mean error (bias) per axis.
+/// Largest per-axis error (m) of the float transform against double over random poses and
+/// sensor points within `radius` m of the sensor; also the mean error (bias) per axis. The
+/// front's map-frame position of a point is (index + fraction) / fl(1/w_0) on x and y, its
+/// height on z.
 void transform_error(double radius, double translation_range, double* worst, double* mean_error) {
   test::Rng rng(7);
   const FrontConfig config = unbounded_front(0.04F);
@@ -134,18 +148,20 @@ void transform_error(double radius, double translation_range, double* worst, dou
   *worst = 0.0;
   for (int p = 0; p < 200; ++p) {
     const Pose pose = random_pose(rng, translation_range);
-    FramePose fixed{};
-    ASSERT_EQ(make_frame_pose(pose.translation, &pose.rotation[0][0], &fixed), Status::kOk);
+    FramePose frame{};
+    ASSERT_EQ(make_frame_pose(pose.translation, &pose.rotation[0][0], config, &frame), Status::kOk);
     for (int i = 0; i < 2000; ++i) {
       const PointXYZ s{static_cast<float>(rng.uniform(-radius, radius)), static_cast<float>(rng.uniform(-radius, radius)),
                        static_cast<float>(rng.uniform(-radius, radius))};
-      const One f = front_one(true, s, fixed, config);
+      const One f = front_one(true, s, frame, config);
       ASSERT_EQ(f.code, 0) << "a point within " << radius << " m must be routed";
       const double t[3] = {pose.translation.x, pose.translation.y, pose.translation.z};
+      const double got[3] = {(static_cast<double>(f.ix0) + f.fx) / double{config.inv_width},
+                             (static_cast<double>(f.iy0) + f.fy) / double{config.inv_width}, double{f.z}};
       for (int r = 0; r < 3; ++r) {
         const double m = double{pose.rotation[r][0]} * s.x + double{pose.rotation[r][1]} * s.y +
                          double{pose.rotation[r][2]} * s.z + t[r];
-        const double e = std::ldexp(static_cast<double>(f.q18[r]), -18) - m;
+        const double e = got[r] - m;
         *worst = std::max(*worst, std::fabs(e));
         sum[r] += e;
       }
@@ -155,19 +171,21 @@ void transform_error(double radius, double translation_range, double* worst, dou
   *mean_error = std::max({std::fabs(sum[0]), std::fabs(sum[1]), std::fabs(sum[2])}) / n;
 }
 
-TEST(Front, SensorTransformWithinEightMicrometresOfDoubleWithinTenMetres) {
+TEST(Front, SensorTransformWithinThreeMicrometresOfDoubleWithinTenMetres) {
   double worst = 0.0, bias = 0.0;
   transform_error(10.0, 100.0, &worst, &bias);
   std::printf("[ front    ] sensor -> map within 10 m: worst %.2f um per axis, bias %.3f um\n", worst * 1e6, bias * 1e6);
-  EXPECT_LT(worst, 8.0e-6) << "docs/design.md states < 8 um per axis within 10 m of the sensor";
-  EXPECT_LT(bias, 0.5e-6) << "the floor of the Q18 conversion must be compensated (unbiased transform)";
+  EXPECT_LT(worst, 3.0e-6) << "docs/design.md states < 3 um per axis within 10 m of the sensor";
+  EXPECT_LT(bias, 0.05e-6) << "round-to-nearest float arithmetic: an unbiased transform";
 }
 
-TEST(Front, SensorTransformWithinTwelveMicrometresAtTwoKilometres) {
+TEST(Front, SensorTransformWithinTwoTenMillionthsOfTheRangeAtTwoKilometres) {
   double worst = 0.0, bias = 0.0;
   transform_error(1400.0, 1000.0, &worst, &bias);  // |s| per axis < 2^11 m
-  std::printf("[ front    ] sensor -> map within 1.4 km: worst %.2f um per axis\n", worst * 1e6);
-  EXPECT_LT(worst, 12.0e-6);
+  std::printf("[ front    ] sensor -> map within 1.4 km: worst %.1f um per axis\n", worst * 1e6);
+  // Float offsets of up to 2.4 km: the error grows with the offset (relative 2^-23 per
+  // operation), 0.3 mm at 1.4 km (docs/design.md).
+  EXPECT_LT(worst, 2.0e-7 * 1400.0 * std::sqrt(3.0));
 }
 
 TEST(Front, FinestIndexEqualsWhatQueriesLocateAtEveryEdge) {
@@ -177,7 +195,7 @@ TEST(Front, FinestIndexEqualsWhatQueriesLocateAtEveryEdge) {
   for (const float width : {0.04F, 0.05F, 0.1F, 0.3F, 0.0002F, 1.0F}) {
     const FrontConfig config = unbounded_front(width);
     FramePose pose{};
-    ASSERT_EQ(make_frame_pose(PointXYZ{0.0F, 0.0F, 1.0F}, nullptr, &pose), Status::kOk);
+    ASSERT_EQ(make_frame_pose(PointXYZ{0.0F, 0.0F, 1.0F}, nullptr, config, &pose), Status::kOk);
     const float inv = 1.0F / width;
     const double limit = 9.0e4;
     const auto edges = static_cast<std::int64_t>(std::min(3000.0, limit / width));
@@ -207,8 +225,8 @@ TEST(Front, FinestIndexEqualsWhatQueriesLocateAtEveryEdge) {
 
 TEST(Front, RangeAndRoutingAgreeWithTheFloatTableOnDoubleRanges) {
   // The CADRE routing table; RoutingTable::select on the double range rounded to float is the
-  // reference. Points within 1e-5 (relative) of a bound may go either way (the front's Q16
-  // quantisation): they are counted, not compared.
+  // reference. Points within 1e-6 (relative) of a bound may go either way (the float range's
+  // rounding): they are counted, not compared.
   const float widths[5] = {0.04F, 0.08F, 0.16F, 0.32F, 0.64F};
   sensor::RoutingTable<5> table{};
   ASSERT_EQ(sensor::build_routing_table(sensor::cadre_stereo(), widths, sensor::constant_layer_max_sigma(0.04F), &table),
@@ -217,7 +235,7 @@ TEST(Front, RangeAndRoutingAgreeWithTheFloatTableOnDoubleRanges) {
   ASSERT_EQ(make_front_config(0.04F, table.max_range_sq, 5, &config), Status::kOk);
   FramePose pose{};
   const PointXYZ origin{1.25F, -0.5F, 0.175F};
-  ASSERT_EQ(make_frame_pose(origin, nullptr, &pose), Status::kOk);
+  ASSERT_EQ(make_frame_pose(origin, nullptr, config, &pose), Status::kOk);
   test::Rng rng(3);
   int ambiguous = 0, compared = 0;
   for (int i = 0; i < 300000; ++i) {
@@ -226,12 +244,11 @@ TEST(Front, RangeAndRoutingAgreeWithTheFloatTableOnDoubleRanges) {
     const double dx = double{p.x} - origin.x, dy = double{p.y} - origin.y, dz = double{p.z} - origin.z;
     const double r2 = dx * dx + dy * dy + dz * dz;
     const One f = front_one(false, p, pose, config);
-    // Q16 range: |error of each offset| < 2^-16 + 2 * 2^-18 m (the floors of the Q16 shift and of
-    // both Q18 conversions), so |error of r^2| < 2 sqrt(3) r (2^-16 + 2^-17) + 3 (...)^2.
-    const double e = 2.0 * std::sqrt(3.0 * r2) * 2.3e-5 + 1e-8;
-    ASSERT_NEAR(std::ldexp(static_cast<double>(f.range_sq), -32), r2, e) << i;
+    // Float offsets (one rounding each), squares and sums: within a few ulp of r^2.
+    ASSERT_NEAR(double{f.range_sq}, r2, 6.0e-7 * r2 + 1e-12) << i;
+    ASSERT_EQ(f.range_key, static_cast<std::int32_t>(std::floor(std::min(double{f.range_sq}, 524287.0) * 4096.0)));
     bool near_bound = false;
-    for (float b : table.max_range_sq) near_bound = near_bound || std::fabs(r2 - b) < 1e-5 * b;
+    for (float b : table.max_range_sq) near_bound = near_bound || std::fabs(r2 - b) < 1e-6 * b;
     if (near_bound) {
       ++ambiguous;
       continue;
@@ -240,29 +257,54 @@ TEST(Front, RangeAndRoutingAgreeWithTheFloatTableOnDoubleRanges) {
     ASSERT_EQ(f.code == std::int32_t{kFrontTooNoisy} ? -1 : f.code, expected) << "r^2 = " << r2;
     ++compared;
   }
-  EXPECT_GT(compared, 290000);
-  EXPECT_LT(ambiguous, 200);
+  EXPECT_GT(compared, 299000);
+  EXPECT_LT(ambiguous, 50);
+}
+
+TEST(Front, KalmanSlotIsTheBufferOffsetInsideTheFineWindowAndRoutedToIt) {
+  const float bounds[2] = {1.0F, std::numeric_limits<float>::infinity()};
+  FrontConfig config{};
+  ASSERT_EQ(make_front_config(0.04F, bounds, 2, &config), Status::kOk);
+  FramePose pose{};
+  ASSERT_EQ(make_frame_pose(PointXYZ{0.1F, -0.2F, 0.0F}, nullptr, config, &pose), Status::kOk);
+  const FineWindow fine{{-32, -40}, 64, 6};
+  test::Rng rng(4);
+  int inside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const PointXYZ p{static_cast<float>(rng.uniform(-2.0, 2.0)), static_cast<float>(rng.uniform(-2.0, 2.0)), 0.0F};
+    const One f = front_one(false, p, pose, config, fine);
+    const bool in_window = f.ix0 >= -32 && f.ix0 < 32 && f.iy0 >= -40 && f.iy0 < 24;
+    if (f.code == 0 && in_window) {
+      ASSERT_EQ(f.fine_slot, static_cast<std::int32_t>(grid::buffer_offset(CellIndex{f.ix0, f.iy0}, 64)));
+      ++inside;
+    } else {
+      ASSERT_EQ(f.fine_slot, -1) << "routed " << f.code << ", index " << f.ix0 << ", " << f.iy0;
+    }
+    ASSERT_EQ(f.height_q14, 0);
+  }
+  EXPECT_GT(inside, 1000);
 }
 
 TEST(Front, RefusesWhatIsNotARigidPose) {
+  const FrontConfig config = unbounded_front(0.04F);
   FramePose pose{};
   const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, identity, &pose), Status::kOk);
-  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, identity, nullptr), Status::kInvalidArgument);
+  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, identity, config, &pose), Status::kOk);
+  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, identity, config, nullptr), Status::kInvalidArgument);
   float r[9];
   std::memcpy(r, identity, sizeof r);
   r[4] = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, r, &pose), Status::kNonFiniteInput);
+  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, r, config, &pose), Status::kNonFiniteInput);
   const float scaled[9] = {2, 0, 0, 0, 2, 0, 0, 0, 2};
-  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, scaled, &pose), Status::kInvalidArgument);
+  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, scaled, config, &pose), Status::kInvalidArgument);
   const float shear[9] = {1, 0.5F, 0, 0, 1, 0, 0, 0, 1};
-  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, shear, &pose), Status::kInvalidArgument);
+  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, shear, config, &pose), Status::kInvalidArgument);
   const float shrunk[9] = {0.99F, 0, 0, 0, 0.99F, 0, 0, 0, 0.99F};
-  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, shrunk, &pose), Status::kInvalidArgument);
+  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, shrunk, config, &pose), Status::kInvalidArgument);
   const float mirror[9] = {1, 0, 0, 0, 1, 0, 0, 0, -1};  // orthonormal: accepted (a reflection is rigid in R^T R)
-  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, mirror, &pose), Status::kOk);
-  EXPECT_EQ(make_frame_pose(PointXYZ{2.0e5F, 0, 0}, identity, &pose), Status::kOutOfRange);
-  EXPECT_EQ(make_frame_pose(PointXYZ{0, std::numeric_limits<float>::infinity(), 0}, identity, &pose),
+  EXPECT_EQ(make_frame_pose(PointXYZ{0, 0, 0}, mirror, config, &pose), Status::kOk);
+  EXPECT_EQ(make_frame_pose(PointXYZ{2.0e5F, 0, 0}, identity, config, &pose), Status::kOutOfRange);
+  EXPECT_EQ(make_frame_pose(PointXYZ{0, std::numeric_limits<float>::infinity(), 0}, identity, config, &pose),
             Status::kNonFiniteInput);
 }
 
@@ -270,7 +312,7 @@ TEST(Front, RefusalCodesOfSensorPoints) {
   const FrontConfig config = unbounded_front(0.04F);
   FramePose pose{};
   const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  ASSERT_EQ(make_frame_pose(PointXYZ{99990.0F, 0, 0}, identity, &pose), Status::kOk);
+  ASSERT_EQ(make_frame_pose(PointXYZ{99990.0F, 0, 0}, identity, config, &pose), Status::kOk);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
   EXPECT_EQ(front_one(true, PointXYZ{nan, 0, 0}, pose, config).code, std::int32_t{kFrontNonFinite});
@@ -286,15 +328,15 @@ TEST(Front, RefusalCodesOfSensorPoints) {
 TEST(Front, RefusalCodesOfMapPointsAndFarPoints) {
   const FrontConfig config = unbounded_front(0.04F);
   FramePose pose{};
-  ASSERT_EQ(make_frame_pose(PointXYZ{-3000.0F, 0, 0}, nullptr, &pose), Status::kOk);
+  ASSERT_EQ(make_frame_pose(PointXYZ{-3000.0F, 0, 0}, nullptr, config, &pose), Status::kOk);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   EXPECT_EQ(front_one(false, PointXYZ{0, nan, 0}, pose, config).code, std::int32_t{kFrontNonFinite});
   EXPECT_EQ(front_one(false, PointXYZ{0, 0, 1.0001e5F}, pose, config).code, std::int32_t{kFrontOutOfRange});
   EXPECT_EQ(front_one(false, PointXYZ{-3000.0F, 0, 0}, pose, config).code, std::int32_t{kFrontTooNoisy});
-  // 3 km from the sensor: a saturated range, taken by an unbounded layer, indexed exactly.
+  // 103 km from the sensor: the float range, taken by an unbounded layer, indexed exactly.
   const One far = front_one(false, PointXYZ{1.0e5F, -12.34F, 0}, pose, config);
   EXPECT_EQ(far.code, 0);
-  EXPECT_EQ(far.range_sq, INT64_MAX);
+  EXPECT_NEAR(double{far.range_sq}, 103000.0 * 103000.0 + 12.34 * 12.34, 1e-6 * 103000.0 * 103000.0);
   CellIndex located{};
   ASSERT_TRUE(grid::index_of_position(1.0e5F, -12.34F, 1.0F / 0.04F, &located));
   EXPECT_EQ(far.ix0, located.x);

@@ -31,8 +31,8 @@
 //
 // Assignment in double. The tool decides each point's finest cell in double on the map-frame
 // grid (floor((x - origin) / w)), then hands the library a float tile-frame coordinate inside
-// that cell: the rounded value, or, when rounding (or the library's 3.8 um position quantum,
-// grid::quantize_position) puts it in a neighbour, the nearest position that the library's own
+// that cell: the rounded value, or, when rounding puts it in a neighbour, the nearest position
+// that the library's own
 // index function (grid::index_of_position, what updates and queries use) puts in that cell,
 // a few um away at most. The tool's bookkeeping and the library's cells never disagree.
 #pragma once

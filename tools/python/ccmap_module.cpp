@@ -103,6 +103,7 @@ constexpr CounterField kCounterFields[] = {
     {"gated_dropped", &FrameCounters::gated_dropped},
     {"reseeded_cells", &FrameCounters::reseeded_cells},
     {"merged_cells", &FrameCounters::merged_cells},
+    {"skipped_budget", &FrameCounters::skipped_budget},
     {"free_rays", &FrameCounters::free_rays},
     {"free_rays_refused", &FrameCounters::free_rays_refused},
     {"cleared_cells", &FrameCounters::cleared_cells},

@@ -51,20 +51,31 @@ static_assert(sizeof(OmgCell) == 3U * sizeof(float), "OmgCell must stay 3 packed
 }
 
 namespace detail {
-inline void kalman_update_unchecked(KalmanCell& cell, float z, float measurement_variance,
-                                    float min_variance) noexcept {
+/// The one Kalman update of the library: fuses a measurement of height z (m) with variance
+/// `variance` (m^2) worth `count` measurements into the cell: h += K (z - h), K = P / (P + R),
+/// P = K R (= P R / (P + R)), P >= min_variance; weight += count. An empty cell becomes the
+/// measurement (P = R, floored). The single update (count 1), the frame batch (the mean of n
+/// measurements with R / n, count n) and the merge of two cells (the other cell's height and
+/// variance, its weight) are this function. Precondition (unchecked: callers validate):
+/// variance > 0 and finite, z finite, min_variance > 0.
+inline void kalman_fuse(KalmanCell& cell, float z, float variance, float count, float min_variance) noexcept {
   if (!(cell.weight > 0.0F)) {
     cell.height = z;
-    cell.variance = measurement_variance > min_variance ? measurement_variance : min_variance;
-    cell.weight = 1.0F;
+    cell.variance = variance > min_variance ? variance : min_variance;
+    cell.weight = count;
     return;
   }
-  const float sum = cell.variance + measurement_variance;        // > 0
+  const float sum = cell.variance + variance;                    // > 0
   const float gain = cell.variance / sum;                        // Kalman gain K = P / (P + R)
   cell.height += gain * (z - cell.height);
-  const float variance = gain * measurement_variance;            // P R / (P + R) = K R
-  cell.variance = variance > min_variance ? variance : min_variance;
-  cell.weight += 1.0F;
+  const float fused = gain * variance;                           // P R / (P + R) = K R
+  cell.variance = fused > min_variance ? fused : min_variance;
+  cell.weight += count;
+}
+
+inline void kalman_update_unchecked(KalmanCell& cell, float z, float measurement_variance,
+                                    float min_variance) noexcept {
+  kalman_fuse(cell, z, measurement_variance, 1.0F, min_variance);
 }
 
 /// n measurements of one frame with the same variance R fused at once: the Kalman update with
@@ -74,19 +85,7 @@ inline void kalman_update_unchecked(KalmanCell& cell, float z, float measurement
 inline void kalman_update_batch_unchecked(KalmanCell& cell, float mean_z, float measurement_variance,
                                           std::uint32_t n, float min_variance) noexcept {
   const float count = static_cast<float>(n);
-  const float batch_variance = n == 1U ? measurement_variance : measurement_variance / count;
-  if (!(cell.weight > 0.0F)) {
-    cell.height = mean_z;
-    cell.variance = batch_variance > min_variance ? batch_variance : min_variance;
-    cell.weight = count;
-    return;
-  }
-  const float sum = cell.variance + batch_variance;
-  const float gain = cell.variance / sum;
-  cell.height += gain * (mean_z - cell.height);
-  const float variance = gain * batch_variance;
-  cell.variance = variance > min_variance ? variance : min_variance;
-  cell.weight += count;
+  kalman_fuse(cell, mean_z, n == 1U ? measurement_variance : measurement_variance / count, count, min_variance);
 }
 
 inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_variance, float w,
@@ -164,17 +163,7 @@ inline void omg_update_unchecked(OmgCell& cell, float z, float measurement_varia
   if (!std::isfinite(other.height) || !std::isfinite(other.variance) || !(other.variance > 0.0F)) {
     return Status::kInvalidArgument;
   }
-  if (!(cell.weight > 0.0F)) {
-    cell = other;
-    cell.variance = other.variance > min_variance ? other.variance : min_variance;
-    return Status::kOk;
-  }
-  const float sum = cell.variance + other.variance;
-  const float gain = cell.variance / sum;  // P_a / (P_a + P_b)
-  cell.height += gain * (other.height - cell.height);
-  const float variance = gain * other.variance;
-  cell.variance = variance > min_variance ? variance : min_variance;
-  cell.weight += other.weight;
+  detail::kalman_fuse(cell, other.height, other.variance, other.weight, min_variance);
   return Status::kOk;
 }
 

@@ -111,27 +111,19 @@ namespace detail {
   return detail::floor_scaled_bits(detail::float_bits(x), c_significand, 150 - c_exponent);
 }
 
-/// The map's position quantum: a position names its cell after flooring to Q18 metres
-/// (2^-18 m = 3.8 um), the fixed-point format of the update path (map/update/front.hpp), so that
-/// an update and a query of the same float position name the same cell, edges included.
-/// For |v| >= 32 m every float is already a multiple of 2^-18 m (the quantisation is the identity).
-[[nodiscard]] inline float quantize_position(float v) noexcept {
-  return std::fabs(v) < 32.0F ? std::floor(v * 262144.0F) * 3.81469727e-6F : v;  // 2^18, 2^-18: exact scales
-}
-
 /// Global index of the cell holding the map-frame position (x, y) metres:
-/// floor(q(x) * inv_cell_width), floor(q(y) * inv_cell_width) of the exact product, with q the
-/// Q18 quantisation (quantize_position).
+/// floor(x * inv_cell_width), floor(y * inv_cell_width) of the exact (unrounded) product.
 ///
 /// Returns false, and leaves *out untouched, if out is nullptr, if x or y is NaN or infinite,
 /// if inv_cell_width is not a positive normal float (NaN included), or if an index would leave
 /// [-kMaxCellIndex, kMaxCellIndex].
 ///
 /// Precision limit: inv_cell_width is the rounded 1/w (0.1 m, 0.2 m, ... are not floats), a
-/// relative error below 2^-24, and positions are floored to 3.8 um, so a position within about
-/// 2^-24 * |x| + 3.8 um of a cell boundary (10 um at 100 m) may be put into the neighbouring cell
-/// of the true 1/w: off by one, never more. The product itself is not rounded (exact_floor_mul),
-/// so the map update (map/update/front.hpp) and every query name the same cell for a position.
+/// relative error below 2^-24, so a position within about 2^-24 * |x| of a cell boundary (6 um
+/// at 100 m) may be put into the neighbouring cell of the true 1/w: off by one, never more. The
+/// product itself is not rounded (exact_floor_mul), and the map update computes the same exact
+/// floor (map/update/front.hpp), so an update and every query name the same cell for a
+/// map-frame position, edges included.
 /// Beyond |x / w| = 2^23 consecutive floats are a cell or more apart, so not every cell can be
 /// named by a position (the map frame is local: see kMaxAbsCoordinateM in cell/ccm_cell.hpp).
 /// Tested in tests/grid/ring_index_test.cpp (IndexOfPosition.FloatRoundingLimitNearEdges) and,
@@ -150,8 +142,8 @@ namespace detail {
   if (!(fx >= -kGate && fx <= kGate && fy >= -kGate && fy <= kGate)) {
     return false;
   }
-  const std::int64_t ix = exact_floor_mul(quantize_position(x), inv_cell_width);
-  const std::int64_t iy = exact_floor_mul(quantize_position(y), inv_cell_width);
+  const std::int64_t ix = exact_floor_mul(x, inv_cell_width);
+  const std::int64_t iy = exact_floor_mul(y, inv_cell_width);
   if (ix < -kMaxCellIndex || ix > kMaxCellIndex || iy < -kMaxCellIndex || iy > kMaxCellIndex) {
     return false;
   }

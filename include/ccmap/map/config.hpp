@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <type_traits>
 
@@ -91,6 +92,44 @@ struct ConfigCcmCellKind<Config, std::void_t<decltype(Config::kCcmCell)>> {
 template <typename Config>
 inline constexpr CcmCellKind kConfigCcmCell = detail::ConfigCcmCellKind<Config>::value;
 
+namespace detail {
+template <typename Config, typename = void>
+struct ConfigOutlierGate {
+  static constexpr bool value = true;
+};
+template <typename Config>
+struct ConfigOutlierGate<Config, std::void_t<decltype(Config::kOutlierGate)>> {
+  static constexpr bool value = Config::kOutlierGate;
+};
+template <typename Config, typename = void>
+struct ConfigHeldSlots {
+  static constexpr std::size_t value = 0U;  // the update path's default (map/update/held_pool.hpp)
+};
+template <typename Config>
+struct ConfigHeldSlots<Config, std::void_t<decltype(Config::kHeldSlots)>> {
+  static constexpr std::size_t value = Config::kHeldSlots;
+};
+}  // namespace detail
+
+/// Whether a Config compiles the outlier gate in: its `kOutlierGate` member (bool), true if it
+/// has none. A stack whose Config says false carries none of the gate's memory (the held-point
+/// pools, the per-cell tags) or instructions, and refuses StackParams::outlier_gate_sigma > 0
+/// at init; with the gate compiled in, outlier_gate_sigma = 0 switches it off at run time.
+template <typename Config>
+inline constexpr bool kConfigOutlierGate = detail::ConfigOutlierGate<Config>::value;
+
+/// The held-point slots per pool of a Config with the gate: its `kHeldSlots` member, or 0 for
+/// the update path's default.
+template <typename Config>
+inline constexpr std::size_t kConfigHeldSlots = detail::ConfigHeldSlots<Config>::value;
+
+/// A configuration without the outlier gate compiled in: WithoutOutlierGate<CadreConfig> is the
+/// CADRE stack that runs the paper's update and carries no gate memory. Everything else of Base
+/// is kept.
+template <typename Base>
+struct WithoutOutlierGate : Base {
+  static constexpr bool kOutlierGate = false;
+};
 /// A configuration with or without free space from lines of sight (docs/design.md, "Free space
 /// from lines of sight"): WithFreeSpace<CadreConfig, false> is the CADRE stack that carries none
 /// of its memory (4 bytes per cell, the ray scratch) and never clears a cell or marks a drop-off.
@@ -150,6 +189,16 @@ struct StackParams {
   /// points that are no surface are dropped as outliers.
   float change_min_points = 0.0F;
   float change_share = 0.0F;
+  /// Frame budget (docs/integration.md, "The frame budget"): a frame update processes at most
+  /// frame_point_budget points (0: no limit) and starts no chunk of kFrontChunkPoints (128)
+  /// points once frame_time_budget_us microseconds of the platform's monotonic clock have passed
+  /// since it began (0: no limit; the overrun is at most one chunk). With either limit set the
+  /// points are taken chunk by chunk in an interleaved (bit-reversed) order, so that a frame cut
+  /// short covers the whole field of view at a lower density; each chunk is processed whole or
+  /// not at all, and the points left are counted (FrameCounters::skipped_budget). With both 0
+  /// the chunks are taken in order (the update of earlier versions, bitwise).
+  std::uint32_t frame_point_budget = 0U;
+  std::uint32_t frame_time_budget_us = 0U;
   /// Free space from lines of sight (docs/design.md, "Free space from lines of sight"): the
   /// lines of sight walked per frame, from the sensor to an evenly spread subsample of the
   /// frame's points (a whole number in [0, 65535]; 0 switches the feature off at run time: no
@@ -170,7 +219,7 @@ struct StackParams {
 /// CADRE defaults: W_l = 1000, tau = 0.8, min weight 5, obstacles at 75 % of a cell,
 /// 20 deg maximum inclination (tan 20 deg = 0.364), the CADRE stereo model, calibrated
 /// thresholds; the outlier gate at 3 sigma with the change rule 3 points / 8 % (docs/design.md,
-/// "Outlier gate and change", says how they were chosen); free space from 1024 lines of sight per
+/// "Outlier gate and change", says how they were chosen); free space from 512 lines of sight per
 /// frame, a cell cleared after 3 contradicting frames, no sensor view axis (docs/design.md, "Free
 /// space from lines of sight"). Set outlier_gate_sigma = 0 for the paper's update,
 /// free_space_rays = 0 for no free space.

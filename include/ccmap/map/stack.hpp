@@ -96,6 +96,9 @@ class Stack {
     if (status != Status::kOk) {
       return status;
     }
+    if (!kConfigOutlierGate<Config> && params.outlier_gate_sigma > 0.0F) {
+      return Status::kInvalidArgument;  // the gate is not compiled into this Config (map/config.hpp)
+    }
     params_ = params;
     if (layers_.init(params.finest_cell_width_m) != Status::kOk) {
       return Status::kInvalidArgument;
@@ -415,7 +418,7 @@ class Stack {
       too_many = n > 0xFFFFFFFFULL;
     }
     const Status status = ((points == nullptr && n > 0U) || too_many) ? Status::kInvalidArgument
-                                                                      : detail::make_frame_pose(origin, rotation, pose);
+                                                                      : detail::make_frame_pose(origin, rotation, update_.front(), pose);
     if (status != Status::kOk) {
       ++rejected_frames_;
       write_counters(frame, counters);

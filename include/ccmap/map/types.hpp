@@ -89,7 +89,7 @@ struct CellRecord {
 /// What happened to the points of one frame (also accumulated over the life of a stack).
 /// Every received point is counted once, in the frame that received it: received = used +
 /// rejected_non_finite + rejected_out_of_range + rejected_weight + outside_map + too_noisy +
-/// gated_finer + gated_occluded + gated_held + gated_pool_full. A held point is counted again when the change rule decides it
+/// gated_finer + gated_occluded + gated_held + gated_pool_full + skipped_budget. A held point is counted again when the change rule decides it
 /// (gated_admitted or gated_dropped, in that frame or a later one: docs/design.md, "Outlier gate
 /// and change"). The gate counters are 0 with the outlier gate off. The free-space counters
 /// (free_rays .. drop_cells) count lines of sight and cells, not points, and are outside that
@@ -110,6 +110,7 @@ struct FrameCounters {
   std::uint32_t gated_dropped;          ///< held points it dropped as outliers (or whose cell left the map)
   std::uint32_t reseeded_cells;         ///< cells replaced by their held points
   std::uint32_t merged_cells;           ///< cells that took their held points in beside their own
+  std::uint32_t skipped_budget;         ///< not processed: the frame budget was spent (StackParams)
   std::uint32_t free_rays;              ///< lines of sight walked from the sensor to a sampled point
   /// Sampled points whose line of sight was refused: refused points (non-finite, out of range,
   /// too noisy, a bad weight), points behind the sensor, or all of them when no window holds the

@@ -15,8 +15,9 @@
 // the outlier gate's held points awaiting the change rule (map/update/held_pool.hpp: at most
 // kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
 //
-// Format (version 4: version 3 with free space from lines of sight: its parameters, counters and
-// per-cell records). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 5: version 4, the frame budget's parameters and counter, with free space from
+// lines of sight: its parameters, counters and per-cell records). Every field is little-endian,
+// written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -36,6 +37,7 @@
 //                   normal_variance_threshold[0..7]
 //                4  finest_max_sigma_m
 //               12  outlier_gate_sigma, change_min_points, change_share
+//                8  frame_point_budget, frame_time_budget_us (uint32 each)
 //               20  free_space_rays, free_space_clear_frames, sensor_view_axis[0..2]
 //               20  noise model: kind (u8), weight mode (u8), 2 reserved 0, stereo k = sigma_d/(f b)
 //                   (1/m), lidar sigma0 (m), lidar sigma per m, reference range (m)
@@ -48,16 +50,17 @@
 //   records         with free space, per layer (finest first) side*side free-space records in the
 //                   same window order: bound code (uint16), evidence (uint8), state (uint8)
 //                   (map/visibility/free_space_cell.hpp); nothing without free space
-//   counters    76  total FrameCounters (19 x uint32, in declaration order)
+//   counters    80  total FrameCounters (20 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
 //
 // Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
-// (CcmCell with s_xy); version 3 the outlier gate; version 4 free space. A version-1 snapshot is
-// refused with kVersionMismatch: its 9-float cells hold no lateral covariance, and a full-cell map
-// rebuilt from them would answer differently. Versions 2 and 3 are refused likewise (a map
-// without the records would answer no drop-off the saved one answered).
+// (CcmCell with s_xy); version 3 the outlier gate's parameters and counters; version 4 the frame
+// budget's; version 5 free space (its shape field, parameters, counters and records). A version-1
+// snapshot is refused with kVersionMismatch: its 9-float cells hold no lateral covariance, and a
+// full-cell map rebuilt from them would answer differently. Versions 2 to 4 are refused likewise
+// (a map without the records would answer no drop-off the saved one answered).
 //
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
 //   kInvalidArgument  data == nullptr
@@ -86,7 +89,7 @@
 namespace ccmap {
 
 /// Format version written by this library; load_snapshot accepts exactly this version.
-inline constexpr std::uint16_t kSnapshotFormatVersion = 4U;
+inline constexpr std::uint16_t kSnapshotFormatVersion = 5U;
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32): pass 0 as `crc` for the first block, the previous
 /// result to continue. crc32_update(0, "123456789", 9) == 0xCBF43926. data may be nullptr
@@ -100,11 +103,12 @@ static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 t
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
+
 inline constexpr std::size_t kSnapshotFreeSpaceShapeBytes = 8U;
-inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 5U) + 20U;
+inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U + 5U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
 inline constexpr std::size_t kSnapshotFreeSpaceRecordBytes = 4U;
-inline constexpr std::size_t kSnapshotCountersBytes = 19U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotCountersBytes = 20U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
 /// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
@@ -439,8 +443,8 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 516,408 bytes (PaperCell<CadreConfig>: 475,448; WithFreeSpace<CadreConfig, false>:
-/// 459,064;
+/// CadreConfig: 516,420 bytes (PaperCell<CadreConfig>: 475,460; WithFreeSpace<CadreConfig, false>:
+/// 459,076;
 /// docs/integration.md lists every preset).
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {

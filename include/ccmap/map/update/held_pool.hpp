@@ -26,8 +26,9 @@
 
 namespace ccmap::detail {
 
-/// Slots of a pool: cells with held points. docs/performance.md ("Outlier gate: what it costs")
-/// gives the slots a CADRE traverse with 1 % of its pixels mismatched takes.
+/// Slots of a pool by default (Config::kHeldSlots overrides it, map/config.hpp): cells with
+/// held points. docs/performance.md ("Outlier gate: what it costs") gives the slots a CADRE
+/// traverse with 1 % of its pixels mismatched takes.
 inline constexpr std::size_t kHeldSlots = 512U;
 /// A slot whose points have not come to a decision after this many frames is dropped.
 inline constexpr std::uint32_t kMaxHeldFrames = 8U;
@@ -78,12 +79,6 @@ class HeldPool {
     return &slot;
   }
 
-  /// Slot of cell `cell`, or nullptr.
-  [[nodiscard]] Slot* find(std::uint32_t cell) noexcept {
-    const std::uint16_t tag = tags_[cell];
-    return (tag & kSlotBit) != 0U ? &slots_[tag & kIndexMask] : nullptr;
-  }
-
   /// The end of a frame: keep(slot) for every slot in the order they were taken; a slot is
   /// kept (its frames raised) if keep returns true, freed otherwise. Then every tag is reset
   /// for the next frame (kept slots keep theirs).
@@ -127,7 +122,6 @@ class HeldPool {
   }
 
   [[nodiscard]] std::uint32_t used() const noexcept { return used_; }
-  [[nodiscard]] const Slot* slots() const noexcept { return slots_; }
 
  private:
   static constexpr std::uint16_t kSlotBit = 0x8000U;

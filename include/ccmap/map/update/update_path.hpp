@@ -1,206 +1,268 @@
-// The per-frame update path of a stack: the integer front of every point (map/update/front.hpp),
-// the back half that walks the layers and updates one cell, and the per-frame batches of the
-// piece-wise constant Kalman layer. Owned by Stack<Config>; integrators need not read it.
+// The per-frame update path of a stack: chunks of points through the front, then each point to
+// one cell. Owned by Stack<Config>; integrators need not read it. One job per file:
+//   map/update/front.hpp         validation, transform, range, routing, finest index (vectorised)
+//   map/update/kalman_batch.hpp  the Kalman layer's frame batch and its integer gate
+//   map/update/layer_walk.hpp    the walk to the first window that holds a point; eq. (2)
+//   map/update/gate.hpp          the outlier gate of CCM and OMG points, the held points
+//   map/update/line_of_sight.hpp the gate's line-of-sight check
+//   map/update/change.hpp        the change rule at the end of a frame
+//   map/update/held_pool.hpp     where held points wait
+// Data flows one way: point -> front -> (Kalman batch | walk -> gate -> one cell update).
 //
-// Data flows one way: point -> front (validate, transform, range, route, index) -> the routed
-// layer or the first coarser one whose window holds the point -> one cell update.
-// No heap, no exceptions; O(points) per frame plus O(touched Kalman cells).
+// Per chunk, two passes: the points routed to a Kalman finest layer inside its window (81 % of a
+// CADRE frame) are summed into their cells' batches (a few integer operations each), the rest
+// are listed and walk the layers (CCM and OMG cells, refusals, per-point weights).
 //
-// With the outlier gate on (StackParams::outlier_gate_sigma > 0; docs/design.md, "Outlier gate
-// and change"), a point outside its cell's gate is held back (CCM and OMG cells: in the frame's
-// HeldPool, map/update/held_pool.hpp; Kalman cells: in their frame batch) and the end of the
-// frame drops, merges or re-seeds per cell (change_verdict, cell/outlier_gate.hpp).
+// The frame budget (StackParams::frame_point_budget, frame_time_budget_us; docs/integration.md,
+// "The frame budget"): with a budget the chunks are taken in bit-reversed order, so that a frame
+// cut short covers the whole field of view at a lower density; a chunk is processed whole or not
+// at all, and the points of chunks not taken are counted (skipped_budget). Without a budget the
+// chunks are taken in order.
 //
-// Cost (docs/performance.md): under QEMU user mode every float instruction is a soft-float
-// helper call, so the back half forms a CCM cell's relative position in fixed point (one
-// conversion per axis), the Kalman batch takes no float operation per point (its gate is an
-// integer compare against a reference set once per cell and frame) and the CCM and OMG gates
-// are 6 float operations without division.
+// No heap, no exceptions; O(points) per frame plus O(cells of the finest layer and of the held
+// points' pools).
 #pragma once
 
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
-#include "ccmap/cell/outlier_gate.hpp"
 #include "ccmap/map/config.hpp"
-#include "ccmap/map/update/front.hpp"
-#include "ccmap/map/update/held_pool.hpp"
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/types.hpp"
+#include "ccmap/map/update/change.hpp"
+#include "ccmap/map/update/front.hpp"
+#include "ccmap/map/update/gate.hpp"
+#include "ccmap/map/update/kalman_batch.hpp"
+#include "ccmap/map/update/layer_walk.hpp"
+#include "ccmap/platform/platform.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap::detail {
 
-/// Position relative to a cell centre, from a Q18 coordinate and the cell's index: the exact
-/// integer (q + 1/2) * 2^22 - (i + 1/2) * w * 2^40 in Q40 (w * 2^40 is an exact integer for every
-/// float width of 2^-17 m or more, so for every width the stack accepts), converted once to float: one rounding (relative
-/// 2^-24), against three for x - (i + 0.5) * w in float. The + 1/2 Q18 unit centres the floor of
-/// the Q18 conversion (unbiased; |error| <= 1.9 um).
-[[nodiscard]] inline float relative_to_centre(std::int64_t q18, std::int32_t index, std::int64_t width_q40) noexcept {
-  constexpr std::int64_t kHalfQ18InQ40 = std::int64_t{1} << 21;
-  // |q18| < 2^35 -> |q40| < 2^57; |index * width_q40| <= 1e5 m * 2^40 < 2^57: no overflow.
-  const std::int64_t point_q40 = q18 * (std::int64_t{1} << 22) + kHalfQ18InQ40;
-  const std::int64_t centre_q40 = static_cast<std::int64_t>(index) * width_q40 + width_q40 / 2;
-  const std::int64_t relative = point_q40 - centre_q40;
-  return static_cast<float>(relative) * 9.09494702e-13F;  // 2^-40
+/// Chunk `j` of a frame of `chunks` chunks in the budget's order: the bit-reversed sequence of
+/// [0, 2^bits) with the values >= chunks left out (next_budget_chunk walks it).
+[[nodiscard]] inline std::uint32_t reverse_bits(std::uint32_t v, std::uint32_t bits) noexcept {
+  std::uint32_t r = 0U;
+  for (std::uint32_t b = 0U; b < bits; ++b) {
+    r = (r << 1U) | ((v >> b) & 1U);
+  }
+  return r;
 }
 
 template <typename Config>
 class UpdatePath {
  public:
   using Layers = LayerSet<Config>;
+  static constexpr bool kKalman = Config::kFineKind == FineKind::kKalman;
+  static constexpr bool kGateCompiled = kConfigOutlierGate<Config>;
+  using Gate = OutlierGate<Config>;
+  using Batch = KalmanBatch<kKalman ? Layers::kFineCellCount : 1U>;
 
-  /// Derives the front (index scale, routing bounds in fixed point), the cell widths in Q40, the
-  /// weighting mode and the outlier gate of every layer. max_range_sq_m2: the routing table's
-  /// squared ranges (m^2), per layer. Empties the frame batches and the held points.
+  /// Derives the front (index scale, routing bounds), the gate's constants and the budget.
+  /// max_range_sq_m2: the routing table's squared ranges (m^2), per layer. Empties the frame
+  /// batches and the held points. kInvalidArgument if the front refuses the width or bounds.
   [[nodiscard]] Status init(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
     const Status status = make_front_config(layers.widths[0], max_range_sq_m2, Layers::kLayerCount, &front_);
-    for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
-      // Exact: a float width >= 2^-17 m times 2^40 is an integer below 2^47 (validated widths).
-      width_q40_[layer] = floor_to_int64(layers.widths[layer] * 1099511627776.0F);
-    }
     constant_weight_ = params.noise.weight_mode() == sensor::WeightMode::kConstant;
-    stereo_ = params.noise.kind() == sensor::SensorKind::kStereo && params.noise.validate() == Status::kOk;
-    stereo_k_ = stereo_ ? params.noise.stereo_sigma_per_range_sq() : 0.0F;
-    gate_on_ = params.outlier_gate_sigma > 0.0F;
-    rule_ = ChangeRule{params.change_min_points, params.change_share};
-    line_of_sight_ = gate_on_ && params.noise.kind() == sensor::SensorKind::kStereo;
-    for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
-      const float sigma = layer_max_sigma(params, max_range_sq_m2[layer], layers.widths[layer], layer);
-      const float floor_variance = gate_floor_variance(sigma, layers.widths[layer], params.max_inclination);
-      gate_[layer] = make_gate_constants(params.outlier_gate_sigma, floor_variance);
-      sight_margin_[layer] = params.outlier_gate_sigma * std::sqrt(floor_variance);
+    if constexpr (kGateCompiled) {
+      gate_.init(params, max_range_sq_m2, layers);
     }
-    if constexpr (kKalman) {
-      fine_touched_count_ = 0U;
-      for (FineFrameSum& sum : fine_sums_) {
-        sum = FineFrameSum{};
-      }
-    }
-    ccm_held_.clear();
-    fine_held_.clear();
+    batch_.clear();
+    point_budget_ = params.frame_point_budget;
+    time_budget_ns_ = std::uint64_t{params.frame_time_budget_us} * 1000U;
     return status;
   }
 
-  /// The largest range noise (m) layer `layer` (cell width `width`) receives: sigma_m at its
-  /// routing bound max_range_sq_m2 (m^2; a point reaches a layer only from a range within the
-  /// bound of the layer it was routed to, which is at most this one's), capped by what the
-  /// routing admits (a CCM layer's IV-G bound, finest_max_sigma_m for a constant finest layer)
-  /// where that is smaller or sigma_m is not finite.
-  [[nodiscard]] static float layer_max_sigma(const StackParams& params, float max_range_sq_m2, float width,
-                                             int layer) noexcept {
-    const float admitted = Layers::is_ccm(layer) ? sensor::max_sigma_for_cell_width(width) : params.finest_max_sigma_m;
-    const float sigma = params.noise.sigma_at_range_sq(max_range_sq_m2);
-    return sigma <= admitted ? sigma : admitted;
-  }
+  [[nodiscard]] const FrontConfig& front() const noexcept { return front_; }
 
   /// Folds map-frame points (weights may be nullptr: the noise model weighs them).
   void run_map(Layers& layers, const StackParams& params, const PointXYZ* points, const float* weights, std::size_t n,
                const FramePose& pose, FrameCounters& frame) noexcept {
-    begin_frame(layers, pose, frame);
     const bool unit_weights = weights == nullptr && constant_weight_;
-    for (std::size_t begin = 0; begin < n; begin += kFrontChunkPoints) {
-      const std::size_t count = n - begin < kFrontChunkPoints ? n - begin : kFrontChunkPoints;
-      front_map_chunk(points + begin, count, pose, front_, chunk_);
-      const float* chunk_weights = weights != nullptr ? weights + begin : nullptr;
-      if (gate_on_) {
-        back_half<true>(layers, params, points + begin, chunk_weights, count, unit_weights, frame);
-      } else {
-        back_half<false>(layers, params, points + begin, chunk_weights, count, unit_weights, frame);
-      }
-    }
-    finish_frame(layers, params, frame);
+    run(layers, params, n, pose, frame, [&](std::size_t begin, std::size_t count, const FineWindow& fine) {
+      front_map_chunk(points + begin, count, pose, front_, fine, chunk_);
+      return weights != nullptr ? weights + begin : nullptr;
+    }, unit_weights);
   }
 
-  /// Folds sensor-frame points with the frame's fixed-point pose (make_frame_pose with a rotation).
+  /// Folds sensor-frame points with the frame's pose (make_frame_pose with a rotation).
   void run_sensor(Layers& layers, const StackParams& params, const PointXYZ* points, std::size_t n,
                   const FramePose& pose, FrameCounters& frame) noexcept {
-    begin_frame(layers, pose, frame);
-    for (std::size_t begin = 0; begin < n; begin += kFrontChunkPoints) {
-      const std::size_t count = n - begin < kFrontChunkPoints ? n - begin : kFrontChunkPoints;
-      front_sensor_chunk(points + begin, count, pose, front_, chunk_);
-      if (gate_on_) {
-        back_half<true>(layers, params, nullptr, nullptr, count, constant_weight_, frame);
-      } else {
-        back_half<false>(layers, params, nullptr, nullptr, count, constant_weight_, frame);
-      }
-    }
-    finish_frame(layers, params, frame);
+    run(layers, params, n, pose, frame, [&](std::size_t begin, std::size_t count, const FineWindow& fine) {
+      front_sensor_chunk(points + begin, count, pose, front_, fine, chunk_);
+      return static_cast<const float*>(nullptr);
+    }, constant_weight_);
   }
 
-  [[nodiscard]] const FrontConfig& front() const noexcept { return front_; }
   /// Cells whose held points await the change rule (CCM layers; the finest layer).
-  [[nodiscard]] std::uint32_t pending_ccm_cells() const noexcept { return ccm_held_.used(); }
-  [[nodiscard]] std::uint32_t pending_fine_cells() const noexcept { return fine_held_.used(); }
+  [[nodiscard]] std::uint32_t pending_ccm_cells() const noexcept {
+    if constexpr (kGateCompiled) {
+      return gate_.pending_ccm_cells();
+    } else {
+      return 0U;
+    }
+  }
+  [[nodiscard]] std::uint32_t pending_fine_cells() const noexcept {
+    if constexpr (kGateCompiled) {
+      return gate_.pending_fine_cells();
+    } else {
+      return 0U;
+    }
+  }
   /// Slots the last frame had taken at its end, before the change rule (both pools).
-  [[nodiscard]] std::uint32_t last_frame_slots() const noexcept { return last_frame_slots_; }
+  [[nodiscard]] std::uint32_t last_frame_slots() const noexcept {
+    if constexpr (kGateCompiled) {
+      return gate_.last_frame_slots();
+    } else {
+      return 0U;
+    }
+  }
 
  private:
-  static constexpr bool kKalman = Config::kFineKind == FineKind::kKalman;
-  static constexpr bool kCcmPool = Layers::kCcmLayerCount > 0;
-  static constexpr bool kFinePool = Layers::kHasFine;
-
-  /// CCM cells as the layers store them.
-  using CcmCellType = std::remove_all_extents_t<decltype(Layers::ccm_storage)>;
-  using FineCell = typename Layers::FineCell;
-  /// Held points of a Kalman cell: the sums of its frame batch, and their spread for the change
-  /// rule (Welford, in float, of the heights about the first held one: rare points, not the hot
-  /// path).
-  struct KalmanHeld {
-    std::int64_t sum_height_q14;  ///< sum of floor(z * 2^14)
-    std::uint64_t sum_range_key;  ///< sum of routing keys (squared ranges, 2^-12 m^2)
-    std::int32_t origin_q14;      ///< the first held height, floor(z * 2^14)
-    float mean_m;                 ///< mean of the held heights minus the origin (m)
-    float spread_sum;             ///< sum of squared deviations from that mean (m^2)
-  };
-  using FineHeld = std::conditional_t<kKalman, KalmanHeld, OmgCell>;
-
-  static constexpr std::size_t kFineBatchSlots = kKalman ? Layers::kFineCellCount : 1U;
-  static constexpr std::size_t kCcmPoolCells = kCcmPool ? Layers::kCcmCellCount : 1U;
-  static constexpr std::size_t kCcmPoolSlots = kCcmPool ? kHeldSlots : 1U;
-  static constexpr std::size_t kFinePoolCells = kFinePool ? Layers::kFineCellCount : 1U;
-  static constexpr std::size_t kFinePoolSlots = kFinePool ? kHeldSlots : 1U;
-  using CcmPool = HeldPool<CcmCellType, kCcmPoolCells, kCcmPoolSlots>;
-  using FinePool = HeldPool<FineHeld, kFinePoolCells, kFinePoolSlots>;
-
   /// Counts of one chunk, kept in registers and added to the frame's counters once.
   struct ChunkCounts {
     std::uint32_t used = 0U, non_finite = 0U, out_of_range = 0U, too_noisy = 0U, bad_weight = 0U, outside = 0U,
                   finer = 0U, occluded = 0U, held = 0U, pool_full = 0U;
   };
 
-  /// Back half of one chunk. `map_points` is the caller's map-frame chunk (the CCM and OMG
-  /// updates take the float z from it), or nullptr for sensor-frame input (z from the Q18 position).
-  /// kGate: the outlier gate is on (gate_on_), chosen once per chunk so that the paper's update
-  /// runs the code it ran before the gate.
-  template <bool kGate>
-  // cppcheck-suppress unusedPrivateFunction ; called as back_half<true> / back_half<false>
-  void back_half(Layers& layers, const StackParams& params, const PointXYZ* map_points, const float* weights,
-                 std::size_t count, bool unit_weights, FrameCounters& frame) noexcept {
-    ChunkCounts c{};
-    // The Kalman batch entry, the common case (81 % of a CADRE frame): a point routed to the
-    // finest layer inside its window, no per-point weight. The window is constant over the frame.
-    const CellIndex fine_min = kKalman ? layers.fine.window_min() : CellIndex{0, 0};
-    for (std::size_t i = 0; i < count; ++i) {
-      const std::int32_t code = chunk_.code[i];
-      if constexpr (kKalman) {
-        if (code == 0 && unit_weights) {
-          // Unsigned wrap: inside iff 0 <= index - min < side (|index|, |min| <= 2^30 + 2^14).
-          constexpr auto kSide = static_cast<std::uint32_t>(Config::kFineSide);
-          const std::uint32_t rx = static_cast<std::uint32_t>(chunk_.ix0[i]) - static_cast<std::uint32_t>(fine_min.x);
-          const std::uint32_t ry = static_cast<std::uint32_t>(chunk_.iy0[i]) - static_cast<std::uint32_t>(fine_min.y);
-          // cppcheck-suppress unsignedLessThanZero ; kSide is 0 only where kKalman is false
-          if (rx < kSide && ry < kSide) {
-            kalman_point<kGate>(layers, CellIndex{chunk_.ix0[i], chunk_.iy0[i]}, i, c);
-            continue;
-          }
+  /// One frame: the chunks in order (no budget) or in the budget's order until it is spent,
+  /// then the end of the frame. front(begin, count, fine) fills chunk_ and returns the chunk's
+  /// weights (or nullptr).
+  template <typename Front>
+  void run(Layers& layers, const StackParams& params, std::size_t n, const FramePose& pose, FrameCounters& frame,
+           Front&& front, bool unit_weights) noexcept {
+    begin_frame(layers, pose, frame);
+    const bool gate = gate_on();
+    const auto chunks = static_cast<std::uint32_t>((n + kFrontChunkPoints - 1U) / kFrontChunkPoints);
+    auto one_chunk = [&](std::uint32_t c) {
+      const std::size_t begin = std::size_t{c} * kFrontChunkPoints;
+      const std::size_t count = n - begin < kFrontChunkPoints ? n - begin : kFrontChunkPoints;
+      const float* weights = front(begin, count, fine_window_);
+      if constexpr (kGateCompiled) {
+        if (gate) {
+          back_half<true>(layers, params, weights, count, unit_weights, frame);
+          return count;
         }
       }
-      apply<kGate>(layers, params, i, map_points, weights, unit_weights, c);
+      back_half<false>(layers, params, weights, count, unit_weights, frame);
+      return count;
+    };
+    if (point_budget_ == 0U && time_budget_ns_ == 0U) {
+      for (std::uint32_t c = 0; c < chunks; ++c) {
+        (void)one_chunk(c);
+      }
+    } else {
+      std::uint32_t bits = 0U;
+      while ((std::uint64_t{1} << bits) < chunks) {
+        ++bits;
+      }
+      const std::uint64_t start = time_budget_ns_ > 0U ? platform::monotonic_ns() : 0U;
+      std::size_t done = 0U;
+      for (std::uint64_t j = 0; j < (std::uint64_t{1} << bits); ++j) {
+        const std::uint32_t c = reverse_bits(static_cast<std::uint32_t>(j), bits);
+        if (c >= chunks) {
+          continue;
+        }
+        const std::size_t begin = std::size_t{c} * kFrontChunkPoints;
+        const std::size_t count = n - begin < kFrontChunkPoints ? n - begin : kFrontChunkPoints;
+        if (point_budget_ > 0U && done + count > point_budget_) {
+          break;  // this chunk would exceed the budget: it and the rest are skipped
+        }
+        if (time_budget_ns_ > 0U && done > 0U && platform::monotonic_ns() - start >= time_budget_ns_) {
+          break;
+        }
+        done += one_chunk(c);
+      }
+      frame.skipped_budget += static_cast<std::uint32_t>(n - done);
+    }
+    finish_frame(layers, params, frame);
+  }
+
+  [[nodiscard]] bool gate_on() const noexcept {
+    if constexpr (kGateCompiled) {
+      return gate_.on();
+    } else {
+      return false;
+    }
+  }
+
+  /// The start of a frame: the walk's windows, the finest layer's window for the front's Kalman
+  /// slots, the Kalman gate's intervals, the gate's camera and the slots of cells that left.
+  void begin_frame(const Layers& layers, const FramePose& pose, FrameCounters& frame) noexcept {
+    walk_.begin_frame(layers);
+    if constexpr (kKalman) {
+      const CellIndex min = layers.window_min(0);
+      std::int32_t log2 = 0;
+      while ((std::int32_t{1} << log2) < Config::kFineSide) {
+        ++log2;
+      }
+      fine_window_ = FineWindow{min, Config::kFineSide, log2};
+    } else {
+      fine_window_ = FineWindow{CellIndex{0, 0}, 0, 0};
+    }
+    if constexpr (kGateCompiled) {
+      if (gate_.on()) {
+        if constexpr (kKalman) {
+          batch_.begin_frame(layers.fine_storage, gate_.constants(0));
+        }
+        gate_.begin_frame(layers, pose, frame);
+      }
+    } else {
+      (void)pose;
+      (void)frame;
+    }
+  }
+
+  /// Back half of one chunk. kGate: the outlier gate is on, chosen once per chunk so that the
+  /// paper's update runs no gate instruction.
+  template <bool kGate>
+  void back_half(Layers& layers, const StackParams& params, const float* weights, std::size_t count,
+                 bool unit_weights, FrameCounters& frame) noexcept {
+    ChunkCounts c{};
+    std::size_t others = 0U;
+    if constexpr (kKalman) {
+      if (unit_weights) {
+        // Pass 1: the Kalman batch entries, the common case, in runs of one cell.
+        const GateConstants& gate0 = gate_constants(0);
+        typename Batch::Run run{};
+        for (std::size_t i = 0; i < count; ++i) {
+          const std::int32_t slot = chunk_.fine_slot[i];
+          if (slot < 0) {
+            others_[others++] = static_cast<std::uint16_t>(i);
+            continue;
+          }
+          if (slot != run.slot) {
+            batch_.start(run, slot);
+          }
+          if constexpr (kGate) {
+            if (!batch_.template add<true>(run, chunk_.height_q14[i], chunk_.range_key[i], gate0)) {
+              const CellIndex index{chunk_.ix0[i], chunk_.iy0[i]};
+              count_outcome(gate_.hold_kalman(static_cast<std::uint32_t>(slot), index, chunk_.height_q14[i],
+                                              chunk_.range_key[i]),
+                            c);
+            }
+          } else {
+            (void)batch_.template add<false>(run, chunk_.height_q14[i], chunk_.range_key[i], gate0);
+          }
+        }
+        batch_.flush(run);
+        c.used += run.flushed;
+      } else {
+        for (std::size_t i = 0; i < count; ++i) {
+          others_[others++] = static_cast<std::uint16_t>(i);
+        }
+      }
+    } else {
+      for (std::size_t i = 0; i < count; ++i) {
+        others_[others++] = static_cast<std::uint16_t>(i);
+      }
+    }
+    // Pass 2: everything else walks the layers.
+    for (std::size_t j = 0; j < others; ++j) {
+      apply<kGate>(layers, params, others_[j], weights, unit_weights, c);
     }
     frame.used += c.used;
     frame.rejected_non_finite += c.non_finite;
@@ -214,14 +276,57 @@ class UpdatePath {
     frame.gated_pool_full += c.pool_full;
   }
 
-  /// Every other entry: refusals, weights, the layer walk. The walk uses index_k = index_0 >> k
-  /// (floor division by 2^k): widths are w_0 * 2^k exactly and 1/w_k = (1/w_0) * 2^-k exactly in
-  /// float, so floor(q / w_k) = floor(floor(q / w_0) / 2^k), the index locate() computes. (>> of
-  /// a negative int32 is an arithmetic shift with gcc and clang, the floor division; C++20 makes
-  /// it standard.)
+  [[nodiscard]] const GateConstants& gate_constants(int layer) const noexcept {
+    if constexpr (kGateCompiled) {
+      return gate_.constants(layer);
+    } else {
+      (void)layer;
+      return no_gate_;
+    }
+  }
+
+  /// A point of the Kalman frame batch in cell slot `slot` of the finest layer.
   template <bool kGate>
-  void apply(Layers& layers, const StackParams& params, std::size_t i, const PointXYZ* map_points,
-             const float* weights, bool unit_weights, ChunkCounts& c) noexcept {
+  void kalman_point(Layers& layers, std::uint32_t slot, std::size_t i, const GateConstants& gate0,
+                    ChunkCounts& c) noexcept {
+    if constexpr (kKalman) {
+      const std::int32_t h = chunk_.height_q14[i];
+      const std::int32_t key = chunk_.range_key[i];
+      if constexpr (kGate) {
+        if (!batch_.template add<true>(slot, h, key, gate0)) {
+          const CellIndex index{chunk_.ix0[i], chunk_.iy0[i]};
+          count_outcome(gate_.hold_kalman(slot, index, h, key), c);
+        } else {
+          ++c.used;
+        }
+      } else {
+        (void)batch_.template add<false>(slot, h, key, gate0);  // always inside without the gate
+        ++c.used;
+      }
+    } else {
+      (void)layers;
+      (void)slot;
+      (void)i;
+      (void)gate0;
+      (void)c;
+    }
+  }
+
+  /// Adds a gate outcome other than kFold to the chunk's counts.
+  static void count_outcome(GateOutcome outcome, ChunkCounts& c) noexcept {
+    switch (outcome) {
+      case GateOutcome::kFiner: ++c.finer; break;
+      case GateOutcome::kOccluded: ++c.occluded; break;
+      case GateOutcome::kHeld: ++c.held; break;
+      case GateOutcome::kPoolFull: ++c.pool_full; break;
+      case GateOutcome::kFold: ++c.used; break;
+    }
+  }
+
+  /// Every other entry: refusals, weights, the walk, one CCM, Kalman or OMG cell.
+  template <bool kGate>
+  void apply(Layers& layers, const StackParams& params, std::size_t i, const float* weights, bool unit_weights,
+             ChunkCounts& c) noexcept {
     const std::int32_t code = chunk_.code[i];
     if (code >= std::int32_t{kFrontNonFinite}) {
       c.non_finite += code == std::int32_t{kFrontNonFinite} ? 1U : 0U;
@@ -231,7 +336,7 @@ class UpdatePath {
     }
     float weight = 1.0F;  // the constant model's weight: always valid
     if (!unit_weights) {
-      weight = weights != nullptr ? weights[i] : params.noise.weight_at_range_sq(to_range_sq_m2(chunk_.range_sq[i]));
+      weight = weights != nullptr ? weights[i] : params.noise.weight_at_range_sq(chunk_.range_sq[i]);
       if (ccm_check_weight(weight) != Status::kOk) {
         ++c.bad_weight;
         return;
@@ -239,423 +344,100 @@ class UpdatePath {
     }
     const std::int32_t ix0 = chunk_.ix0[i];
     const std::int32_t iy0 = chunk_.iy0[i];
-    for (int layer = code; layer < Layers::kLayerCount; ++layer) {
-      const CellIndex index{ix0 >> layer, iy0 >> layer};
-      if (Layers::is_ccm(layer)) {
-        auto& grid = layers.ccm_grid(layer);
-        if (!grid.contains(index)) {
-          continue;
-        }
-        const std::int64_t width_q40 = width_q40_[layer];
-        auto& cell = grid.cell_unchecked(index);
-        const float x = relative_to_centre(chunk_.q18[0][i], index.x, width_q40);
-        const float y = relative_to_centre(chunk_.q18[1][i], index.y, width_q40);
-        const float z = height(i, map_points);
-        if constexpr (kGate) {
-          if (contradicted_by_finer(layers, layer, ix0, iy0, z)) {
-            ++c.finer;
-            return;
-          }
-          if (line_of_sight_ && occluded(layers, layer, i, z)) {
-            ++c.occluded;
-            return;
-          }
-          const auto number = static_cast<std::uint32_t>(&cell - layers.ccm_storage);
-          if (ccm_outside_gate(cell, z, gate_[layer])) {
-            if (auto* slot = hold(ccm_held_, number, index, layer, c)) {
-              ccm_update_unchecked(slot->held, x, y, z, weight, params.weight_limit);
-            }
-            return;
-          }
-          ccm_held_.accept(number);
-        }
-        ccm_update_unchecked(cell, x, y, z, weight, params.weight_limit);
-        ++c.used;
-        return;
-      }
-      if constexpr (Layers::kHasFine) {
-        if (!layers.fine.contains(index)) {
-          continue;
-        }
-        if constexpr (kKalman) {
-          kalman_point<kGate>(layers, index, i, c);  // Kalman gains come from the range variance, not from weights
-        } else {
-          FineCell& cell = layers.fine.cell_unchecked(index);
-          const float variance = fine_measurement_variance(params, to_range_sq_m2(chunk_.range_sq[i]));
-          const float z = height(i, map_points);
-          if constexpr (kGate) {
-            const auto number = static_cast<std::uint32_t>(&cell - layers.fine_storage);
-            if (omg_outside_gate(cell, z, gate_[layer])) {
-              if (auto* slot = hold(fine_held_, number, index, layer, c)) {
-                omg_update_unchecked(slot->held, z, variance, weight, params.weight_limit);
-              }
-              return;
-            }
-            fine_held_.accept(number);
-          }
-          omg_update_unchecked(cell, z, variance, weight, params.weight_limit);
-          ++c.used;
-        }
-        return;
-      }
+    const typename LayerWalk<Config>::Hit hit = walk_.find(code, ix0, iy0);
+    if (hit.layer >= Layers::kLayerCount) {
+      ++c.outside;
+      return;
     }
-    ++c.outside;
-  }
-
-  /// True if the next finer layer's cell at the point (finest indices ix0, iy0) holds points and
-  /// z lies outside that cell's gate with the constants of the point's own layer (its range
-  /// noise class). A point routed by its range to a coarse layer while a finer layer knows the
-  /// ground there is, when the two disagree, a range error: a stereo mismatch far along a steep
-  /// near ray lands metres underground in a cell whose own direct points come only from such
-  /// errors (the ground at that place is nearer and goes to the finer layer); the finer cell,
-  /// made of more precise points, is the better judge (docs/design.md, "Outlier gate and change").
-  [[nodiscard]] bool contradicted_by_finer(const Layers& layers, int layer, std::int32_t ix0, std::int32_t iy0,
-                                           float z) const noexcept {
-    if (layer == 0) {
-      return false;
-    }
-    const int finer = layer - 1;
-    const CellIndex index{ix0 >> finer, iy0 >> finer};
-    const GateConstants& gate = gate_[layer];
-    if (Layers::is_ccm(finer)) {
-      const auto& grid = layers.ccm_grid(finer);
-      return grid.contains(index) && ccm_outside_gate(grid.cell_unchecked(index), z, gate);
-    }
-    if constexpr (Layers::kHasFine) {
-      if (!layers.fine.contains(index)) {
-        return false;
-      }
-      if constexpr (kKalman) {
-        return kalman_outside_gate(layers.fine.cell_unchecked(index), z, gate);
-      } else {
-        return omg_outside_gate(layers.fine.cell_unchecked(index), z, gate);
-      }
-    } else {
-      return false;
-    }
-  }
-
-  /// True if the point's line of sight from the sensor passes under known ground at its middle:
-  /// at the midpoint of sensor and point (Q18, floored), the finest layer (up to the point's own)
-  /// whose window holds it and whose cell there holds points has a height (a CCM cell's mean, a
-  /// constant cell's height) above the line by more than the margin k sqrt(V) of the point's
-  /// layer. Such a point cannot have been seen: a range too long for its ray (a stereo mismatch,
-  /// docs/design.md, "Outlier gate and change"). Stereo only: a stereo frame's origin is its
-  /// camera; map-frame lidar clouds may come with a nominal origin.
-  [[nodiscard]] bool occluded(const Layers& layers, int layer, std::size_t i, float z) const noexcept {
-    const std::int64_t mx = (chunk_.q18[0][i] + sight_origin_q18_[0]) >> 1;
-    const std::int64_t my = (chunk_.q18[1][i] + sight_origin_q18_[1]) >> 1;
-    // The finest index of the midpoint, as the front computes it: floor(q * fl(1 / w_0)).
-    const auto ix0 = static_cast<std::int32_t>((mx * front_.index_mult) >> front_.index_shift);
-    const auto iy0 = static_cast<std::int32_t>((my * front_.index_mult) >> front_.index_shift);
-    const float line = 0.5F * (z + sight_origin_z_);
-    for (int k = 0; k <= layer; ++k) {
-      const CellIndex index{ix0 >> k, iy0 >> k};
-      float ground = 0.0F;
-      bool known = false;
-      if (Layers::is_ccm(k)) {
-        const auto& grid = layers.ccm_grid(k);
-        if (!grid.contains(index)) {
-          continue;
+    const CellIndex index{ix0 >> hit.layer, iy0 >> hit.layer};
+    if (Layers::is_ccm(hit.layer)) {
+      const float x = walk_.relative(hit.layer, ix0, chunk_.fx[i], front_.width);
+      const float y = walk_.relative(hit.layer, iy0, chunk_.fy[i], front_.width);
+      if constexpr (kGate) {
+        const GateOutcome outcome =
+            gate_.judge_ccm(layers, walk_, hit.layer, hit.number, index, chunk_, i, x, y, weight, params.weight_limit);
+        if (outcome != GateOutcome::kFold) {
+          count_outcome(outcome, c);
+          return;
         }
-        const auto& cell = grid.cell_unchecked(index);
-        known = cell.weight > 0.0F;
-        ground = cell.mean_z;
-      } else if constexpr (Layers::kHasFine) {
-        if (!layers.fine.contains(index)) {
-          continue;
+      }
+      ccm_update_unchecked(layers.ccm_storage[hit.number], x, y, chunk_.z[i], weight, params.weight_limit);
+      ++c.used;
+      return;
+    }
+    if constexpr (kKalman) {
+      // Kalman gains come from the range variance, not from weights.
+      kalman_point<kGate>(layers, hit.number, i, gate_constants(0), c);
+    } else if constexpr (Layers::kHasFine) {
+      const float variance = measurement_variance(params, chunk_.range_sq[i]);
+      const float z = chunk_.z[i];
+      if constexpr (kGate) {
+        const GateOutcome outcome = gate_.judge_omg(layers, hit.number, index, z, variance, weight, params.weight_limit);
+        if (outcome != GateOutcome::kFold) {
+          count_outcome(outcome, c);
+          return;
         }
-        const FineCell& cell = layers.fine.cell_unchecked(index);
-        known = cell.weight > 0.0F;
-        ground = cell.height;
       }
-      if (known) {
-        return ground - line > sight_margin_[layer];
-      }
+      omg_update_unchecked(layers.fine_storage[hit.number], z, variance, weight, params.weight_limit);
+      ++c.used;
     }
-    return false;
-  }
-
-  /// The slot of a point outside its cell's gate, counted as held, or nullptr (counted as
-  /// dropped) when every slot of the pool is taken.
-  template <typename Pool>
-  [[nodiscard]] static typename Pool::Slot* hold(Pool& pool, std::uint32_t number, CellIndex index, int layer,
-                                                 ChunkCounts& c) noexcept {
-    typename Pool::Slot* slot = pool.hold(number, index, layer);
-    ++(slot != nullptr ? c.held : c.pool_full);
-    return slot;
-  }
-
-  /// Map-frame height (m) of chunk entry i for the float cell updates: the caller's float for
-  /// map-frame input, the Q18 position rounded once to float (+ half a unit: unbiased) otherwise.
-  [[nodiscard]] float height(std::size_t i, const PointXYZ* map_points) const noexcept {
-    if (map_points != nullptr) {
-      return map_points[i].z;
-    }
-    return static_cast<float>(2 * chunk_.q18[2][i] + 1) * 1.90734863e-6F;  // 2^-19: (q + 1/2) * 2^-18
   }
 
   /// Measurement variance (m^2) of the piece-wise constant layer at squared range r^2 (m^2):
-  /// sigma_m(r)^2, at least kalman_min_variance (which also catches NaN).
-  [[nodiscard]] float fine_measurement_variance(const StackParams& params, float range_sq) const noexcept {
-    // Stereo: sigma = k r^2 inline, the value sigma_at_range_sq returns for the finite positive
-    // ranges that routing lets through; other models call it.
-    const float sigma = stereo_ ? stereo_k_ * range_sq : params.noise.sigma_at_range_sq(range_sq);
+  /// sigma_m(r)^2 from the noise model, at least kalman_min_variance (which also catches NaN).
+  [[nodiscard]] static float measurement_variance(const StackParams& params, float range_sq) noexcept {
+    const float sigma = params.noise.sigma_at_range_sq(range_sq);
     const float variance = sigma * sigma;
     return variance >= params.kalman_min_variance ? variance : params.kalman_min_variance;
   }
 
-  /// One point of the Kalman layer's frame batch: the frame's points of a cell are collected in
-  /// integers (count, Q14 heights, squared ranges as routing keys, 2^-12 m^2: no float operation
-  /// per point) and fused once per frame by finish_fine_frame: n measurements of the variance at
-  /// the cell's mean squared range, i.e. one update with their mean and R / n (docs/design.md,
-  /// "Frame batches"). With the gate on, the cell's first point of the frame sets the gate's
-  /// reference (the cell's height before the frame, or that point's own for a never-observed
-  /// cell) and half-width (kalman_gate_half_width), both floored to Q14; a point whose
-  /// |Q14 height - reference| exceeds the half-width is held in the cell's slot (sums of the
-  /// same kind) instead. Precondition: the fine window contains `index`.
-  template <bool kGate>
-  void kalman_point(Layers& layers, CellIndex index, std::size_t i, ChunkCounts& c) noexcept {
-    if constexpr (kKalman) {
-      const std::size_t slot = grid::buffer_offset(index, Config::kFineSide);
-      FineFrameSum& sum = fine_sums_[slot];
-      const std::int32_t h = chunk_.height_q14[i];
-      if constexpr (!kGate) {
-        if (sum.count == 0U) {  // gate off: every point of the frame is inside (points stays 0)
-          fine_touched_[fine_touched_count_++] = static_cast<std::uint32_t>(slot);
-        }
-      } else {
-        if (sum.points == 0U) {
-          fine_touched_[fine_touched_count_++] = static_cast<std::uint32_t>(slot);
-          const KalmanCell& cell = layers.fine.storage()[slot];
-          sum.reference_q14 = cell.weight > 0.0F ? q14_floor_of(cell.height) : h;
-          sum.gate_q14 = q14_half_width(kalman_gate_half_width(cell, gate_[0]));
-        }
-        ++sum.points;
-        const std::int64_t d = std::int64_t{h} - std::int64_t{sum.reference_q14};
-        if (static_cast<std::uint64_t>(d < 0 ? -d : d) > std::uint64_t{sum.gate_q14}) {
-          if (auto* held = hold(fine_held_, static_cast<std::uint32_t>(slot), index, 0, c)) {
-            KalmanHeld& k = held->held;
-            if (held->count == 1U) {
-              k.origin_q14 = h;
-            }
-            k.sum_height_q14 += h;
-            k.sum_range_key += chunk_.range_key[i];
-            const float v = static_cast<float>(std::int64_t{h} - std::int64_t{k.origin_q14}) * 6.10351562e-5F;  // m
-            const float delta = v - k.mean_m;
-            k.mean_m += delta / static_cast<float>(held->count);
-            k.spread_sum += delta * (v - k.mean_m);
-          }
-          return;
-        }
-      }
-      // |Q14 height| <= 1e5 m * 2^14 < 2^31 and routing keys < 2^32: 2^32 of either stay below
-      // 2^63 / 2^64, so no sum can overflow within one frame (at most 2^32 points), nor a slot's
-      // held sums over kMaxHeldFrames frames of at most 2^32 points each (2^35 < 2^63 / 2^31).
-      ++sum.count;
-      sum.sum_height_q14 += h;
-      sum.sum_range_key += chunk_.range_key[i];
-      ++c.used;
-    } else {
-      (void)layers;
-      (void)index;
-      (void)i;
-      (void)c;
-    }
-  }
-
-  /// floor(v 2^14) for |v| <= 1e5 m (a Kalman cell's height: a mean of accepted heights).
-  [[nodiscard]] static std::int32_t q14_floor_of(float v) noexcept {
-    return static_cast<std::int32_t>(std::floor(v * 16384.0F));
-  }
-  /// floor(v 2^14) of a gate half-width v >= 0 (m), saturated at 2^31 units (131 km).
-  [[nodiscard]] static std::uint32_t q14_half_width(float v) noexcept {
-    const float units = v * 16384.0F;
-    return units < 2147483648.0F ? static_cast<std::uint32_t>(units) : 0x80000000U;
-  }
-
-  /// The start of a frame: a slot whose cell left its layer's window (a move since the last
-  /// frame cleared the cell) is dropped with its points.
-  void begin_frame(const Layers& layers, const FramePose& pose, FrameCounters& frame) noexcept {
-    if (!gate_on_) {
-      return;
-    }
-    for (int a = 0; a < 3; ++a) {
-      sight_origin_q18_[a] = pose.origin_q18[a];
-    }
-    sight_origin_z_ = q18_to_float(pose.origin_q18[2]);
-    auto gone = [&layers](const auto& slot) { return !layers.contains(slot.layer, slot.index); };
-    auto dropped = [&frame](const auto& slot) { frame.gated_dropped += slot.count; };
-    if constexpr (kCcmPool) {
-      ccm_held_.drop_if(gone, dropped);
-    }
-    if constexpr (kFinePool) {
-      fine_held_.drop_if(gone, dropped);
-    }
+  /// One Kalman batch update of `count` > 0 points with these sums (kalman_batch.hpp, batch_mean).
+  static void fuse_sums(KalmanCell& cell, const StackParams& params, std::int64_t sum_height_q14,
+                        std::int64_t sum_range_key, std::uint32_t count) noexcept {
+    const BatchMean mean = batch_mean(sum_height_q14, sum_range_key, count);
+    kalman_update_batch_unchecked(cell, mean.height_m, measurement_variance(params, mean.range_sq_m2), count,
+                                  params.kalman_min_variance);
   }
 
   /// The end of a frame: the Kalman layer's batches, then the change rule for every cell with
-  /// held points (slots kept while their verdict is kPending).
+  /// held points (slots kept while their verdict is kPending), then the batches emptied.
   void finish_frame(Layers& layers, const StackParams& params, FrameCounters& frame) noexcept {
     if constexpr (kKalman) {
-      fuse_fine_batches(layers, params);
+      KalmanCell* cells = layers.fine_storage;
+      batch_.fuse([&](std::uint32_t slot, const KalmanFrameSum& sum) {
+        fuse_sums(cells[slot], params, sum.sum_height_q14, sum.sum_range_key, sum.count);
+      });
     }
-    last_frame_slots_ = ccm_held_.used() + fine_held_.used();
-    if (gate_on_) {
-      if constexpr (kCcmPool) {
-        ccm_held_.end_frame([&](const auto& slot) {
-          auto& cell = layers.ccm_storage[slot.cell];
-          const bool tight = held_is_tight(slot.held.s_zz, slot.held.weight, gate_[slot.layer]);
-          switch (verdict(slot, tight, frame)) {
-            case ChangeVerdict::kReseed:
-              cell = slot.held;  // the held points folded into an empty cell, limiter included
-              return false;
-            case ChangeVerdict::kMerge:
-              // Cannot fail: the limit was validated at init, the held weight is > 0 and finite.
-              (void)ccm_merge(cell, slot.held, params.weight_limit);
-              return false;
-            case ChangeVerdict::kPending:
-              return true;
-            case ChangeVerdict::kDrop:
-              break;
-          }
-          return false;
-        });
-      }
-      if constexpr (kFinePool) {
-        fine_held_.end_frame([&](auto& slot) {
-          bool tight = false;
-          if constexpr (kKalman) {
-            slot.accepted += fine_sums_[slot.cell].count;  // this frame's points inside the gate
-            tight = held_is_tight(slot.held.spread_sum, static_cast<float>(slot.count), gate_[0]);
-          } else {
-            tight = held_is_tight(slot.held.s, slot.held.weight, gate_[0]);
-          }
-          const ChangeVerdict v = verdict(slot, tight, frame);
-          if (v == ChangeVerdict::kReseed || v == ChangeVerdict::kMerge) {
-            admit_fine(layers, params, slot, v == ChangeVerdict::kReseed);
-          }
-          return v == ChangeVerdict::kPending;
-        });
+    if constexpr (kGateCompiled) {
+      gate_.note_frame_slots();
+      if (gate_.on()) {
+        apply_change_rule(
+            gate_, layers, params, frame, [&](std::uint32_t cell) { return batch_.sum(cell).count; },
+            [&](auto& cell, const auto& held, std::uint32_t count) {
+              if constexpr (kKalman) {
+                // The held points as one more batch: their mean, the variance at their mean squared range.
+                fuse_sums(cell, params, held.sum_height_q14, held.sum_range_key, count);
+              }
+            });
       }
     }
     if constexpr (kKalman) {
-      for (std::uint32_t t = 0; t < fine_touched_count_; ++t) {
-        fine_sums_[fine_touched_[t]] = FineFrameSum{};
-      }
-      fine_touched_count_ = 0U;
+      batch_.empty_sums();
     }
   }
-
-  /// The change rule for a slot at the end of a frame, counted in the frame's counters.
-  template <typename Slot>
-  [[nodiscard]] ChangeVerdict verdict(const Slot& slot, bool tight, FrameCounters& frame) const noexcept {
-    const bool may_wait = slot.frames + 1U < kMaxHeldFrames;
-    const ChangeVerdict v = change_verdict(slot.accepted, slot.count, tight, may_wait, rule_);
-    switch (v) {
-      case ChangeVerdict::kDrop:
-        frame.gated_dropped += slot.count;
-        break;
-      case ChangeVerdict::kReseed:
-        frame.gated_admitted += slot.count;
-        ++frame.reseeded_cells;
-        break;
-      case ChangeVerdict::kMerge:
-        frame.gated_admitted += slot.count;
-        ++frame.merged_cells;
-        break;
-      case ChangeVerdict::kPending:
-        break;
-    }
-    return v;
-  }
-
-  /// Admits the held points of a finest-layer slot: re-seed (the cell emptied first) or merge.
-  template <typename Slot>
-  void admit_fine(Layers& layers, const StackParams& params, const Slot& slot, bool reseed) noexcept {
-    FineCell& cell = layers.fine_storage[slot.cell];
-    if (reseed) {
-      cell = FineCell{};
-    }
-    if constexpr (kKalman) {
-      // The held points as one more batch: their mean, the variance at their mean squared range.
-      fuse_batch(cell, params, slot.held.sum_height_q14, slot.held.sum_range_key, slot.count);
-    } else {
-      // Cannot fail: the limit was validated at init, the held statistics are finite.
-      (void)omg_merge(cell, slot.held, params.weight_limit);
-    }
-  }
-
-  /// Fuses each touched Kalman cell's batch of this frame (the points inside the gate).
-  void fuse_fine_batches(Layers& layers, const StackParams& params) noexcept {
-    if constexpr (kKalman) {
-      KalmanCell* cells = layers.fine.storage();
-      for (std::uint32_t t = 0; t < fine_touched_count_; ++t) {
-        const std::uint32_t slot = fine_touched_[t];
-        const FineFrameSum& sum = fine_sums_[slot];
-        if (sum.count > 0U) {
-          fuse_batch(cells[slot], params, sum.sum_height_q14, sum.sum_range_key, sum.count);
-        }
-      }
-    } else {
-      (void)layers;
-      (void)params;
-    }
-  }
-
-  /// One Kalman batch update of `count` > 0 points with these sums: their mean height (the
-  /// floored Q14 mean, + half a unit: unbiased) and the variance at their mean squared range
-  /// (from the keys floored to 2^-12 m^2, + half a key likewise), divided by count.
-  void fuse_batch(KalmanCell& cell, const StackParams& params, std::int64_t sum_height_q14,
-                  std::uint64_t sum_range_key, std::uint32_t count) const noexcept {
-    const auto n = static_cast<std::int64_t>(count);
-    std::int64_t whole = sum_height_q14 / n;
-    std::int64_t rest = sum_height_q14 % n;
-    if (rest < 0) {
-      --whole;
-      rest += n;
-    }
-    const float mean_q14 = static_cast<float>(whole) +
-                           (static_cast<float>(rest) + 0.5F * static_cast<float>(n)) / static_cast<float>(n);
-    const float mean_z = mean_q14 * 6.10351562e-5F;  // 2^-14
-    const std::uint64_t whole_key = sum_range_key / count;  // integer mean, then the rest
-    const std::uint64_t rest_key = sum_range_key % count;
-    const float mean_key =
-        static_cast<float>(whole_key) + (static_cast<float>(rest_key) + 0.5F * static_cast<float>(n)) / static_cast<float>(n);
-    const float variance = fine_measurement_variance(params, mean_key * 2.44140625e-4F);  // 2^-12 m^2
-    kalman_update_batch_unchecked(cell, mean_z, variance, count, params.kalman_min_variance);
-  }
-
-  /// Per-frame batch of a Kalman cell (all zero between frames).
-  struct FineFrameSum {
-    std::uint32_t count;          ///< points inside the gate (every point with the gate off)
-    std::uint32_t points;         ///< with the gate on: every point of the frame (held ones included); else 0
-    std::int64_t sum_height_q14;  ///< sum of floor(z * 2^14) of the points inside
-    std::uint64_t sum_range_key;  ///< sum of their routing keys (squared ranges, 2^-12 m^2)
-    std::int32_t reference_q14;   ///< gate reference, floor(h * 2^14), set by the frame's first point
-    std::uint32_t gate_q14;       ///< gate half-width, floor(. * 2^14)
-  };
 
   // ---- zero-initialised (a static stack lives in .bss); derived at init ----
   FrontConfig front_{};
   FrontChunk chunk_{};
-  std::int64_t width_q40_[Layers::kLayerSlots]{};  ///< cell width of each layer, Q40 m (exact)
-  FineFrameSum fine_sums_[kFineBatchSlots]{};
-  std::uint32_t fine_touched_[kFineBatchSlots]{};
-  std::uint32_t fine_touched_count_ = 0U;
-  CcmPool ccm_held_{};                         ///< held points of CCM cells
-  FinePool fine_held_{};                       ///< held points of finest-layer cells
-  GateConstants gate_[Layers::kLayerSlots]{};  ///< per layer (cell/outlier_gate.hpp)
-  ChangeRule rule_{};
-  float sight_margin_[Layers::kLayerSlots]{};  ///< k sqrt(V) per layer (m)
-  std::int64_t sight_origin_q18_[3]{};         ///< this frame's sensor position (Q18)
-  float sight_origin_z_ = 0.0F;                ///< its height (m)
-  std::uint32_t last_frame_slots_ = 0U;
-  bool gate_on_ = false;
-  bool line_of_sight_ = false;
+  FineWindow fine_window_{};
+  LayerWalk<Config> walk_{};
+  Batch batch_{};
+  std::conditional_t<kGateCompiled, Gate, char> gate_{};  ///< the outlier gate, if compiled in
+  std::uint16_t others_[kFrontChunkPoints]{};             ///< chunk entries for the walk (pass 2)
+  std::uint32_t point_budget_ = 0U;
+  std::uint64_t time_budget_ns_ = 0U;
   bool constant_weight_ = false;
-  bool stereo_ = false;
-  float stereo_k_ = 0.0F;  ///< stereo sigma per range^2 (1/m) when stereo_
+  static constexpr GateConstants no_gate_{0.0F, 0.0F};
 };
 
 }  // namespace ccmap::detail

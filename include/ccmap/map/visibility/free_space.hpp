@@ -53,7 +53,7 @@
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/types.hpp"
 #include "ccmap/map/update/front.hpp"
-#include "ccmap/map/update/update_path.hpp"
+#include "ccmap/map/update/gate.hpp"
 #include "ccmap/map/visibility/free_space_cell.hpp"
 #include "ccmap/map/visibility/ray_walk.hpp"
 #include "ccmap/sensor/noise_model.hpp"
@@ -72,14 +72,27 @@ inline constexpr std::size_t kMaxRunCells = 64U;
 
 /// The end of a sampled point's line of sight, as the front computed it.
 struct RayEnd {
-  std::int32_t code;      ///< routed layer, or kFrontNonFinite / kFrontOutOfRange / kFrontTooNoisy
-  std::int64_t q18[3];    ///< map-frame position (Q18), valid when routed
-  std::int64_t range_sq;  ///< squared range from the sensor, 2^-32 m^2
+  std::int32_t code;  ///< routed layer, or kFrontNonFinite / kFrontOutOfRange / kFrontTooNoisy
+  std::int64_t u[2];  ///< horizontal position in U units (ray_walk.hpp), valid when routed
+  float z;            ///< map-frame height (m), valid when routed
+  float range_sq;     ///< squared range from the sensor (m^2)
 };
 
 /// The adapter to the front's chunk representation: the only place this stage reads a FrontChunk.
 [[nodiscard]] inline RayEnd ray_end_of(const FrontChunk& chunk, std::size_t i) noexcept {
-  return RayEnd{chunk.code[i], {chunk.q18[0][i], chunk.q18[1][i], chunk.q18[2][i]}, chunk.range_sq[i]};
+  return RayEnd{chunk.code[i],
+                {ray_u(chunk.ix0[i], chunk.fx[i]), ray_u(chunk.iy0[i], chunk.fy[i])},
+                chunk.z[i],
+                chunk.range_sq[i]};
+}
+
+/// The finest window the front is given here: none (this stage reads no Kalman slot).
+inline constexpr FineWindow kNoFineWindow{CellIndex{0, 0}, 0, 0};
+
+/// The sensor's horizontal position in U units (the pose's anchor cell and fraction).
+inline void ray_origin_of(const FramePose& pose, std::int64_t* u) noexcept {
+  u[0] = ray_u(pose.anchor.x, pose.anchor_fraction[0]);
+  u[1] = ray_u(pose.anchor.y, pose.anchor_fraction[1]);
 }
 
 /// Per-frame constants of a layer (derived at init).
@@ -132,7 +145,7 @@ class FreeSpace<Config, true> {
       offset_[layer] = offset;
       offset += static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
       const float width = layers.widths[layer];
-      const float sigma = UpdatePath<Config>::layer_max_sigma(params, max_range_sq_m2[layer], width, layer);
+      const float sigma = layer_max_sigma(params, max_range_sq_m2[layer], width, Layers::is_ccm(layer));
       const float step = params.obstacle_fraction * width;
       float margin = kRangeSigmas * sigma;
       if (!Layers::is_ccm(layer)) {
@@ -248,7 +261,9 @@ class FreeSpace<Config, true> {
            const float* weights, std::size_t n, const FramePose& pose, bool sensor_frame,
            FrameCounters& frame) noexcept {
     ++frames_;
-    if (rays_ == 0U || n == 0U) {
+    // A frame the budget cut short (StackParams::frame_point_budget, frame_time_budget_us) casts
+    // no line of sight: its time is spent.
+    if (rays_ == 0U || n == 0U || frame.skipped_budget > 0U) {
       return;
     }
     stamp_ = static_cast<std::uint8_t>(frames_ & kStampMask);
@@ -262,8 +277,9 @@ class FreeSpace<Config, true> {
       windows_.min[layer] = layers.window_min(layer);
       windows_.side[layer] = Layers::side(layer);
     }
-    origin_u_[0] = ray_u_of(pose.origin_q18[0], front.index_mult, front.index_shift);
-    origin_u_[1] = ray_u_of(pose.origin_q18[1], front.index_mult, front.index_shift);
+    ray_origin_of(pose, origin_u_);
+    origin_z_ = pose.origin[2];
+    cell_width_ = front.width;
     bool held = false;
     for (int layer = 0; layer < kLayerCount && !held; ++layer) {
       const int shift = kRayFracBits + layer;
@@ -292,9 +308,9 @@ class FreeSpace<Config, true> {
   void run_batch(Layers& layers, const StackParams& params, const FrontConfig& front, const float* weights,
                  std::size_t count, const FramePose& pose, bool sensor_frame, FrameCounters& frame) noexcept {
     if (sensor_frame) {
-      front_sensor_chunk(batch_points_, count, pose, front, chunk_);
+      front_sensor_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk_);
     } else {
-      front_map_chunk(batch_points_, count, pose, front, chunk_);
+      front_map_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk_);
     }
     for (std::size_t i = 0; i < count; ++i) {
       const RayEnd end = ray_end_of(chunk_, i);
@@ -311,24 +327,22 @@ class FreeSpace<Config, true> {
         continue;
       }
       ++frame.free_rays;
-      cast(layers, params, front, end, pose, frame);
+      cast(layers, params, end, frame);
     }
   }
 
   /// One line of sight: its point confirms the surface it lies on, then the walk.
-  void cast(Layers& layers, const StackParams& params, const FrontConfig& front, const RayEnd& end,
-            const FramePose& pose, FrameCounters& frame) noexcept {
+  void cast(Layers& layers, const StackParams& params, const RayEnd& end, FrameCounters& frame) noexcept {
     RayState ray{};
-    const std::int64_t end_u[2] = {ray_u_of(end.q18[0], front.index_mult, front.index_shift),
-                                   ray_u_of(end.q18[1], front.index_mult, front.index_shift)};
+    const std::int64_t* end_u = end.u;
     for (int layer = 0; layer < kLayerCount; ++layer) {
       const int shift = kRayFracBits + layer;
       ray.end[layer] = CellIndex{static_cast<std::int32_t>(end_u[0] >> shift), static_cast<std::int32_t>(end_u[1] >> shift)};
     }
-    const float end_z = q18_to_float(end.q18[2]);
+    const float end_z = end.z;
     confirm_end(layers, end.code, ray, end_z);
     // Shorten the ray by kRangeSigmas range errors: f = 1 - m / r of the segment is walked.
-    const float range_sq = to_range_sq_m2(end.range_sq);
+    const float range_sq = end.range_sq;
     const float range = std::sqrt(range_sq);
     const float margin = kRangeSigmas * params.noise.sigma_at_range_sq(range_sq);
     if (!(margin < range)) {
@@ -349,10 +363,12 @@ class FreeSpace<Config, true> {
     const RayU walk{{origin_u_[0], origin_u_[1]},
                     {static_cast<std::int32_t>(static_cast<float>(du[0]) * f),
                      static_cast<std::int32_t>(static_cast<float>(du[1]) * f)}};
-    ray.z0 = q18_to_float(pose.origin_q18[2]);
-    const float full_dz = q18_to_float(end.q18[2] - pose.origin_q18[2]);
-    const float full_dx = q18_to_float(end.q18[0] - pose.origin_q18[0]);
-    const float full_dy = q18_to_float(end.q18[1] - pose.origin_q18[1]);
+    ray.z0 = origin_z_;
+    const float full_dz = end_z - origin_z_;
+    // U units to metres: w_0 / 256 (exact scale); |du| <= 2^39 is exact to float's 24 bits.
+    const float metres_per_u = cell_width_ * 0.00390625F;
+    const float full_dx = static_cast<float>(du[0]) * metres_per_u;
+    const float full_dy = static_cast<float>(du[1]) * metres_per_u;
     // The walked fraction of the full ray, from the integer delta actually walked.
     const float walked = fraction_walked(end_u, walk);
     ray.dz = full_dz * walked;
@@ -548,6 +564,8 @@ class FreeSpace<Config, true> {
   std::uint8_t stamp_ = 0U;
   RayWindows windows_{};
   std::int64_t origin_u_[2]{};
+  float origin_z_ = 0.0F;
+  float cell_width_ = 0.0F;  ///< w_0 (m)
   std::uint32_t contradicted_[kMaxContradictedCells]{};
   RunCell run_[kMaxRunCells]{};
   std::uint32_t contradicted_count_ = 0U;

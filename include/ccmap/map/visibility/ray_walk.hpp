@@ -3,9 +3,10 @@
 // (tests/map/ray_walk_test.cpp holds it to a dense double-precision sampling of the ray).
 //
 // Units: a ray is given in "U units", finest-layer cells in fixed point with kRayFracBits = 8
-// fraction bits: U = floor(q * fl(1/w_0) * 2^8) for a Q18 position q (ray_u_of), so that the cell
-// of layer k holding a U coordinate is U >> (8 + k), exactly the index the front computes for a
-// point (index_0 >> k, map/update/front.hpp): the walk and the update name the same cells.
+// fraction bits: U = 256 i + floor(256 f) for a point the front placed in finest cell i at
+// fraction f of it (ray_u), so that the cell of layer k holding a U coordinate is U >> (8 + k),
+// exactly the index the front computes for the point (index_0 >> k, map/update/front.hpp): the
+// walk and the update name the same cells.
 //
 // What the walk reports: for every layer whose window holds the ray's origin, every cell of that
 // layer the segment crosses while it stays inside the layer's window (a window is convex and holds
@@ -73,10 +74,13 @@ struct RayVisit {
   bool walk_layer;  ///< its layer is the finest whose window holds the ray at t_out
 };
 
-/// U coordinate of a Q18 position for the front's index constants (FrontConfig::index_mult,
-/// index_shift): floor(q * fl(1/w_0) * 2^8). |q18| <= 2^35 and mult < 2^24: the product fits.
-[[nodiscard]] inline std::int64_t ray_u_of(std::int64_t q18, std::int32_t index_mult, std::int32_t index_shift) noexcept {
-  return (q18 * index_mult) >> (index_shift - kRayFracBits);
+/// U coordinate of a position in finest cell `index` at `fraction` of it (the front's fx, fy or
+/// a pose's anchor fraction, in [0, 1]; a fraction of 1 or more, NaN or below 0 is clamped into
+/// the cell): 256 index + floor(256 fraction). |index| <= 2^30 + 2^14: fits int64.
+[[nodiscard]] inline std::int64_t ray_u(std::int32_t index, float fraction) noexcept {
+  const float scaled = fraction * 256.0F;
+  const std::int32_t sub = scaled >= 255.0F ? 255 : (scaled >= 0.0F ? static_cast<std::int32_t>(scaled) : 0);
+  return std::int64_t{index} * 256 + sub;
 }
 
 /// Calls sink(const RayVisit&) for every visit of the ray (see the header comment).
