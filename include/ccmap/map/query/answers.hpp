@@ -37,8 +37,9 @@ class QueryView {
             const DropRecords* drops = nullptr) noexcept
       : layers_(layers), params_(params), thresholds_(thresholds), drops_(drops) {}
 
-  /// Answer from the finest layer that knows (x, y); where none does, a drop-off answer from the
-  /// finest layer holding the point whose unobserved cell there is a drop-off; see Stack::query.
+  /// Answer from the finest layer that knows (x, y), a drop-off counting as known at its layer (an
+  /// unobserved cell, no finer point below it, that lines of sight proved a drop-off: finer
+  /// knowledge than a coarser cell that holds the ground beside it); see Stack::query.
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
     QueryResult result = empty_result(Status::kOutsideMap, -1);
     for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
@@ -50,21 +51,13 @@ class QueryView {
         result = empty_result(Status::kUnknown, layer);
       }
       QueryResult answer = answer_at(layer, index, x, y, true);
-      if (answer.status != Status::kOk || answer.cell_class == CellClass::kDropOff) {
-        continue;  // a drop-off answers only where no layer knows the point (below)
+      if (answer.status != Status::kOk) {
+        continue;
       }
-      if (!Layers::is_ccm(layer) && Layers::kCcmLayerCount > 0) {
+      if (!Layers::is_ccm(layer) && Layers::kCcmLayerCount > 0 && answer.cell_class != CellClass::kDropOff) {
         refine_with_ccm(x, y, answer);
       }
       return answer;
-    }
-    if (result.status == Status::kUnknown && drops_ != nullptr) {
-      for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
-        CellIndex index{};
-        if (layers_.locate(layer, x, y, &index) && unobserved_drop(layer, index)) {
-          return drop_answer(layer, index);
-        }
-      }
     }
     return result;
   }

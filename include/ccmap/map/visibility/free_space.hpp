@@ -454,7 +454,12 @@ class FreeSpace<Config, true> {
         const CellView coarse = view_of(layers, j, c);
         if (coarse.weight > 0.0F) {
           track_ground(j, coarse.height, v.t_out, ray);
-          ray.run = 0U;  // observed here: a new run starts after it
+          // Observed here, at the coarser layer's resolution, where the ray passes at or above
+          // that surface: a new run starts after it. A ray that dips below it inside the coarse
+          // cell (just past a rim the coarse cell holds the ground before) keeps the run going.
+          if (z_hi >= coarse.height) {
+            ray.run = 0U;
+          }
           break;
         }
       }
