@@ -393,6 +393,21 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
       st.mean_life_frames = st.points_ever > 0 ? sum / st.points_ever : 0.0;
     }
   }
+  for (int j = 0; j < ras.ny; ++j) {
+    for (int i = 0; i < ras.nx; ++i) {
+      const QueryResult q = after[0]->query(static_cast<float>(ras.x(i)), static_cast<float>(ras.y(j)));
+      if (q.cell_class != CellClass::kDropOff) continue;
+      const double w = q.cell_width_m;
+      const double cx0 = std::floor(ras.x(i) / w) * w, cy0 = std::floor(ras.y(j) / w) * w;
+      double deepest = 0.0;
+      for (int b = 0; b < 5; ++b) {
+        for (int a = 0; a < 5; ++a) {
+          deepest = std::max(deepest, terrain->negative_depth(cx0 + (a + 0.5) * w / 5, cy0 + (b + 0.5) * w / 5));
+        }
+      }
+      (deepest > 0.75 * w ? out.drop_points_true : out.drop_points_false) += 1;
+    }
+  }
   if (!cfg.out_dir.empty()) {
     const int scale = 3;
     const int panel_w = ras.nx * scale, panel_h = ras.ny * scale;
@@ -628,9 +643,11 @@ std::string ghost_report(const GhostResult& r, const GhostConfig& c) {
     }
   }
   s += t.str();
-  s += format("\nlines of sight walked %llu, refused %llu; drop-offs marked %llu\n\n",
+  s += format("\nlines of sight walked %llu, refused %llu; drop-offs marked %llu; rover 1's final map: %d drop-off\n"
+              "points (of the %.2f m raster) in cells holding a crater bowl deeper than the cell's obstacle height, %d not\n\n",
               static_cast<unsigned long long>(r.team.rays), static_cast<unsigned long long>(r.team.refused),
-              static_cast<unsigned long long>(r.team.drops_after));
+              static_cast<unsigned long long>(r.team.drops_after), r.team.drop_points_true,
+              c.query_step_m > 0.04 ? c.query_step_m : 0.04, r.team.drop_points_false);
   s += format("Negative obstacles approached at 0.1 m per frame (range: camera to the near rim; stopping distance %.1f m)\n\n",
               kStoppingDistanceM);
   experiments::Table d({"obstacle", "map", "drop-off in swath at", "first path hazard at", "its front", "class",

@@ -75,6 +75,9 @@ struct GhostStats {
 struct TeamResult {
   GhostStats before[3], after[3];
   std::uint64_t rays = 0, refused = 0, drops_after = 0;
+  /// Rover 1's final map (after): drop-off answers on the raster whose answering cell holds a
+  /// crater bowl deeper than the cell's obstacle height (true) or not (false).
+  int drop_points_true = 0, drop_points_false = 0;
   std::vector<std::string> pictures;
 };
 
