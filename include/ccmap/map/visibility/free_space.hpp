@@ -270,7 +270,9 @@ class FreeSpace<Config, true> {
     contradicted_count_ = 0U;
     // An evenly spread subsample: every stride-th point from a phase that moves every frame.
     const std::size_t stride = (n + rays_ - 1U) / rays_;
-    const std::size_t phase = stride > 1U ? static_cast<std::size_t>((frames_ * 2654435761U) % stride) : 0U;
+    // The phase: a 32-bit multiplicative hash of the frame count (wraps alike on every target).
+    const std::uint32_t hashed = frames_ * 2654435761U;
+    const std::size_t phase = stride > 1U ? static_cast<std::size_t>(hashed) % stride : 0U;
     const std::size_t sampled = (n - phase + stride - 1U) / stride;
     windows_.layers = kLayerCount;
     for (int layer = 0; layer < kLayerCount; ++layer) {
