@@ -259,9 +259,9 @@ class Stack {
   /// For an answer from the piece-wise constant layer, height and elevation variance come from
   /// it and slope, normal variance and class from the first CCM layer's pooled cell there when
   /// that is known (hazards are a CCM matter); otherwise the roughness filter classifies.
-  /// Where no layer knows (x, y) but lines of sight proved a drop-off in an unobserved cell
-  /// holding it (docs/design.md, "Free space from lines of sight"): kOk with class kDropOff,
-  /// weight 0 and height_m the upper bound of the terrain there.
+  /// A cell that lines of sight proved a drop-off (docs/design.md, "Free space from lines of
+  /// sight"), unobserved and with no finer point below it, answers in that order like a known
+  /// cell: kOk with class kDropOff, weight 0 and height_m the upper bound of the terrain there.
   /// kOutsideMap if no layer holds (x, y); kUnknown if none knows it; kNotInitialised.
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
     if (!initialised_) {
