@@ -14,6 +14,18 @@ if(CCMAP_SANITIZE)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
+# Statement and branch coverage of the core (gcc --coverage, read by tools/coverage with gcovr):
+# every translation unit is instrumented, since most of the core is templates compiled in the
+# tests' own files. The host-coverage preset turns it on, without the sanitizers (together they
+# made the tests five times slower; docs/integration.md section 11).
+if(CCMAP_COVERAGE)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    message(FATAL_ERROR "CCMAP_COVERAGE needs gcc (gcov data for gcovr), not ${CMAKE_CXX_COMPILER_ID}")
+  endif()
+  add_compile_options(--coverage)
+  add_link_options(--coverage)
+endif()
+
 # libFuzzer build (clang): everything instrumented for coverage; the fuzz targets link -fsanitize=fuzzer.
 if(CCMAP_BUILD_FUZZ)
   add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)

@@ -1,8 +1,8 @@
 # Installable package: `cmake --install` gives the public headers (include/ccmap/**, the platform
 # header), the static libraries (ccmap_core and the platform library chosen by CCMAP_PLATFORM),
 # a CMake package (find_package(ccmap) -> ccmap::core, with the platform resolved) and a
-# pkg-config file ccmap.pc. The flight core has no third-party dependency (Eigen serves the
-# tests' double-precision references and the host tools only).
+# pkg-config file ccmap.pc. The flight core has no third-party dependency a consumer needs: Eigen
+# (header-only) is compiled into src/registration/ and appears in no installed header.
 # examples/consumer builds against it; tools/check-install proves it for host and aarch64.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
@@ -18,9 +18,8 @@ set_target_properties(ccmap_core PROPERTIES EXPORT_NAME core)
 set_target_properties(${_ccmap_platform_target} PROPERTIES EXPORT_NAME platform_${CCMAP_PLATFORM})
 set_target_properties(ccmap_platform_interface PROPERTIES EXPORT_NAME platform_interface)
 set_target_properties(ccmap_core_flags PROPERTIES EXPORT_NAME core_build_flags)
-# Most of the core is templates compiled in the consumer's translation units: give consumers
-# the same rounding as the library's own build (no FMA contraction; docs/design.md).
-target_compile_options(ccmap_core INTERFACE $<INSTALL_INTERFACE:-ffp-contract=off>)
+# The consumers' compile flags (-ffp-contract=off) are ccmap_core's PUBLIC options
+# (src/CMakeLists.txt): exported with the target, as they reach an add_subdirectory consumer.
 
 install(TARGETS ccmap_core ${_ccmap_platform_target} ccmap_platform_interface ccmap_core_flags
         EXPORT ccmapTargets

@@ -3,7 +3,7 @@
  * The map lives in storage the caller owns (static, or a memory pool handed over at set-up):
  * nothing allocates, nothing throws, every call answers with a status. Two-phase life:
  *
- *   static ccmap_cadre_storage storage;                      // 600 KiB, aligned for the map
+ *   static ccmap_cadre_storage storage;   // CCMAP_CADRE_STORAGE_SIZE bytes, aligned for the map
  *   ccmap_map* map = NULL;
  *   ccmap_params params;
  *   if (ccmap_place(&storage, sizeof storage, CCMAP_PRESET_CADRE, &map) != CCMAP_OK) ...
@@ -20,7 +20,9 @@
  *
  * Errors: a NULL pointer argument, a handle that was not produced by ccmap_place, or a bad
  * enum value is answered with CCMAP_INVALID_ARGUMENT and changes nothing. Functions that
- * return a number answer 0 for a bad handle.
+ * return a number answer 0 for a bad handle. A map used before a successful ccmap_init or
+ * ccmap_load_snapshot answers CCMAP_NOT_INITIALISED. Each call below names its other refusals;
+ * "refused (counted)" means the map also counts it (ccmap_get_counters) and is left unchanged.
  *
  * Thread safety: none inside; one map must not be used by two threads at once.
  */
@@ -49,6 +51,9 @@ typedef enum ccmap_status {
   CCMAP_VERSION_MISMATCH = 10, /* snapshot of another format version or another preset */
   CCMAP_DUPLICATE = 11,        /* map exchange: delta already merged (sender, sequence) or this map's own */
   CCMAP_MISALIGNED = 12,       /* map exchange: another cell width, or an origin offset off the coarsest grid */
+  CCMAP_INSUFFICIENT_OVERLAP = 13, /* registration: too few samples on known cells of the map */
+  CCMAP_DEGENERATE_INPUT = 14,     /* registration: no usable points, or all of them at one spot */
+  CCMAP_NOT_CONVERGED = 15,        /* registration: no solution within the iteration or search bounds */
   CCMAP_STATUS_MAX_ENUM_ = 0x7FFFFFFF /* not a status: keeps the enum 32 bits wide */
 } ccmap_status;
 
@@ -67,13 +72,14 @@ typedef enum ccmap_preset {
 #define CCMAP_MAX_LAYERS 8
 
 /* Storage for a map placed by ccmap_place. The sizes are upper bounds with headroom for future
- * versions (the library checks at build time that its map fits); ccmap_storage_size() gives
- * the exact figure. The unions give every target's maximum fundamental alignment (16 on
+ * versions (the library checks at build time that its map fits, and that each KiB figure below
+ * is its constant); ccmap_storage_size() gives the exact figure (docs/integration.md, section 7,
+ * lists them). The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
-#define CCMAP_CADRE_STORAGE_SIZE 786432u          /* 768 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3145728u    /* 3072 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3342336u /* 3264 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1310720u    /* 1280 KiB */
+#define CCMAP_CADRE_STORAGE_SIZE 802816u          /* 784 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3080192u    /* 3008 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3375104u /* 3296 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1245184u    /* 1216 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \
@@ -160,11 +166,17 @@ typedef struct ccmap_params {
 /* CADRE defaults for the preset's default finest width (CADRE: 4 cm, single layers: 8 cm).
  * CCMAP_INVALID_ARGUMENT: NULL out or bad preset. */
 ccmap_status ccmap_default_params(ccmap_preset preset, ccmap_params* out);
-/* The same defaults for another finest cell width (m). */
+/* The same defaults for another finest cell width (m). CCMAP_INVALID_ARGUMENT: NULL out. The
+ * width is not checked here: ccmap_init refuses a bad one. */
 ccmap_status ccmap_default_params_for_width(float finest_cell_width_m, ccmap_params* out);
 
 /* Validates the parameters and (re)initialises the map: every layer centred on the origin and
- * empty. On failure the map is uninitialised (CCMAP_NOT_INITIALISED for every other call). */
+ * empty. On failure the map is uninitialised (CCMAP_NOT_INITIALISED for every other call).
+ * CCMAP_INVALID_ARGUMENT: NULL params or map, a bad handle, noise.sensor or noise.weight_mode
+ * outside its enum, or a parameter outside its range (e.g. finest_cell_width_m below 0.19 mm or
+ * giving coarsest cells over 100 m, coverage_tau outside (0, 1], weight_limit below 1e-3 or NaN,
+ * outlier_gate_sigma neither 0 nor in [1, 100], change_share outside (0, 0.5]).
+ * CCMAP_NON_FINITE_INPUT: NaN or Inf in any other parameter (the noise model's included). */
 ccmap_status ccmap_init(ccmap_map* map, const ccmap_params* params);
 
 /* ---- run phase ------------------------------------------------------------------------------ */
@@ -193,22 +205,25 @@ typedef struct ccmap_frame_counters {
   uint32_t drop_cells;       /* unobserved cells that became drop-offs */
 } ccmap_frame_counters;
 
-/* Re-centres every layer on the robot at (x, y) (m). Refused (counted): non-finite or
- * out-of-range position. */
+/* Re-centres every layer on the robot at (x, y) (m). Refused (counted): a non-finite position
+ * (CCMAP_NON_FINITE_INPUT), |x| or |y| above 1e5 m (CCMAP_OUT_OF_RANGE). */
 ccmap_status ccmap_move_to(ccmap_map* map, float x, float y);
 
 /* The same move for a pose known only to position_sigma_m (m, 1-sigma, isotropic): the
  * odometry's uncertainty of the position change since the last move. Every observed cell then
  * forgets in proportion to inclination^2 sigma^2 (Stack::move_to(x, y, sigma); one pass over
  * every cell). 0 is ccmap_move_to exactly. Refused (counted): as ccmap_move_to, and a non-finite
- * (CCMAP_NON_FINITE_INPUT), negative (CCMAP_INVALID_ARGUMENT) or > 1e5 (CCMAP_OUT_OF_RANGE) sigma. */
+ * (CCMAP_NON_FINITE_INPUT), negative (CCMAP_INVALID_ARGUMENT) or > 1e5 m (CCMAP_OUT_OF_RANGE) sigma. */
 ccmap_status ccmap_move_to_uncertain(ccmap_map* map, float x, float y, float position_sigma_m);
 
 /* Folds n points, xyz[3*i .. 3*i+2] in the map frame (m). weights may be NULL (the noise
  * model's weight) or n weights, one per point (the w_t of eq. (1)); a weight outside
  * (0, 1e6] refuses its point. sensor_origin_xyz: the sensor position in the map frame (3 floats).
- * counters may be NULL. Refused as a whole: NULL xyz with n > 0 or NULL sensor_origin_xyz
- * (CCMAP_INVALID_ARGUMENT), non-finite sensor origin (CCMAP_NON_FINITE_INPUT). */
+ * counters may be NULL. Refused as a whole, the map unchanged: NULL sensor_origin_xyz
+ * (CCMAP_INVALID_ARGUMENT, not counted); counted: NULL xyz with n > 0, n >= 2^32
+ * (CCMAP_INVALID_ARGUMENT), a non-finite sensor origin (CCMAP_NON_FINITE_INPUT), a coordinate of
+ * the sensor origin above 1e5 m (CCMAP_OUT_OF_RANGE). Points are refused one by one, counted in
+ * counters by reason (non-finite, out of range, weight, outside the map, too noisy). */
 ccmap_status ccmap_update_frame(ccmap_map* map, const float* xyz, const float* weights, size_t n,
                                 const float* sensor_origin_xyz, ccmap_frame_counters* counters);
 
@@ -218,9 +233,71 @@ typedef struct ccmap_pose {
   float translation[3];
 } ccmap_pose;
 
-/* Same as ccmap_update_frame for points in the sensor frame (noise-model weights). */
+/* Same as ccmap_update_frame for points in the sensor frame (noise-model weights); a sensor-frame
+ * coordinate of 2^11 m or more refuses its point (out of range). Refused as a whole, the map
+ * unchanged: NULL pose (CCMAP_INVALID_ARGUMENT, not counted); counted: NULL xyz with n > 0,
+ * n >= 2^32, a rotation that is not one (an entry above 1.001 in magnitude, or R^T R off the
+ * identity by more than 1e-3: CCMAP_INVALID_ARGUMENT), NaN or Inf in the rotation or the
+ * translation (CCMAP_NON_FINITE_INPUT), a translation coordinate above 1e5 m (CCMAP_OUT_OF_RANGE). */
 ccmap_status ccmap_update_frame_sensor(ccmap_map* map, const float* xyz, size_t n, const ccmap_pose* pose,
                                        ccmap_frame_counters* counters);
+
+/* ---- registration (include/ccmap/registration/registration.hpp, types.hpp) ------------------ */
+/* The rigid correction (dx, dy, dz m; dyaw rad about the vertical through the rotation centre:
+ * the sensor origin of a frame) that best aligns a frame's map-frame points with the map: p' =
+ * Rz(dyaw)(p - o) + o + d. Axes a terrain does not fix are not claimed: observable[k] == 0, their
+ * sigma +infinity, and the correction has no component along them. Indices: 0 dx, 1 dy, 2 dz, 3 dyaw. */
+typedef struct ccmap_registration_params {
+  uint32_t max_points;      /* points used, at most (every k-th): 1 .. 65536 */
+  uint32_t max_iterations;  /* 1 .. 64 */
+  uint32_t min_matches;     /* fewest points on known cells, >= 3 */
+  float max_translation_m;  /* search bound of |(dx, dy)| and |dz| */
+  float max_yaw_rad;        /* search bound of |dyaw|, (0, 0.5] */
+  float max_sigma_m;        /* a direction is observable when its sigma is at most this (yaw times the lever) */
+  float robust_sigmas;      /* Cauchy weight scale in standard deviations */
+  float model_variance_m2;  /* variance added to every residual */
+  float convergence_m;      /* a step moving no point by more than this ends the iterations */
+} ccmap_registration_params;
+
+typedef struct ccmap_registration_result {
+  int32_t status;          /* ccmap_status; on any but CCMAP_OK nothing is claimed */
+  float correction[4];     /* dx, dy, dz (m), dyaw (rad) */
+  float sigma[4];          /* 1-sigma; +infinity where not observable */
+  uint8_t observable[4];   /* 1 where the terrain fixes the parameter */
+  uint32_t rank;           /* observable directions, 0 .. 4 */
+  uint32_t iterations;
+  uint32_t points_sampled;
+  uint32_t points_rejected;
+  uint32_t points_matched;
+  float lever_m;           /* the yaw's lever arm */
+  float residual_sigma;    /* RMS residual in its own standard deviations */
+  float centre[2];         /* rotation centre, map frame (m): the sensor origin; team alignment: the
+                              centre of the other map's cells */
+  uint32_t cells;          /* team alignment: the other map's usable cells; 0 for a frame */
+} ccmap_registration_result;
+
+/* The library's defaults (1,024 points, 10 iterations, ...). CCMAP_INVALID_ARGUMENT for NULL. */
+ccmap_status ccmap_default_registration_params(ccmap_registration_params* out);
+/* Registers map-frame points (xyz: 3 n floats) seen from sensor_origin_xyz before they are folded
+ * in; changes nothing in the map. params NULL: the defaults. Returns out->status:
+ * CCMAP_NOT_INITIALISED, CCMAP_INVALID_ARGUMENT (NULL out or origin, NULL xyz with n > 0, bad
+ * params), CCMAP_NON_FINITE_INPUT, CCMAP_OUT_OF_RANGE, CCMAP_DEGENERATE_INPUT, CCMAP_OUTSIDE_MAP
+ * (a pose far from the map), CCMAP_INSUFFICIENT_OVERLAP, CCMAP_NOT_CONVERGED. */
+ccmap_status ccmap_register_frame(const ccmap_map* map, const float* xyz, size_t n, const float* sensor_origin_xyz,
+                                  const ccmap_registration_params* params, ccmap_registration_result* out);
+/* The same for sensor-frame points with the sensor pose (rotation centre: its translation). */
+ccmap_status ccmap_register_frame_sensor(const ccmap_map* map, const float* xyz, size_t n, const ccmap_pose* pose,
+                                         const ccmap_registration_params* params, ccmap_registration_result* out);
+/* Team alignment (include/ccmap/registration/alignment.hpp): the correction of another map of the
+ * same preset, a snapshot (ccmap_save_snapshot) placed by the nominal offset (its map-frame
+ * point p lies at p + offset in this map, m), or an exchange delta placed by the two origins in
+ * the team frame (this map's origin given here). Also CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH,
+ * CCMAP_MISALIGNED (another cell width), CCMAP_OUT_OF_RANGE (a bad offset). */
+ccmap_status ccmap_align_snapshot(const ccmap_map* map, const uint8_t* data, size_t size, const float* offset_xyz_m,
+                                  const ccmap_registration_params* params, ccmap_registration_result* out);
+ccmap_status ccmap_align_delta(const ccmap_map* map, const uint8_t* data, size_t size, int32_t origin_x_cells,
+                               int32_t origin_y_cells, float origin_z_m, const ccmap_registration_params* params,
+                               ccmap_registration_result* out);
 
 /* ---- queries -------------------------------------------------------------------------------- */
 typedef enum ccmap_cell_class {
@@ -253,7 +330,8 @@ typedef struct ccmap_query_result {
 /* Answer of the finest layer that knows (x, y). Returns out->status (CCMAP_OK,
  * CCMAP_UNKNOWN, CCMAP_OUTSIDE_MAP, CCMAP_NOT_INITIALISED) or CCMAP_INVALID_ARGUMENT. */
 ccmap_status ccmap_query(const ccmap_map* map, float x, float y, ccmap_query_result* out);
-/* Answer of one layer (0 = finest). */
+/* Answer of one layer (0 = finest): as ccmap_query, and CCMAP_INVALID_ARGUMENT for a layer outside
+ * [0, ccmap_layer_count(map)). */
 ccmap_status ccmap_query_layer(const ccmap_map* map, int32_t layer, float x, float y, ccmap_query_result* out);
 
 /* Layers: count (0 for a bad handle), cells per layer (0 for a bad layer), cell width (m, 0 for
@@ -279,7 +357,8 @@ typedef struct ccmap_cell_record {
 } ccmap_cell_record;
 
 /* Writes every observed cell of `layer` into out[0..*written). CCMAP_BUFFER_TOO_SMALL (nothing
- * written) if capacity < ccmap_layer_capacity(map, layer). */
+ * written) if capacity < ccmap_layer_capacity(map, layer); CCMAP_INVALID_ARGUMENT: NULL out or
+ * written, a bad handle, a bad layer. *written is 0 on every refusal. */
 ccmap_status ccmap_export_layer(const ccmap_map* map, int32_t layer, ccmap_cell_record* out, size_t capacity,
                                 size_t* written);
 
@@ -327,7 +406,8 @@ typedef struct ccmap_footprint_result {
 } ccmap_footprint_result;
 
 /* Every part of the rectangle answered by the finest layer that knows it, as ccmap_query would
- * answer its points. Returns out->status, or CCMAP_INVALID_ARGUMENT (NULL pointers, bad handle).
+ * answer its points. Returns out->status, or CCMAP_INVALID_ARGUMENT (NULL pointers, bad handle);
+ * CCMAP_NOT_INITIALISED.
  * Refusals: CCMAP_NON_FINITE_INPUT, CCMAP_INVALID_ARGUMENT (zero heading, extents not > 0),
  * CCMAP_OUT_OF_RANGE (centre beyond 1e5 m; bounding box over CCMAP_MAX_FOOTPRINT_CELLS cells). */
 ccmap_status ccmap_query_footprint(const ccmap_map* map, const ccmap_footprint* footprint, ccmap_footprint_result* out);
@@ -370,11 +450,18 @@ typedef struct ccmap_path_result {
 
 /* The body at poses every sweep->step_m along the polyline xy[2*i], xy[2*i+1] (count 2 ..
  * CCMAP_MAX_PATH_VERTICES points, heading along each segment), until both a hazard and an unknown
- * footprint are found. Returns out->status or CCMAP_INVALID_ARGUMENT; CCMAP_OUT_OF_RANGE for more
- * than CCMAP_MAX_PATH_SAMPLES poses. */
+ * footprint are found. Returns out->status. Refused: CCMAP_INVALID_ARGUMENT (NULL sweep or out, a
+ * bad handle; NULL xy, fewer than 2 or more than CCMAP_MAX_PATH_VERTICES points, no segment of
+ * 1 um or more; sweep extents or step not > 0, max_unknown_share outside [0, 1]),
+ * CCMAP_NON_FINITE_INPUT (a point or the sweep), CCMAP_OUT_OF_RANGE (a point beyond 1e5 m, more
+ * than CCMAP_MAX_PATH_SAMPLES poses), CCMAP_NOT_INITIALISED. */
 ccmap_status ccmap_query_path(const ccmap_map* map, const float* xy, size_t count, const ccmap_path_sweep* sweep,
                               ccmap_path_result* out);
-/* The same along a circular arc from `start` (curvature 1/m, > 0 left; |curvature| length_m <= 2 pi). */
+/* The same along a circular arc from `start` (curvature 1/m, > 0 left; |curvature| length_m <= 2 pi).
+ * Refused: CCMAP_INVALID_ARGUMENT (NULL start, sweep or out, a bad handle; a heading shorter than
+ * 1e-6, a negative length; the sweep's as ccmap_query_path), CCMAP_NON_FINITE_INPUT,
+ * CCMAP_OUT_OF_RANGE (start beyond 1e5 m, |curvature| length_m > 2 pi, length_m > 1e4 m, more
+ * than CCMAP_MAX_PATH_SAMPLES poses), CCMAP_NOT_INITIALISED. */
 ccmap_status ccmap_query_arc(const ccmap_map* map, const ccmap_path_pose* start, float curvature, float length_m,
                              const ccmap_path_sweep* sweep, ccmap_path_result* out);
 
@@ -414,15 +501,21 @@ typedef struct ccmap_counters {
   uint64_t last_update_ns;      /* duration of the last accepted frame update */
 } ccmap_counters;
 
+/* CCMAP_INVALID_ARGUMENT: NULL out, a bad handle; CCMAP_NOT_INITIALISED (out untouched). */
 ccmap_status ccmap_get_counters(const ccmap_map* map, ccmap_counters* out);
 
 /* ---- snapshots (include/ccmap/persistence/snapshot.hpp has the byte format) ------------------------- */
 /* Bytes of a snapshot of this map (0 for a bad handle). */
 size_t ccmap_snapshot_size(const ccmap_map* map);
-/* CCMAP_BUFFER_TOO_SMALL if capacity < ccmap_snapshot_size(map); *written = bytes written. */
+/* *written = bytes written (0 on a refusal). CCMAP_BUFFER_TOO_SMALL if capacity <
+ * ccmap_snapshot_size(map); CCMAP_INVALID_ARGUMENT: NULL buffer or written, a bad handle;
+ * CCMAP_NOT_INITIALISED; CCMAP_NON_FINITE_INPUT: the map holds a NaN or Inf that a load would
+ * refuse (no update of this library writes one). */
 ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t capacity, size_t* written);
-/* All-or-nothing restore (the map may be uninitialised): CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH
- * (another format version or a snapshot of another preset), CCMAP_INVALID_ARGUMENT. */
+/* All-or-nothing restore (the map may be uninitialised; on a refusal it is bitwise unchanged):
+ * CCMAP_INVALID_ARGUMENT (NULL data, a bad handle), CCMAP_CORRUPT (truncated, trailing bytes, CRC
+ * mismatch, content no save writes), CCMAP_VERSION_MISMATCH (another format version or a snapshot
+ * of another preset). */
 ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size);
 
 /* ---- map exchange between rovers (include/ccmap/persistence/exchange.hpp: rules and byte format) ---- */
@@ -448,7 +541,7 @@ typedef struct ccmap_exchange ccmap_exchange; /* opaque: lives at the start of t
 /* Exact bytes and alignment an exchange of `preset` needs; 0 for a bad preset. */
 size_t ccmap_exchange_storage_size(ccmap_preset preset);
 size_t ccmap_exchange_storage_align(ccmap_preset preset);
-/* Constructs an unbound exchange of `preset` in storage (as ccmap_place). */
+/* Constructs an unbound exchange of `preset` in storage, with ccmap_place's refusals. */
 ccmap_status ccmap_exchange_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_exchange** out);
 
 /* Who this map is in the team, and where its map frame lies in the team frame. */
@@ -463,7 +556,8 @@ typedef struct ccmap_exchange_params {
 /* Binds the exchange to an initialised map of the same preset and starts afresh (nothing counts
  * as sent: the first export sends the whole map). Re-initialising or re-loading the map retires
  * the exchange (CCMAP_NOT_INITIALISED) until it is bound again. CCMAP_INVALID_ARGUMENT: NULL,
- * bad handles, another preset, a bad origin. */
+ * bad handles, another preset, a bad origin (origin_z_m not finite or beyond 1e5 m, a cell
+ * origin beyond +-2^30); CCMAP_NOT_INITIALISED: the map is not initialised. */
 ccmap_status ccmap_exchange_init(ccmap_exchange* exchange, ccmap_map* map, const ccmap_exchange_params* params);
 
 typedef struct ccmap_export_report {
@@ -477,8 +571,10 @@ typedef struct ccmap_export_report {
 /* Writes a delta of what the map gained since the last export (coarsest layer first, as many
  * cells as fit) and counts it as sent. weight_floor >= 0: cells whose gain weighs less stay
  * pending; so do the cells of layers finer than finest_layer (0: every layer). report may be
- * NULL. CCMAP_BUFFER_TOO_SMALL: capacity < ccmap_delta_min_size; CCMAP_INVALID_ARGUMENT: a
- * negative floor or a layer beyond the map's. */
+ * NULL. CCMAP_BUFFER_TOO_SMALL: capacity < ccmap_delta_min_size; CCMAP_INVALID_ARGUMENT: NULL
+ * buffer or written, a bad handle, a negative or NaN floor, a layer outside the map's;
+ * CCMAP_NOT_INITIALISED: the exchange is not bound, or its map was re-initialised or re-loaded
+ * since. Nothing counts as sent on a refusal. */
 ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, size_t capacity, float weight_floor,
                                    int32_t finest_layer, size_t* written, ccmap_export_report* report);
 
@@ -490,16 +586,23 @@ typedef struct ccmap_merge_report {
   uint32_t deltas_missed;  /* sequence numbers of this sender lost before this delta */
 } ccmap_merge_report;
 
-/* Folds another rover's delta into the map, all-or-nothing: CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH,
- * CCMAP_MISALIGNED, CCMAP_DUPLICATE, CCMAP_BUFFER_TOO_SMALL (peer table full), CCMAP_OUT_OF_RANGE;
- * on any of them the map is bitwise unchanged. report may be NULL. */
+/* Folds another rover's delta into the map, all-or-nothing: CCMAP_NOT_INITIALISED (as for
+ * export), CCMAP_INVALID_ARGUMENT (NULL data, a bad handle), CCMAP_CORRUPT, CCMAP_VERSION_MISMATCH,
+ * CCMAP_MISALIGNED, CCMAP_DUPLICATE, CCMAP_BUFFER_TOO_SMALL (peer table full), CCMAP_OUT_OF_RANGE
+ * (the merge would leave a cell non-finite or beyond 1e5 m); on any of them the map is bitwise
+ * unchanged (include/ccmap/persistence/exchange.hpp lists when each applies). report may be NULL. */
 ccmap_status ccmap_exchange_merge_delta(ccmap_exchange* exchange, const uint8_t* data, size_t size,
                                         ccmap_merge_report* report);
-/* Folds a snapshot of an independently built map (its origin minus this one's: finest cells, m). */
+/* Folds a snapshot of an independently built map (its origin minus this one's: finest cells, m),
+ * all-or-nothing: CCMAP_NOT_INITIALISED (as for export), ccmap_load_snapshot's refusals, then
+ * CCMAP_MISALIGNED (another finest cell width, or an offset that is not a whole number of
+ * coarsest cells), CCMAP_INVALID_ARGUMENT (a non-finite offset_z_m), CCMAP_OUT_OF_RANGE (as for a
+ * delta). report may be NULL. */
 ccmap_status ccmap_exchange_merge_snapshot(ccmap_exchange* exchange, const uint8_t* data, size_t size,
                                            int32_t offset_x_cells, int32_t offset_y_cells, float offset_z_m,
                                            ccmap_merge_report* report);
-/* The same into a map without an exchange (e.g. merging saved maps on the ground). */
+/* The same into a map without an exchange (e.g. merging saved maps on the ground), with the same
+ * refusals (CCMAP_NOT_INITIALISED: the map is not initialised). */
 ccmap_status ccmap_merge_snapshot(ccmap_map* map, const uint8_t* data, size_t size, int32_t offset_x_cells,
                                   int32_t offset_y_cells, float offset_z_m, ccmap_merge_report* report);
 
@@ -519,6 +622,7 @@ typedef struct ccmap_exchange_counters {
   uint64_t cells_merged;
   uint64_t cells_outside;
 } ccmap_exchange_counters;
+/* CCMAP_INVALID_ARGUMENT: NULL out, a bad handle. An exchange never bound answers zeros. */
 ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_exchange_counters* out);
 
 /* Name of the linked platform implementation ("posix", "baremetal"). */

@@ -17,6 +17,7 @@
 #include "ccmap/persistence/exchange.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/alignment.hpp"
 #include "ccmap/platform/platform.hpp"
 
 namespace ccmap {
@@ -38,6 +39,9 @@ CCMAP_SAME_STATUS(CCMAP_CORRUPT, kCorrupt);
 CCMAP_SAME_STATUS(CCMAP_VERSION_MISMATCH, kVersionMismatch);
 CCMAP_SAME_STATUS(CCMAP_DUPLICATE, kDuplicate);
 CCMAP_SAME_STATUS(CCMAP_MISALIGNED, kMisaligned);
+CCMAP_SAME_STATUS(CCMAP_INSUFFICIENT_OVERLAP, kInsufficientOverlap);
+CCMAP_SAME_STATUS(CCMAP_DEGENERATE_INPUT, kDegenerateInput);
+CCMAP_SAME_STATUS(CCMAP_NOT_CONVERGED, kNotConverged);
 #undef CCMAP_SAME_STATUS
 static_assert(static_cast<int>(CCMAP_CLASS_UNKNOWN) == static_cast<int>(CellClass::kUnknown), "class");
 static_assert(static_cast<int>(CCMAP_CLASS_TRAVERSABLE) == static_cast<int>(CellClass::kTraversable), "class");
@@ -129,6 +133,17 @@ static_assert(ExchangePreset<SingleKalmanConfig>::kStorageSize <= CCMAP_SINGLE_K
 static_assert(ExchangePreset<SingleOmgConfig>::kStorageSize <= CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE,
               "raise CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE");
 static_assert(MapExchange<CadreConfig>::max_delta_size() == CCMAP_CADRE_DELTA_MAX_SIZE, "CCMAP_CADRE_DELTA_MAX_SIZE");
+// The smallest CADRE delta, as persistence/exchange.hpp documents it (header, five layer headers, CRC).
+static_assert(MapExchange<CadreConfig>::min_delta_size() == 152U, "the empty CADRE delta is documented as 152 bytes");
+// The KiB figures beside the storage constants in ccmap.h.
+static_assert(CCMAP_CADRE_STORAGE_SIZE == 784U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 3008U * 1024U &&
+                  CCMAP_SINGLE_KALMAN_STORAGE_SIZE == 3296U * 1024U && CCMAP_SINGLE_OMG_STORAGE_SIZE == 1216U * 1024U,
+              "ccmap.h: a map storage constant and its KiB comment disagree");
+static_assert(CCMAP_CADRE_EXCHANGE_STORAGE_SIZE == 464U * 1024U &&
+                  CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE == 2624U * 1024U &&
+                  CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE == 784U * 1024U &&
+                  CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE == 784U * 1024U,
+              "ccmap.h: an exchange storage constant and its KiB comment disagree");
 
 ccmap_status to_c(Status status) noexcept { return static_cast<ccmap_status>(status); }
 
@@ -205,6 +220,46 @@ Result dispatch(const ccmap_map* map, Result bad, Fn&& fn) noexcept {
     default: break;
   }
   return bad;
+}
+
+/// The registration parameters of the C call (NULL: the defaults).
+RegistrationParams registration_params_from_c(const ccmap_registration_params* p) noexcept {
+  if (p == nullptr) {
+    return default_registration_params();
+  }
+  RegistrationParams out{};
+  out.max_points = p->max_points;
+  out.max_iterations = p->max_iterations;
+  out.min_matches = p->min_matches;
+  out.max_translation_m = p->max_translation_m;
+  out.max_yaw_rad = p->max_yaw_rad;
+  out.max_sigma_m = p->max_sigma_m;
+  out.robust_sigmas = p->robust_sigmas;
+  out.model_variance_m2 = p->model_variance_m2;
+  out.convergence_m = p->convergence_m;
+  return out;
+}
+
+void registration_to_c(const RegistrationResult& r, float centre_x, float centre_y, std::uint32_t cells,
+                       ccmap_registration_result* out) noexcept {
+  out->status = static_cast<std::int32_t>(r.status);
+  const float correction[4] = {r.dx, r.dy, r.dz, r.dyaw};
+  const float sigma[4] = {r.sigma_dx, r.sigma_dy, r.sigma_dz, r.sigma_dyaw};
+  for (int k = 0; k < 4; ++k) {
+    out->correction[k] = correction[k];
+    out->sigma[k] = sigma[k];
+    out->observable[k] = r.observable[k] ? 1U : 0U;
+  }
+  out->rank = r.rank;
+  out->iterations = r.iterations;
+  out->points_sampled = r.points_sampled;
+  out->points_rejected = r.points_rejected;
+  out->points_matched = r.points_matched;
+  out->lever_m = r.lever_m;
+  out->residual_sigma = r.residual_sigma;
+  out->centre[0] = centre_x;
+  out->centre[1] = centre_y;
+  out->cells = cells;
 }
 
 const HandleHeader* exchange_header_of(const ccmap_exchange* exchange) noexcept {
@@ -441,7 +496,7 @@ extern "C" {
 
 const char* ccmap_status_string(ccmap_status status) {
   const int s = static_cast<int>(status);
-  if (s < static_cast<int>(CCMAP_OK) || s > static_cast<int>(CCMAP_MISALIGNED)) {
+  if (s < static_cast<int>(CCMAP_OK) || s > static_cast<int>(CCMAP_NOT_CONVERGED)) {
     return "invalid_status";
   }
   return ccmap::to_string(static_cast<Status>(s));
@@ -891,6 +946,95 @@ ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_e
                                    c.bytes_exported,    c.bytes_merged,       c.cells_exported,   c.cells_merged,
                                    c.cells_outside};
     return CCMAP_OK;
+  });
+}
+
+ccmap_status ccmap_default_registration_params(ccmap_registration_params* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::RegistrationParams p = ccmap::default_registration_params();
+  *out = ccmap_registration_params{p.max_points,  p.max_iterations, p.min_matches,      p.max_translation_m,
+                                   p.max_yaw_rad, p.max_sigma_m,    p.robust_sigmas,    p.model_variance_m2,
+                                   p.convergence_m};
+  return CCMAP_OK;
+}
+
+ccmap_status ccmap_register_frame(const ccmap_map* map, const float* xyz, size_t n, const float* sensor_origin_xyz,
+                                  const ccmap_registration_params* params, ccmap_registration_result* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::registration_to_c(ccmap::detail::unclaimed_result(Status::kInvalidArgument), 0.0F, 0.0F, 0U, out);
+  if (sensor_origin_xyz == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const auto* points = reinterpret_cast<const ccmap::PointXYZ*>(xyz);
+  const ccmap::PointXYZ origin{sensor_origin_xyz[0], sensor_origin_xyz[1], sensor_origin_xyz[2]};
+  const ccmap::RegistrationParams p = ccmap::registration_params_from_c(params);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::RegistrationResult r = stack.register_frame(points, n, origin, p);
+    ccmap::registration_to_c(r, origin.x, origin.y, 0U, out);
+    return ccmap::to_c(r.status);
+  });
+}
+
+ccmap_status ccmap_register_frame_sensor(const ccmap_map* map, const float* xyz, size_t n, const ccmap_pose* pose,
+                                         const ccmap_registration_params* params, ccmap_registration_result* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::registration_to_c(ccmap::detail::unclaimed_result(Status::kInvalidArgument), 0.0F, 0.0F, 0U, out);
+  if (pose == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const auto* points = reinterpret_cast<const ccmap::PointXYZ*>(xyz);
+  ccmap::Pose p{};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      p.rotation[r][c] = pose->rotation[3 * r + c];
+    }
+  }
+  p.translation = ccmap::PointXYZ{pose->translation[0], pose->translation[1], pose->translation[2]};
+  const ccmap::RegistrationParams rp = ccmap::registration_params_from_c(params);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::RegistrationResult r = stack.register_frame_sensor(points, n, p, rp);
+    ccmap::registration_to_c(r, p.translation.x, p.translation.y, 0U, out);
+    return ccmap::to_c(r.status);
+  });
+}
+
+ccmap_status ccmap_align_snapshot(const ccmap_map* map, const uint8_t* data, size_t size, const float* offset_xyz_m,
+                                  const ccmap_registration_params* params, ccmap_registration_result* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::registration_to_c(ccmap::detail::unclaimed_result(Status::kInvalidArgument), 0.0F, 0.0F, 0U, out);
+  if (offset_xyz_m == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const ccmap::MapOffset offset{offset_xyz_m[0], offset_xyz_m[1], offset_xyz_m[2]};
+  const ccmap::RegistrationParams p = ccmap::registration_params_from_c(params);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::AlignmentResult a = ccmap::align_snapshot(stack, data, size, offset, p);
+    ccmap::registration_to_c(a.correction, a.centre_x_m, a.centre_y_m, a.cells, out);
+    return ccmap::to_c(a.correction.status);
+  });
+}
+
+ccmap_status ccmap_align_delta(const ccmap_map* map, const uint8_t* data, size_t size, int32_t origin_x_cells,
+                               int32_t origin_y_cells, float origin_z_m, const ccmap_registration_params* params,
+                               ccmap_registration_result* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::registration_to_c(ccmap::detail::unclaimed_result(Status::kInvalidArgument), 0.0F, 0.0F, 0U, out);
+  const ccmap::RegistrationParams p = ccmap::registration_params_from_c(params);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
+    const ccmap::AlignmentResult a =
+        ccmap::align_delta(stack, data, size, ccmap::CellIndex{origin_x_cells, origin_y_cells}, origin_z_m, p);
+    ccmap::registration_to_c(a.correction, a.centre_x_m, a.centre_y_m, a.cells, out);
+    return ccmap::to_c(a.correction.status);
   });
 }
 

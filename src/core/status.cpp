@@ -17,6 +17,9 @@ const char* to_string(Status status) noexcept {
     case Status::kVersionMismatch: return "version_mismatch";
     case Status::kDuplicate: return "duplicate";
     case Status::kMisaligned: return "misaligned";
+    case Status::kInsufficientOverlap: return "insufficient_overlap";
+    case Status::kDegenerateInput: return "degenerate_input";
+    case Status::kNotConverged: return "not_converged";
   }
   return "invalid_status";
 }

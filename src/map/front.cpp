@@ -3,6 +3,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__aarch64__) && defined(__ARM_NEON)
+#include <arm_neon.h>
+#endif
+
 namespace ccmap::detail {
 namespace {
 
@@ -208,9 +212,9 @@ inline FineSlot fine_slot_of(const FineWindow& fine) noexcept {
 /// vectorise the routing's float compares in one loop with the transform): routing, the Kalman
 /// slot, the Q14 height and the range key.
 template <int kLayers>
-void finish_entries(std::size_t n, const float (&bounds)[kFrontMaxLayers], const FineSlot& fine,
+void finish_entries(std::size_t first, std::size_t n, const float (&bounds)[kFrontMaxLayers], const FineSlot& fine,
                     FrontChunk& __restrict out) noexcept {
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = first; i < n; ++i) {
     const std::int32_t valid = out.code[i];
     const float r2 = out.range_sq[i];
     const std::int32_t routed = route<kLayers>(r2, bounds);
@@ -228,6 +232,172 @@ void finish_entries(std::size_t n, const float (&bounds)[kFrontMaxLayers], const
   }
 }
 
+#if defined(__aarch64__) && defined(__ARM_NEON)
+#define CCMAP_FRONT_NEON 1
+// The chunk functions in NEON, four points per step, for the first n - n % 4 points (the rest,
+// and every other target, take the portable loops): the same IEEE operations in the same order
+// as map_chunk / sensor_chunk and finish_entries, fused into one pass (the vectoriser keeps them
+// in two and spills their constants). tests/map/front_test.cpp checks them against the portable
+// loops bit for bit, and the golden hashes check host == aarch64.
+
+/// Routing, the Kalman slot, the Q14 height and the range key of four points, and every store.
+template <int kLayers>
+struct NeonFinish {
+  explicit NeonFinish(const FrontConfig& config, const FineSlot& fine) noexcept
+      : side(vdupq_n_u32(fine.side)),
+        mask(vdupq_n_u32(fine.mask)),
+        log2_side(vdupq_n_s32(static_cast<std::int32_t>(fine.log2_side))),
+        min_x(vdupq_n_u32(fine.min_x)),
+        min_y(vdupq_n_u32(fine.min_y)),
+        q14(vdupq_n_f32(16384.0F)),
+        key_cap(vdupq_n_f32(524287.0F)),
+        key_scale(vdupq_n_f32(4096.0F)) {
+    for (int k = 0; k < kLayers; ++k) {
+      bound[static_cast<std::size_t>(k)] = vdupq_n_f32(config.max_range_sq[k]);
+    }
+  }
+
+  void store(std::size_t i, uint32x4_t refused, uint32x4_t valid, int32x4_t ix0, int32x4_t iy0, float32x4_t fx,
+             float32x4_t fy, float32x4_t z, float32x4_t r2, FrontChunk& __restrict out) const noexcept {
+    // Routing: the bounds the range exceeds; too noisy beyond the last (bounds are
+    // non-decreasing: then it exceeds them all) or at the sensor (not > 0).
+    uint32x4_t layer = vdupq_n_u32(0U);
+    for (int k = 0; k + 1 < kLayers; ++k) {
+      layer = vsubq_u32(layer, vcgtq_f32(r2, bound[static_cast<std::size_t>(k)]));  // true is all ones: -1
+    }
+    const uint32x4_t noisy = vorrq_u32(vcgtq_f32(r2, bound[static_cast<std::size_t>(kLayers - 1)]), vclezq_f32(r2));
+    const uint32x4_t routed = vbslq_u32(noisy, vdupq_n_u32(kFrontTooNoisy), layer);
+    const uint32x4_t code = vbslq_u32(refused, valid, routed);
+    // The Kalman slot: routed to layer 0 and inside the finest window.
+    const uint32x4_t uix = vreinterpretq_u32_s32(ix0);
+    const uint32x4_t uiy = vreinterpretq_u32_s32(iy0);
+    const uint32x4_t ok = vandq_u32(vandq_u32(vcltq_u32(vsubq_u32(uix, min_x), side), vcltq_u32(vsubq_u32(uiy, min_y), side)),
+                                    vceqzq_u32(code));
+    const uint32x4_t slot = vorrq_u32(vshlq_u32(vandq_u32(uiy, mask), log2_side), vandq_u32(uix, mask));
+    vst1q_s32(&out.code[i], vreinterpretq_s32_u32(code));
+    vst1q_s32(&out.ix0[i], ix0);
+    vst1q_s32(&out.iy0[i], iy0);
+    vst1q_f32(&out.fx[i], fx);
+    vst1q_f32(&out.fy[i], fy);
+    vst1q_f32(&out.z[i], z);
+    vst1q_f32(&out.range_sq[i], r2);
+    vst1q_s32(&out.fine_slot[i], vreinterpretq_s32_u32(vornq_u32(vandq_u32(slot, ok), ok)));
+    vst1q_s32(&out.height_q14[i], vcvtmq_s32_f32(vmulq_f32(z, q14)));
+    vst1q_s32(&out.range_key[i], vcvtmq_s32_f32(vmulq_f32(vminq_f32(r2, key_cap), key_scale)));
+  }
+
+  float32x4_t bound[static_cast<std::size_t>(kLayers)];
+  uint32x4_t side, mask;
+  int32x4_t log2_side;
+  uint32x4_t min_x, min_y;
+  float32x4_t q14, key_cap, key_scale;
+};
+
+/// Validity of four points from their bit patterns shifted left by one (the sign dropped):
+/// all-ones lanes in *refused, the reason (kFrontOutOfRange, or kFrontNonFinite for NaN/Inf)
+/// in the result. `inclusive`: the limit itself is accepted (map frame) or not (sensor frame).
+inline uint32x4_t neon_validity(uint32x4_t bx, uint32x4_t by, uint32x4_t bz, std::uint32_t limit_bits, bool inclusive,
+                                uint32x4_t* refused) noexcept {
+  const uint32x4_t largest2 = vmaxq_u32(vmaxq_u32(vshlq_n_u32(bx, 1), vshlq_n_u32(by, 1)), vshlq_n_u32(bz, 1));
+  const uint32x4_t limit2 = vdupq_n_u32(limit_bits << 1U);
+  *refused = inclusive ? vcgtq_u32(largest2, limit2) : vcgeq_u32(largest2, limit2);
+  // kFrontOutOfRange, minus one (kFrontNonFinite) where NaN or Inf: a true compare is all ones.
+  return vandq_u32(*refused, vaddq_u32(vdupq_n_u32(kFrontOutOfRange), vcgeq_u32(largest2, vdupq_n_u32(kInfBits << 1U))));
+}
+
+/// floor_and_fraction of four coordinates: the index and fraction; `far` gathers |x c| >= 2^23.
+inline void neon_floor_and_fraction(float32x4_t x, float32x4_t c, int32x4_t* index, float32x4_t* fraction,
+                                    uint32x4_t* far) noexcept {
+  const float32x4_t p = vmulq_f32(x, c);
+  const int32x4_t whole = vcvtmq_s32_f32(p);
+  // x c + float(-whole), one rounding (FMLA): the portable std::fma(x, c, float(-whole)).
+  const float32x4_t rest = vfmaq_f32(vcvtq_f32_s32(vnegq_s32(whole)), x, c);
+  const int32x4_t negative = vshrq_n_s32(vreinterpretq_s32_f32(rest), 31);  // all ones if the sign bit is set
+  *index = vaddq_s32(whole, negative);
+  *fraction = vbslq_f32(vreinterpretq_u32_s32(negative), vaddq_f32(rest, vdupq_n_f32(1.0F)), rest);
+  *far = vorrq_u32(*far, vcageq_f32(p, vdupq_n_f32(8388608.0F)));
+}
+
+template <int kLayers>
+std::size_t map_chunk_neon(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose,
+                           const FrontConfig& config, const FineSlot& fine, FrontChunk& __restrict out,
+                           std::uint32_t* far_points) noexcept {
+  const NeonFinish<kLayers> finish(config, fine);
+  const float32x4_t ox = vdupq_n_f32(pose.origin[0]);
+  const float32x4_t oy = vdupq_n_f32(pose.origin[1]);
+  const float32x4_t oz = vdupq_n_f32(pose.origin[2]);
+  const float32x4_t inv = vdupq_n_f32(config.inv_width);
+  const std::uint32_t limit_bits = bits_of(kMaxAbsCoordinateM);
+  uint32x4_t far = vdupq_n_u32(0U);
+  const std::size_t done = n - n % 4U;
+  for (std::size_t i = 0; i < done; i += 4U) {
+    const float32x4x3_t p = vld3q_f32(&points[i].x);
+    const uint32x4_t bx = vreinterpretq_u32_f32(p.val[0]);
+    const uint32x4_t by = vreinterpretq_u32_f32(p.val[1]);
+    const uint32x4_t bz = vreinterpretq_u32_f32(p.val[2]);
+    uint32x4_t refused;
+    const uint32x4_t valid = neon_validity(bx, by, bz, limit_bits, true, &refused);
+    const float32x4_t x = vreinterpretq_f32_u32(vbicq_u32(bx, refused));  // refused lanes: zeros
+    const float32x4_t y = vreinterpretq_f32_u32(vbicq_u32(by, refused));
+    const float32x4_t z = vreinterpretq_f32_u32(vbicq_u32(bz, refused));
+    const float32x4_t dx = vsubq_f32(x, ox);
+    const float32x4_t dy = vsubq_f32(y, oy);
+    const float32x4_t dz = vsubq_f32(z, oz);
+    const float32x4_t r2 = vaddq_f32(vaddq_f32(vmulq_f32(dx, dx), vmulq_f32(dy, dy)), vmulq_f32(dz, dz));
+    int32x4_t ix0;
+    int32x4_t iy0;
+    float32x4_t fx;
+    float32x4_t fy;
+    neon_floor_and_fraction(x, inv, &ix0, &fx, &far);
+    neon_floor_and_fraction(y, inv, &iy0, &fy, &far);
+    finish.store(i, refused, valid, ix0, iy0, fx, fy, z, r2, out);
+  }
+  *far_points = vmaxvq_u32(far) != 0U ? 1U : 0U;
+  return done;
+}
+
+template <int kLayers>
+std::size_t sensor_chunk_neon(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose,
+                              const FrontConfig& config, const FineSlot& fine, FrontChunk& __restrict out) noexcept {
+  const NeonFinish<kLayers> finish(config, fine);
+  const float32x4_t c0 = vdupq_n_f32(pose.rotation_cells[0]);
+  const float32x4_t c1 = vdupq_n_f32(pose.rotation_cells[1]);
+  const float32x4_t c2 = vdupq_n_f32(pose.rotation_cells[2]);
+  const float32x4_t c3 = vdupq_n_f32(pose.rotation_cells[3]);
+  const float32x4_t c4 = vdupq_n_f32(pose.rotation_cells[4]);
+  const float32x4_t c5 = vdupq_n_f32(pose.rotation_cells[5]);
+  const float32x4_t r6 = vdupq_n_f32(pose.rotation[6]);
+  const float32x4_t r7 = vdupq_n_f32(pose.rotation[7]);
+  const float32x4_t r8 = vdupq_n_f32(pose.rotation[8]);
+  const float32x4_t fx0 = vdupq_n_f32(pose.anchor_fraction[0]);
+  const float32x4_t fy0 = vdupq_n_f32(pose.anchor_fraction[1]);
+  const float32x4_t oz = vdupq_n_f32(pose.origin[2]);
+  const int32x4_t ax = vdupq_n_s32(pose.anchor.x);
+  const int32x4_t ay = vdupq_n_s32(pose.anchor.y);
+  const std::size_t done = n - n % 4U;
+  for (std::size_t i = 0; i < done; i += 4U) {
+    const float32x4x3_t p = vld3q_f32(&points[i].x);
+    const uint32x4_t bx = vreinterpretq_u32_f32(p.val[0]);
+    const uint32x4_t by = vreinterpretq_u32_f32(p.val[1]);
+    const uint32x4_t bz = vreinterpretq_u32_f32(p.val[2]);
+    uint32x4_t refused;
+    const uint32x4_t valid = neon_validity(bx, by, bz, 0x45000000U, false, &refused);  // bits_of(2048.0F), exclusive
+    const float32x4_t sx = vreinterpretq_f32_u32(vbicq_u32(bx, refused));  // refused lanes: zeros
+    const float32x4_t sy = vreinterpretq_f32_u32(vbicq_u32(by, refused));
+    const float32x4_t sz = vreinterpretq_f32_u32(vbicq_u32(bz, refused));
+    const float32x4_t ux = vaddq_f32(vaddq_f32(vaddq_f32(vmulq_f32(c0, sx), vmulq_f32(c1, sy)), vmulq_f32(c2, sz)), fx0);
+    const float32x4_t uy = vaddq_f32(vaddq_f32(vaddq_f32(vmulq_f32(c3, sx), vmulq_f32(c4, sy)), vmulq_f32(c5, sz)), fy0);
+    const float32x4_t z = vaddq_f32(vaddq_f32(vaddq_f32(vmulq_f32(r6, sx), vmulq_f32(r7, sy)), vmulq_f32(r8, sz)), oz);
+    const float32x4_t r2 = vaddq_f32(vaddq_f32(vmulq_f32(sx, sx), vmulq_f32(sy, sy)), vmulq_f32(sz, sz));
+    const int32x4_t wx = vcvtmq_s32_f32(ux);  // floor
+    const int32x4_t wy = vcvtmq_s32_f32(uy);
+    finish.store(i, refused, valid, vaddq_s32(ax, wx), vaddq_s32(ay, wy), vsubq_f32(ux, vcvtq_f32_s32(wx)),
+                 vsubq_f32(uy, vcvtq_f32_s32(wy)), z, r2, out);
+  }
+  return done;
+}
+#endif
+
 // __restrict: the caller's points and the chunk never overlap (the chunk is the update path's
 // own scratch), which lets the loops vectorise without run-time alias checks.
 template <int kLayers>
@@ -240,7 +410,11 @@ void map_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose
   const float oz = pose.origin[2];
   const FineSlot fine = fine_slot_of(window);
   std::uint32_t far = 0U;
-  for (std::size_t i = 0; i < n; ++i) {
+  std::size_t first = 0U;
+#if defined(CCMAP_FRONT_NEON)
+  first = map_chunk_neon<kLayers>(points, n, pose, config, fine, out, &far);
+#endif
+  for (std::size_t i = first; i < n; ++i) {
     const std::int32_t valid = validity(bits_of(points[i].x), bits_of(points[i].y), bits_of(points[i].z), limit_bits, true);
     // Refused lanes compute on zeros: every conversion below stays in range.
     const float x = valid == 0 ? points[i].x : 0.0F;
@@ -259,14 +433,18 @@ void map_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose
     // Products of 2^23 cells or more (cells narrower than 12 mm far from the origin): exactly,
     // and the Kalman slot from the exact index.
     for (std::size_t i = 0; i < n; ++i) {
-      if (out.code[i] == 0) {
+      // Valid points only: routed (the NEON part, before `first`) or valid so far (0, after it).
+      if (out.code[i] < std::int32_t{kFrontNonFinite}) {
         exact_cell(points[i].x, inv, &out.ix0[i], &out.fx[i]);
         exact_cell(points[i].y, inv, &out.iy0[i], &out.fy[i]);
       }
     }
+    // The NEON part's slots from the exact indices (the portable part is finished below).
+    finish_entries<kLayers>(0U, first, config.max_range_sq, fine, out);
   }
-  finish_entries<kLayers>(n, config.max_range_sq, fine, out);
+  finish_entries<kLayers>(first, n, config.max_range_sq, fine, out);
 }
+
 
 template <int kLayers>
 void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
@@ -282,7 +460,11 @@ void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FrameP
   const std::int32_t ay = pose.anchor.y;
   const float oz = pose.origin[2];
   const FineSlot fine = fine_slot_of(window);
-  for (std::size_t i = 0; i < n; ++i) {
+  std::size_t first = 0U;
+#if defined(CCMAP_FRONT_NEON)
+  first = sensor_chunk_neon<kLayers>(points, n, pose, config, fine, out);
+#endif
+  for (std::size_t i = first; i < n; ++i) {
     const std::int32_t valid = validity(bits_of(points[i].x), bits_of(points[i].y), bits_of(points[i].z), kLimitBits, false);
     const float sx = valid == 0 ? points[i].x : 0.0F;
     const float sy = valid == 0 ? points[i].y : 0.0F;
@@ -304,7 +486,9 @@ void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FrameP
   if (pose.near_limit) {
     // The map-frame position must lie within kMaxAbsCoordinateM on every axis.
     for (std::size_t i = 0; i < n; ++i) {
-      if (out.code[i] != 0) {
+      // Refused already (by validity): keep that reason. A routed or too-noisy point (the NEON
+      // part is routed already) beyond the map's limit is out of range.
+      if (out.code[i] == std::int32_t{kFrontNonFinite} || out.code[i] == std::int32_t{kFrontOutOfRange}) {
         continue;
       }
       const PointXYZ& s = points[i];
@@ -313,10 +497,11 @@ void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FrameP
       const float mz = out.z[i];
       if (std::fabs(mx) > kMaxAbsCoordinateM || std::fabs(my) > kMaxAbsCoordinateM || std::fabs(mz) > kMaxAbsCoordinateM) {
         out.code[i] = std::int32_t{kFrontOutOfRange};
+        out.fine_slot[i] = -1;
       }
     }
   }
-  finish_entries<kLayers>(n, config.max_range_sq, fine, out);
+  finish_entries<kLayers>(first, n, config.max_range_sq, fine, out);
 }
 
 }  // namespace

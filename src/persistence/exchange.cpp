@@ -216,7 +216,7 @@ Status delta_read_header(const std::uint8_t* data, std::size_t size, const Snaps
   if (envelope != Status::kOk) {
     return envelope;
   }
-  r.seek(kSnapshotHeaderBytes);  // magic, version, reserved, size: the envelope's 12 bytes
+  r.seek(kSnapshotHeaderBytes);  // past the envelope's magic, version, reserved and size
   const Status shape = snapshot_check_fingerprint(r, expected);
   if (shape != Status::kOk) {
     return shape;

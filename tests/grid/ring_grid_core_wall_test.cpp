@@ -69,7 +69,8 @@ std::uint32_t check(RingLayer<WallCell, 8>& layer) noexcept {
   mismatches += view.side() == 8 && view.centre() == CellIndex{-1, 4} ? 0U : 1U;
   mismatches += view.cell_width() > 0.24F && view.inv_cell_width() > 3.99F ? 0U : 1U;
   layer.clear();
-  mismatches += layer.cell(CellIndex{0, 4})->count == 0U ? 0U : 1U;
+  const WallCell* cleared = layer.cell(CellIndex{0, 4});
+  mismatches += cleared != nullptr && cleared->count == 0U ? 0U : 1U;
   mismatches += layer.initialised() ? 0U : 1U;
   CellIndex index{0, 0};
   mismatches +=

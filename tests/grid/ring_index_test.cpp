@@ -222,8 +222,7 @@ std::int64_t exact_cell(float x, float width) {
 
 TEST(IndexOfPosition, FloatRoundingLimitNearEdges) {
   // Contract (ring_index.hpp): near a cell boundary the index may be off by one because
-  // fl(1/w) is rounded and positions are floored to Q18 (2^-18 m); only within
-  // ~2^-23 * |x| + 2^-18 m of the boundary, never by more than one.
+  // fl(1/w) is rounded; only within ~2^-23 * |x| of the boundary, never by more than one.
   // A few floats on each side of many boundaries, near the origin and near 100 km.
   int off_by_one = 0;
   int checked = 0;
@@ -253,7 +252,7 @@ TEST(IndexOfPosition, FloatRoundingLimitNearEdges) {
         ASSERT_LE(std::llabs(index.x - exact), 1)
             << "x = " << x << " m, width " << width << ": index " << index.x << ", exact " << exact;
         // Within 2^-22 |x| + 2^-18 m: the documented ~2^-23 |x| with a factor-2 margin (measured
-        // worst on these widths: 0.7 * 2^-23 |x|) plus the Q18 quantum.
+        // worst on these widths: 0.7 * 2^-23 |x|), and 2^-18 m where |x| is tiny.
         const double edge = static_cast<double>(std::max<std::int64_t>(index.x, exact)) *
                             static_cast<double>(width);
         ASSERT_LE(std::fabs(static_cast<double>(x) - edge),

@@ -15,6 +15,7 @@
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
+#include "ccmap/platform/platform.hpp"
 #include "support/flight_cycle.hpp"
 #include "support/icount_marker.hpp"
 
@@ -40,11 +41,14 @@ int run(int cycles) {
       return 1;
     }
   }
+  std::uint64_t cycle_cpu_ns = 0U;
   for (int k = 0; k < cycles; ++k) {
     const ccmap::test::CadreFrame frame = ccmap::test::cycle_frame(k);
     const ccmap::test::CyclePose pose = ccmap::test::cycle_pose(k);
+    const std::uint64_t cpu0 = ccmap::platform::thread_cpu_ns();
     const ccmap::test::CycleOutcome outcome =
         counted<1>([&] { return ccmap::test::run_cycle(*stack, pose, frame); });
+    cycle_cpu_ns += ccmap::platform::thread_cpu_ns() - cpu0;
     if (!ccmap::test::cycle_ok(outcome, frame.sensor_points.size())) {
       std::fprintf(stderr, "ccmap_cycle_icount: cycle %d did not do its work\n", k);
       return 1;
@@ -64,6 +68,9 @@ int run(int cycles) {
       return 1;
     }
   }
+  // The cycles' thread CPU time (with the counting plugin under QEMU: the emulator's time), for
+  // the icount runner's time per instruction (cmake/ccmap_icount_run.cmake).
+  std::printf("[ icount-time ] region=1 cpu_ns=%llu\n", static_cast<unsigned long long>(cycle_cpu_ns));
   std::printf("ccmap_cycle_icount: %d cycles of %d x %d points, %s CCM cells\n", cycles, ccmap::test::kCycleWidthPx,
               ccmap::test::kCycleHeightPx,
               ccmap::Stack<Config>::kCcmCellKind == ccmap::CcmCellKind::kFull ? "full" : "paper");

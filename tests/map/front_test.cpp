@@ -188,6 +188,119 @@ TEST(Front, SensorTransformWithinTwoTenMillionthsOfTheRangeAtTwoKilometres) {
   EXPECT_LT(worst, 2.0e-7 * 1400.0 * std::sqrt(3.0));
 }
 
+TEST(Front, ChunksOfManyPointsEqualOnePointAtATimeBitForBit) {
+  // On aarch64 the sensor chunk runs four points at a time in NEON and the rest (and a chunk of
+  // one point) in the portable loops: both must give the same bits, refusals, NaN, Inf, the
+  // sensor itself, points near the limit and the Kalman slot included. Elsewhere both are the
+  // portable loops (the check holds trivially there).
+  const float widths[5] = {0.04F, 0.08F, 0.16F, 0.32F, 0.64F};
+  sensor::RoutingTable<5> table{};
+  ASSERT_EQ(sensor::build_routing_table(sensor::cadre_stereo(), widths, sensor::constant_layer_max_sigma(0.04F), &table),
+            Status::kOk);
+  FrontConfig config{};
+  ASSERT_EQ(make_front_config(0.04F, table.max_range_sq, 5, &config), Status::kOk);
+  test::Rng rng(11);
+  const FineWindow fine{{-40, 0}, 64, 6};
+  const float specials[] = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -0.0F,
+                            0.0F, 2047.99F, -2048.0F, 1e-40F};
+  int compared = 0;
+  for (int f = 0; f < 40; ++f) {
+    const Pose pose = random_pose(rng, f < 20 ? 50.0 : 99000.0);  // the second half near the map's limit
+    FramePose frame{};
+    ASSERT_EQ(make_frame_pose(pose.translation, &pose.rotation[0][0], config, &frame), Status::kOk);
+    std::vector<PointXYZ> pts(kFrontChunkPoints);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      pts[i] = PointXYZ{static_cast<float>(rng.uniform(-4.0, 4.0)), static_cast<float>(rng.uniform(-4.0, 4.0)),
+                        static_cast<float>(rng.uniform(-1.0, 3.0))};
+      if (rng.uniform(0.0, 1.0) < 0.1) {
+        (i % 3 == 0 ? pts[i].x : (i % 3 == 1 ? pts[i].y : pts[i].z)) = specials[i % 7];
+      }
+      if (i == 5) pts[i] = PointXYZ{0.0F, 0.0F, 0.0F};  // the sensor itself
+    }
+    const bool sensor = f % 2 == 0;  // both chunk functions
+    if (!sensor) {
+      for (PointXYZ& q : pts) {  // map-frame points around the pose
+        q = PointXYZ{q.x + pose.translation.x, q.y + pose.translation.y, q.z + pose.translation.z};
+        if (f % 4 == 1) q.x *= 1.0e-4F;  // and some that need the exact path (|x / w| >= 2^23 at w = 0.0002 m below)
+      }
+    }
+    auto chunk = std::make_unique<FrontChunk>();
+    if (sensor) {
+      front_sensor_chunk(pts.data(), pts.size(), frame, config, fine, *chunk);
+    } else {
+      front_map_chunk(pts.data(), pts.size(), frame, config, fine, *chunk);
+    }
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const One o = front_one(sensor, pts[i], frame, config, fine);
+      ASSERT_EQ(chunk->code[i], o.code) << "point " << i << " of frame " << f;
+      if (o.code >= std::int32_t{kFrontNonFinite}) {
+        ASSERT_EQ(chunk->fine_slot[i], -1);
+        continue;
+      }
+      ASSERT_EQ(chunk->ix0[i], o.ix0);
+      ASSERT_EQ(chunk->iy0[i], o.iy0);
+      ASSERT_EQ(bits_of(chunk->fx[i]), bits_of(o.fx));
+      ASSERT_EQ(bits_of(chunk->fy[i]), bits_of(o.fy));
+      ASSERT_EQ(bits_of(chunk->z[i]), bits_of(o.z));
+      ASSERT_EQ(bits_of(chunk->range_sq[i]), bits_of(o.range_sq));
+      ASSERT_EQ(chunk->fine_slot[i], o.fine_slot);
+      ASSERT_EQ(chunk->height_q14[i], o.height_q14);
+      ASSERT_EQ(chunk->range_key[i], o.range_key);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 2000);
+}
+
+TEST(Front, EveryLayerCountRoutesAsTheFloatTable) {
+  // Stacks of 1 .. 8 layers: the chunk functions are instantiated per layer count; each must
+  // route every point as RoutingTable::select on the double range (bounds doubling from 1 m^2,
+  // the last one unbounded for some counts, points near a bound left out).
+  test::Rng rng(21);
+  for (int layers = 1; layers <= kFrontMaxLayers; ++layers) {
+    std::vector<float> bounds;
+    for (int k = 0; k < layers; ++k) {
+      bounds.push_back(layers % 2 == 0 && k == layers - 1 ? std::numeric_limits<float>::infinity()
+                                                           : static_cast<float>(1 << k));
+    }
+    FrontConfig config{};
+    ASSERT_EQ(make_front_config(0.05F, bounds.data(), layers, &config), Status::kOk);
+    FramePose map_pose{};
+    ASSERT_EQ(make_frame_pose(PointXYZ{0.5F, -0.5F, 0.2F}, nullptr, config, &map_pose), Status::kOk);
+    const float identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    FramePose sensor_pose{};
+    ASSERT_EQ(make_frame_pose(PointXYZ{0.5F, -0.5F, 0.2F}, identity, config, &sensor_pose), Status::kOk);
+    std::vector<PointXYZ> map_points, sensor_points;
+    for (int i = 0; i < 64; ++i) {
+      const PointXYZ s{static_cast<float>(rng.uniform(-12.0, 12.0)), static_cast<float>(rng.uniform(-12.0, 12.0)),
+                       static_cast<float>(rng.uniform(-1.0, 1.0))};
+      sensor_points.push_back(s);
+      map_points.push_back(PointXYZ{s.x + 0.5F, s.y - 0.5F, s.z + 0.2F});
+    }
+    auto chunk = std::make_unique<FrontChunk>();
+    for (const bool sensor : {false, true}) {
+      if (sensor) {
+        front_sensor_chunk(sensor_points.data(), sensor_points.size(), sensor_pose, config, FineWindow{}, *chunk);
+      } else {
+        front_map_chunk(map_points.data(), map_points.size(), map_pose, config, FineWindow{}, *chunk);
+      }
+      for (std::size_t i = 0; i < sensor_points.size(); ++i) {
+        const PointXYZ& s = sensor_points[i];
+        const double r2 = double{s.x} * s.x + double{s.y} * s.y + double{s.z} * s.z;
+        bool near = false;
+        int expected = -1;
+        for (int k = 0; k < layers; ++k) {
+          near = near || std::fabs(r2 - double{bounds[static_cast<std::size_t>(k)]}) < 1e-4;
+          if (expected < 0 && r2 <= double{bounds[static_cast<std::size_t>(k)]}) expected = k;
+        }
+        if (near) continue;
+        ASSERT_EQ(chunk->code[i] == std::int32_t{kFrontTooNoisy} ? -1 : chunk->code[i], expected)
+            << layers << " layers, " << (sensor ? "sensor" : "map") << " frame, r^2 = " << r2;
+      }
+    }
+  }
+}
+
 TEST(Front, FinestIndexEqualsWhatQueriesLocateAtEveryEdge) {
   // The update path and grid::index_of_position (RingGrid::locate) must name the same cell for
   // every map-frame float, including the floats right at and around every cell edge.

@@ -373,9 +373,9 @@ int feed_and_check_one(S& stack, PointXYZ p, const char* what) {
       << what << ": the cell locate() names did not change";
   EXPECT_TRUE(patched == after) << what << ": a cell other than the one locate() names changed";
   if (S::layer_is_ccm(expected_layer)) {
-    // The stored offset from the cell centre is at most half a cell plus half the Q18 quantum
-    // (positions are floored to 2^-18 m and centred by half a unit: map/update/update_path.hpp,
-    // relative_to_centre), plus float rounding.
+    // The stored offset from the cell centre is at most half a cell, plus float rounding of the
+    // position inside the cell (map/update/layer_walk.hpp, LayerWalk::relative: within 2^-24 of a
+    // cell; the bound keeps the old 2^-19 m allowance).
     const CcmCell* cell = stack.ccm_layer(expected_layer - 1).cell(expected_index);
     const float half = 0.5F * stack.layer_cell_width(expected_layer);
     const float limit = half * (1.0F + 1e-5F) + 1.9073486e-6F;  // 2^-19 m

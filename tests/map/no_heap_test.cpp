@@ -18,6 +18,7 @@
 #include "ccmap/persistence/exchange.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/alignment.hpp"
 #include "support/poses.hpp"
 
 extern "C" {
@@ -169,6 +170,44 @@ TEST(NoHeap, MapExchangeExportsAndMergesWithoutAllocating) {
   g_counting = false;
   EXPECT_EQ(status_errors, 0);
   EXPECT_EQ(g_allocations.load(), 0L) << "map exchange allocated on the heap";
+}
+
+TEST(NoHeap, RegistrationAndAlignmentRunWithoutAllocating) {
+  ASSERT_EQ(g_stack.init(default_stack_params(0.04F)), Status::kOk);
+  // Rolling ground around the sensor, mapped once; the same ground registered again, map frame
+  // and sensor frame, and refused (a NaN origin).
+  std::vector<PointXYZ> frame;
+  for (int i = 0; i < 40000; ++i) {
+    const float x = 0.3F + 4.0F * static_cast<float>(i % 200) / 200.0F;
+    const float y = -2.0F + 4.0F * static_cast<float>(i / 200) / 200.0F;
+    frame.push_back(PointXYZ{x, y, 0.05F * x * x - 0.04F * x * y + 0.03F * y * y});
+  }
+  const PointXYZ origin{0.0F, 0.0F, 0.175F};
+  ASSERT_EQ(g_stack.update_frame(frame.data(), frame.size(), origin, nullptr), Status::kOk);
+  std::vector<PointXYZ> sensor(frame.size());
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    sensor[i] = PointXYZ{frame[i].x, frame[i].y, frame[i].z - origin.z};
+  }
+  const Pose pose = test::identity_pose(origin);
+  const RegistrationParams params = default_registration_params();
+  std::size_t snapshot_bytes = 0;
+  ASSERT_EQ(save_snapshot(g_stack, g_snapshot, sizeof g_snapshot, &snapshot_bytes), Status::kOk);
+  g_allocations = 0;
+  g_counting = true;
+  long status_errors = 0;
+  for (int k = 0; k < 3; ++k) {
+    status_errors += g_stack.register_frame(frame.data(), frame.size(), origin, params).status != Status::kOk;
+    status_errors += g_stack.register_frame_sensor(sensor.data(), sensor.size(), pose, params).status != Status::kOk;
+    status_errors += g_stack.register_frame(frame.data(), frame.size(), PointXYZ{std::nanf(""), 0.0F, 0.0F}, params)
+                         .status != Status::kNonFiniteInput;
+    // Team alignment: the same map as another rover's, from the stack and from its snapshot.
+    status_errors += align_maps(g_stack, g_stack, MapOffset{0.01F, 0.0F, 0.0F}, params).correction.status != Status::kOk;
+    status_errors += align_snapshot(g_stack, g_snapshot, snapshot_bytes, MapOffset{0.0F, 0.01F, 0.0F}, params)
+                         .correction.status != Status::kOk;
+  }
+  g_counting = false;
+  EXPECT_EQ(status_errors, 0);
+  EXPECT_EQ(g_allocations.load(), 0L) << "registration allocated on the heap";
 }
 
 }  // namespace

@@ -258,9 +258,11 @@ TEST(OutlierGateStack, APoseJumpReseedsAPoolOfCellsPerFrame) {
   int frames = 0;
   for (std::uint32_t f = 0; f < 6; ++f) {
     const FrameCounters c = fold(*stack, frame(1.6F, w, 8, raised, 0.0F, 100U + f));
-    EXPECT_LE(c.reseeded_cells, detail::kHeldSlots);
+    EXPECT_LE(c.reseeded_cells, Stack<SingleCcmConfig>::kCcmHeldSlots);
     if (f == 0) {
-      EXPECT_EQ(c.reseeded_cells, detail::kHeldSlots);
+      EXPECT_EQ(stack->last_frame_held_cells(), Stack<SingleCcmConfig>::kCcmHeldSlots)
+          << "the frame ended with its pool full";
+      EXPECT_EQ(c.reseeded_cells, Stack<SingleCcmConfig>::kCcmHeldSlots);
       EXPECT_GT(c.gated_pool_full, 0U);
     }
     int high = 0;

@@ -188,6 +188,13 @@ TEST(StackUsage, EveryPublicCallUsesLessThanFourKiB) {
         f.sink = fill_costmap(*f.stack, CostmapSpec{0.0F, 0.0F, 0.04F, 125U, 0.3F}, f.cost.data(), f.cost.size(), &st) ==
                          Status::kOk ? static_cast<float>(st.lethal) : -1.0F;
       }),
+      CCMAP_CALL("register_frame", {
+        f.sink = f.stack->register_frame(f.points.data(), f.points.size(), PointXYZ{0.0F, 0.0F, 0.0F},
+                                         default_registration_params()).dz;
+      }),
+      CCMAP_CALL("register_frame_sensor", {
+        f.sink = f.stack->register_frame_sensor(f.points.data(), 2000U, f.pose, default_registration_params()).dz;
+      }),
       CCMAP_CALL("move_to (teleport)", { f.sink = f.stack->move_to(500.0F, 500.0F) == Status::kOk ? 1.0F : 0.0F; }),
   };
   // Warm runs only: the first call of anything may resolve lazily bound symbols (ld.so's

@@ -8,18 +8,12 @@
 //  - Native (host, or an aarch64 board): median CPU < 80 ms, the budget itself.
 //  - Under an emulator (ctest sets CCMAP_EMULATOR for the cross build, tests/map/CMakeLists.txt):
 //    the time is the emulator's on its x86-64 host, not the target's, and it follows the
-//    emulator's cost model (float instructions are soft-float calls of ~4-6 ns, 64-bit vector
-//    lanes cost several times a 32-bit one). The cycle of 61 M instructions before the outlier
-//    gate took 67 ms on the development machine and 95 ms on the CI machine (1.1 and 1.55 ns per
-//    instruction); with the gate, 80.8 M instructions and more float, 118 ms on the development
-//    machine (1.46 ns). The Snapdragon 820 at 2.15 GHz and one instruction per cycle, the
-//    budget's own assumption, takes 0.47 ns: for the cycle as it flies the emulator is 3.1x
-//    (development machine) to ~4.4x (CI, estimated) slower than the target. The assertion
-//    divides by 3, less than that: median emulator CPU / 3 < 80 ms, i.e. the cycle would fit the
-//    budget on a target only 3x faster than the emulator (docs/performance.md section 5).
-//  The deterministic form of the budget is the instruction count of the same cycle
-//  (tests/map/cycle_icount.cpp, label timing too): at most half of 80 ms x 2.15 GHz x 1 IPC.
-//
+//    emulator's cost model (a float instruction is a soft-float call of several ns, an integer
+//    one a fraction of a ns), so no allowance turns it into the target's time: it is printed,
+//    not asserted. The 80 ms budget is asserted there in its deterministic form, the aarch64
+//    instruction count of the same cycle (ctest ccmap_timing_flight_cycle_instructions,
+//    tests/map/cycle_icount.cpp, label timing too), which also prints the emulator's CPU time
+//    per instruction measured in that run.
 // Label `timing`: tools/test runs it alone after every other test (RUN_SERIAL), once.
 #include <gtest/gtest.h>
 
@@ -39,8 +33,6 @@ namespace {
 
 constexpr int kCycles = 10;
 constexpr double kBudgetMs = 80.0;
-/// Emulator time per target time assumed by the assertion under an emulator (see above).
-constexpr double kEmulatorSlowdown = 3.0;
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -50,7 +42,6 @@ double median(std::vector<double> v) {
 TEST(Timing, FlightCycleMedianUnderTheEightyMillisecondBudget) {
   const char* const emulator = std::getenv("CCMAP_EMULATOR");
   const bool emulated = emulator != nullptr && emulator[0] != '\0';
-  const double slowdown = emulated ? kEmulatorSlowdown : 1.0;
   auto stack = std::make_unique<Stack<CadreConfig>>();
   ASSERT_EQ(stack->init(default_stack_params(0.04F)), Status::kOk);
   std::vector<double> cpu_ms;
@@ -79,12 +70,11 @@ TEST(Timing, FlightCycleMedianUnderTheEightyMillisecondBudget) {
               *std::max_element(cpu_ms.begin(), cpu_ms.end()), wall, *std::max_element(wall_ms.begin(), wall_ms.end()),
               kCycles, kBudgetMs);
   if (emulated) {
-    std::printf("[ timing ] emulated: the assertion takes the target as %.0fx faster than the emulator: %.2f ms < %.0f ms\n",
-                slowdown, cpu / slowdown, kBudgetMs);
+    std::printf("[ timing ] emulated: the emulator's time, printed only; the budget is asserted as the cycle's "
+                "aarch64 instruction count (ctest ccmap_timing_flight_cycle_instructions)\n");
+    return;
   }
-  EXPECT_LT(cpu / slowdown, kBudgetMs) << "median flight cycle " << cpu << " ms of CPU"
-                                       << (emulated ? " (emulated, divided by the emulator allowance)" : "")
-                                       << " exceeds the 80 ms budget";
+  EXPECT_LT(cpu, kBudgetMs) << "median flight cycle " << cpu << " ms of CPU exceeds the 80 ms budget";
 }
 
 }  // namespace

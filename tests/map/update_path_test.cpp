@@ -21,6 +21,12 @@
 namespace ccmap {
 namespace {
 
+/// CADRE with the finest layer's pool at a quarter of its default slots, so that the pose jump
+/// of gated_frames_match_the_model overflows it (every path of the gate must run).
+struct SmallPoolCadre : CadreConfig {
+  static constexpr std::size_t kFineHeldSlots = 256U;
+};
+
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
@@ -167,7 +173,8 @@ StackParams inverse_variance_params(float width) {
 /// and the line of sight), then a frame whose
 /// every point is 15 cm higher (a pose jump: held, re-seeded, the pools overflow), then a
 /// normal frame again, in the map frame or the sensor frame. Every path of the gate must run
-/// (the pool overflow where the jump moves more cells than a pool has slots: CADRE's 4 cm layer).
+/// (the pool overflow where the jump moves more cells than a pool has slots: CADRE's 4 cm layer
+/// with a smaller pool, SmallPoolCadre).
 template <typename Config>
 void gated_frames_match_the_model(const StackParams& params, bool sensor_frame, bool pool_overflows, bool stereo) {
   auto stack = make_stack<Config>(params);
@@ -239,9 +246,10 @@ void gated_frames_match_the_model(const StackParams& params, bool sensor_frame, 
 }
 
 TEST(UpdatePath, CadreGateMatchesTheModel) {
-  gated_frames_match_the_model<CadreConfig>(default_stack_params(0.04F), false, true, true);
-  gated_frames_match_the_model<CadreConfig>(default_stack_params(0.04F), true, true, true);
-  gated_frames_match_the_model<CadreConfig>(lidar_params(0.04F), false, true, false);
+  gated_frames_match_the_model<SmallPoolCadre>(default_stack_params(0.04F), false, true, true);
+  gated_frames_match_the_model<SmallPoolCadre>(default_stack_params(0.04F), true, true, true);
+  gated_frames_match_the_model<SmallPoolCadre>(lidar_params(0.04F), false, true, false);
+  gated_frames_match_the_model<CadreConfig>(default_stack_params(0.04F), true, false, true);
 }
 TEST(UpdatePath, SingleLayerGatesMatchTheModel) {
   gated_frames_match_the_model<SingleCcmConfig>(default_stack_params(0.08F), false, false, true);

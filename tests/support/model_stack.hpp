@@ -436,7 +436,7 @@ class ModelStack {
       ++c.held;
       return s;
     }
-    if (slots.size() >= detail::kHeldSlots) {
+    if (slots.size() >= (&slots == &ccm_slots_ ? S::kCcmHeldSlots : S::kFineHeldSlots)) {
       ++c.pool_full;
       return nullptr;
     }
@@ -490,20 +490,28 @@ class ModelStack {
       const double kv = gate_sigma_sq() * floor_variance_[k];
       if (S::layer_is_ccm(k)) {
         const double rx = x - (i.x + 0.5) * l.width, ry = y - (i.y + 0.5) * l.width;
-        if (gate_on() && contradicted_by_finer(k, x, y, z, kv)) {
-          ++c.finer;
-          return;
-        }
-        if (gate_on() && params.noise.kind() == sensor::SensorKind::kStereo && occluded(k, x, y, z)) {
-          ++c.occluded;
-          return;
-        }
         if (gate_on()) {
           // (z - mu_z)^2 W > k^2 (S_zz + W V)
           const double dz = z - cell.ccm.mean_z;
           const double lhs = dz * dz * cell.ccm.weight;
           const double rhs = gate_sigma_sq() * cell.ccm.s_zz + cell.ccm.weight * kv;
           if (cell.ccm.weight > 0.0) check_margin(lhs, rhs, 1e-2 * rhs);  // W = 0: 0 > 0, exact
+          // The range-error checks judge points outside the gate and every point of a cell
+          // below min_weight (not yet known).
+          const double mature = std::max(double{params.min_weight}, 1e-30);
+          // Float and double weights may round apart near the threshold (not when equal: integer
+          // weights are exact in both).
+          if (cell.ccm.weight != mature) check_margin(cell.ccm.weight, mature, 1e-4 * mature);
+          if (lhs > rhs || !(cell.ccm.weight >= mature)) {
+            if (contradicted_by_finer(k, x, y, z, kv)) {
+              ++c.finer;
+              return;
+            }
+            if (params.noise.kind() == sensor::SensorKind::kStereo && occluded(k, x, y, z)) {
+              ++c.occluded;
+              return;
+            }
+          }
           if (lhs > rhs) {
             if (Slot* s = hold(c, ccm_slots_, k, i)) s->ccm.update(rx, ry, z, w, params.weight_limit);
             return;
@@ -601,7 +609,8 @@ class ModelStack {
   bool occluded(int k, double x, double y, double z) {
     const double mx = 0.5 * (x + sight_origin_[0]), my = 0.5 * (y + sight_origin_[1]);
     const double line = 0.5 * (z + sight_origin_[2]);
-    // The midpoint's cell: ambiguous within 10 um of a finest-layer edge (the stack forms it in Q18).
+    // The midpoint's cell: ambiguous within 10 um of a finest-layer edge (the stack forms it in
+    // float cells from the anchor: map/update/line_of_sight.hpp).
     const double w0 = layers_[0].width;
     for (const double v : {mx, my}) {
       const double f = v / w0 - std::floor(v / w0);

@@ -9,6 +9,8 @@
 
 #include "experiments/detection.hpp"
 #include "experiments/drift.hpp"
+#include "experiments/registration.hpp"
+#include "sim/data_dir.hpp"
 
 namespace ex = ccmap::experiments;
 
@@ -128,4 +130,62 @@ TEST(ExperimentsDrift, FalseObstacleShareGrowsWithDrift) {
   EXPECT_GT(shares[2], cfg.tolerance);
   const double crossing = ex::drift_crossing(r, w, wl, cfg.tolerance);
   EXPECT_TRUE(crossing > 0.0 && crossing < 0.24) << "crossing at " << crossing;
+}
+
+TEST(ExperimentsDrift, RegistrationKeepsTheWaveTraversableAndThePoseOnIt) {
+  // The same runs with every frame registered before it is folded in: the wave fixes x (the
+  // drift's direction), so the map keeps the no-drift share of false obstacles at every drift and
+  // the pose estimate stays within millimetres of the truth (the plain estimate is off by the drift).
+  const ex::DriftConfig cfg = ex::DriftConfig::quick();
+  ASSERT_TRUE(cfg.compare_registration);
+  const ex::DriftResult r = ex::run_drift(cfg);
+  const double w = cfg.cell_widths_m.front(), wl = cfg.weight_limits.front();
+  for (double d : cfg.drift_fractions) {
+    const ex::DriftRow* plain = r.find(w, wl, d);
+    const ex::DriftRow* registered = r.find(w, wl, d, false, true);
+    ASSERT_NE(plain, nullptr);
+    ASSERT_NE(registered, nullptr);
+    EXPECT_LT(registered->share(), 0.02) << "registered at drift " << d << ": " << 100 * registered->share() << " %";
+    EXPECT_LT(registered->final_pose_error_m, 0.01) << "registered pose off at drift " << d;
+    EXPECT_NEAR(plain->final_pose_error_m, d * cfg.path_length_m, 0.01) << "the plain estimate carries the drift";
+    EXPECT_GT(registered->registrations, 0U);
+    EXPECT_EQ(registered->x_observable, registered->registrations) << "the wave fixes x in every frame";
+  }
+  EXPECT_FALSE(std::isfinite(ex::drift_crossing(r, w, wl, cfg.tolerance, false, true))) << "registered maps crossed 5 %";
+}
+
+TEST(ExperimentsRegistration, FlatGroundClaimsOnlyHeightAndTheSinusoidAliasesBeyondHalfAPeriod) {
+  ex::RegistrationExpConfig cfg = ex::RegistrationExpConfig::quick();
+  cfg.terrains = {ex::RegistrationTerrain::kFlat, ex::RegistrationTerrain::kSinusoid};
+  const ex::RegistrationExpResult r = ex::run_registration_experiment(cfg);
+  ASSERT_EQ(r.cells.size(), 2U * cfg.overlaps.size() * cfg.offsets.size());
+  for (const ex::RegistrationCell& c : r.cells) {
+    if (c.terrain == ex::RegistrationTerrain::kFlat) {
+      EXPECT_EQ(c.claimed_x + c.claimed_y + c.claimed_yaw, 0) << "flat ground claimed x, y or yaw";
+      EXPECT_EQ(c.claimed_z, c.trials) << "flat ground should fix the height in every trial";
+      EXPECT_EQ(c.over_claims, 0);
+    } else {
+      EXPECT_EQ(c.claimed_y, 0) << "nothing varies along the sinusoid's crests";
+      if (c.offset_m < 0.3) {
+        EXPECT_EQ(c.claimed_x, c.trials) << "offset " << c.offset_m;
+        EXPECT_EQ(c.over_claims, 0) << "offset " << c.offset_m;
+      }
+    }
+  }
+}
+
+TEST(ExperimentsRegistration, RealTerrainWithoutOverClaims) {
+  ex::RegistrationExpConfig cfg = ex::RegistrationExpConfig::quick();
+  cfg.terrains = {ex::RegistrationTerrain::kLoneStar, ex::RegistrationTerrain::kMarsDtm};
+  cfg.offsets = {0.02, 0.1};
+  cfg.data_dir = ccmap::sim::resolve_data_dir();
+  const ex::RegistrationExpResult r = ex::run_registration_experiment(cfg);
+  int available = 0, claimed = 0;
+  for (const ex::RegistrationTerrainInfo& t : r.terrains) available += t.available ? 1 : 0;
+  if (available == 0) GTEST_SKIP() << "no real terrain data: " << r.terrains.front().why;
+  for (const ex::RegistrationCell& c : r.cells) {
+    EXPECT_EQ(c.over_claims, 0) << "terrain " << int(c.terrain) << " overlap " << c.overlap << " offset " << c.offset_m;
+    claimed += c.claimed_x;
+  }
+  EXPECT_GT(claimed, 0) << "real terrain should fix x in some trials";
 }

@@ -14,6 +14,12 @@ target_compile_definitions(ccmap_test_tools_cli PRIVATE
 add_dependencies(ccmap_test_tools_cli ccmap)
 ccmap_tools_gtest(ccmap_test_tools_cli 600)
 
+# `ccmap map --register` and `ccmap merge --align` (registration, issue 22).
+add_executable(ccmap_test_tools_cli_registration ${CMAKE_CURRENT_LIST_DIR}/cli_registration_test.cpp)
+target_link_libraries(ccmap_test_tools_cli_registration PRIVATE GTest::gtest_main ccmap_cli_lib ccmap_tools_io ccmap_host_flags)
+target_include_directories(ccmap_test_tools_cli_registration PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+ccmap_tools_gtest(ccmap_test_tools_cli_registration 600)
+
 # Whole clouds mapped in tiles (tools/cli/tiling.hpp) against brute-force and one-window references.
 add_executable(ccmap_test_tools_tiling ${CMAKE_CURRENT_LIST_DIR}/tiling_test.cpp)
 target_link_libraries(ccmap_test_tools_tiling PRIVATE GTest::gtest_main ccmap_cli_lib ccmap_tools_io ccmap_host_flags)

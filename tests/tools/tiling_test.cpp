@@ -202,8 +202,8 @@ TEST(Tiling, CcmCellsEqualADoublePrecisionBatchOfTheirPoints) {
     const std::string where = "cell " + std::to_string(r.ix) + "," + std::to_string(r.iy);
     EXPECT_EQ(r.weight, m.weight) << where;
     // The weight is exact: the cell holds exactly its points. The rest agrees to the core's
-    // precision: CCM positions are formed in Q18 (1.9 um error per coordinate), which a 3-point
-    // cell's plane amplifies (worst seen: 0.14 mm, slope 2.2e-3). Far below any threshold.
+    // precision: CCM positions are floats relative to the cell (micrometres at most), which a
+    // 3-point cell's plane amplifies (worst seen: 0.14 mm, slope 2.2e-3). Far below any threshold.
     EXPECT_NEAR(r.height, height, 3e-4) << where;
     EXPECT_NEAR(r.slope_x, a, 5e-3 * (1.0 + std::fabs(a))) << where;
     EXPECT_NEAR(r.slope_y, b, 5e-3 * (1.0 + std::fabs(b))) << where;
@@ -306,8 +306,8 @@ void expect_tiled_equals_one_window(const std::string& preset, const std::vector
       const RefRow& e = it->second;
       const std::string where = preset + " layer " + std::to_string(k) + " cell " + std::to_string(r.ix) + "," +
                                 std::to_string(r.iy) + " (x " + std::to_string(r.cx - cx) + " m from the centre)";
-      // The two runs place x, y in different frames (tile corner vs window centre), so the core's
-      // Q18 positions (1.9 um error) of a CCM point differ: worst seen 42 um of height and 1.1e-3
+      // The two runs place x, y in different frames (tile corner vs window centre), so the float
+      // positions of a CCM point differ in their last bits: worst seen 42 um of height and 1.1e-3
       // of slope in a cell holding a 25 cm step. Piece-wise constant cells agree to the CSV's 1 um.
       EXPECT_NEAR(r.weight, e.weight, 1e-4 * e.weight) << where;
       EXPECT_NEAR(r.height, e.height, 1e-4) << where;

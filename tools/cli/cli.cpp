@@ -127,6 +127,8 @@ struct Options {
   double inflate = 0.0;
   bool paper_cell = false;  ///< --paper-cell: the paper's 9-float CCM cells (PaperCell<Config>)
   bool geotiff = false;  ///< --geotiff: DIR/layer_<k>.tif too
+  bool register_frames = false;  ///< map --register: each frame after the first registered before it is folded
+  bool align = false;            ///< merge --align: each map aligned with the first before it is merged
   int epsg = 0;          ///< --epsg CODE; 0: none given
   /// A planner query (--footprint or --path) without --poses: a map centred on it, not tiles.
   [[nodiscard]] bool centred_map() const { return (have_footprint || !path.empty()) && poses.empty(); }
@@ -357,6 +359,11 @@ void add_map_command(CLI::App& app, Options& o) {
            "the map of one stack at the origin holding the points that fall in its\n"
            "windows (what a rover there holds; the CSV files cover every tile)",
            &o.save);
+  map->add_flag("--register", o.register_frames,
+                "with --poses: registers every frame after the first against the map before\n"
+                "it is folded in (the library's register_frame: the cells' planes, docs/design.md,\n"
+                "'Registration'), prints the correction per frame ('registration N: ...'), and\n"
+                "applies it to that frame and, as a rover corrects its pose, to the poses after it");
   map->footer(kMapFooter);
 }
 
@@ -428,6 +435,12 @@ void add_merge_command(CLI::App& app, Options& o) {
               parse_pair("--offset", v, &o.offset_x, &o.offset_y);
               o.have_offset = true;
             });
+  merge->add_flag("--align", o.align,
+                  "aligns each map with the first before merging it (the library's align_snapshot),\n"
+                  "prints the correction ('alignment FILE: ...'), and merges with the nominal offset\n"
+                  "plus the correction's observable part: dz exactly, the horizontal part rounded to\n"
+                  "whole coarsest cells (the grids must coincide); the remainder and the yaw are\n"
+                  "printed as not applied (docs/design.md, 'Merging at an offset that is not whole cells')");
   add_output_options(merge, o);
   merge->footer(kMergeFooter);
 }
@@ -566,6 +579,88 @@ void fold_cloud(const Options& o, MappedClouds& m, const Cloud& cloud, std::size
   if (verbose) print_frame(o.clouds[f], cloud, f, stats, ms, out);
 }
 
+/// "observable: dx dy dz dyaw" flags as 0/1.
+std::string correction_text(const LocalCorrection& c) {
+  std::string t = c.status + " correction " + fmt("%.4f", c.correction[0]) + ' ' + fmt("%.4f", c.correction[1]) + ' ' +
+                  fmt("%.4f", c.correction[2]) + " m " + fmt("%.5f", c.correction[3]) + " rad, sigma";
+  for (int k = 0; k < 4; ++k) t += ' ' + (std::isfinite(c.sigma[k]) ? fmt(k == 3 ? "%.5f" : "%.4f", c.sigma[k]) : std::string("inf"));
+  t += ", observable";
+  for (int k = 0; k < 4; ++k) t += c.observable[k] ? " 1" : " 0";
+  return t + ", " + std::to_string(c.iterations) + " iterations";
+}
+
+/// map --register: frame f (f > 0) moved by the corrections so far, registered against the map,
+/// its correction printed and composed into them, then the frame (moved by the new total) folded
+/// in. The first frame starts the map and is folded as it is.
+void register_and_fold(const Options& o, MappedClouds& m, const Cloud& cloud, std::size_t f, const Pose& p,
+                       double* cos_yaw, double* sin_yaw, double* tx, double* ty, double* tz, std::vector<float>* xyz,
+                       std::vector<float>* weights, std::ostream& out, bool verbose) {
+  std::string error;
+  const double pose_local[3] = {p.x - m.origin.xyz[0], p.y - m.origin.xyz[1], p.z - m.origin.xyz[2]};
+  for (double v : pose_local) {
+    if (!(std::fabs(v) <= static_cast<double>(kMaxAbsCoordinateM))) {
+      fail(o.poses + ": pose " + std::to_string(f + 1) + " lies beyond +-1e5 m of the origin; is it in the clouds' frame?");
+    }
+  }
+  FrameStats stats;
+  stats.received = cloud.size() + cloud.skipped_non_finite;
+  stats.rejected_non_finite = cloud.skipped_non_finite;
+  local_frame_points(cloud, m.origin, o.bounds, xyz, weights, &stats);
+  // Moves the frame's points and the sensor by the corrections so far.
+  auto apply = [&](double c, double s, double ax, double ay, double az, const double in[3], double* outp) {
+    outp[0] = c * in[0] - s * in[1] + ax;
+    outp[1] = s * in[0] + c * in[1] + ay;
+    outp[2] = in[2] + az;
+  };
+  std::vector<float> moved(xyz->size());
+  double sensor_d[3];
+  apply(*cos_yaw, *sin_yaw, *tx, *ty, *tz, pose_local, sensor_d);
+  for (std::size_t i = 0; i + 2 < xyz->size(); i += 3) {
+    const double in[3] = {(*xyz)[i], (*xyz)[i + 1], (*xyz)[i + 2]};
+    double q[3];
+    apply(*cos_yaw, *sin_yaw, *tx, *ty, *tz, in, q);
+    for (int a = 0; a < 3; ++a) moved[i + static_cast<std::size_t>(a)] = static_cast<float>(q[a]);
+  }
+  float sensor[3] = {static_cast<float>(sensor_d[0]), static_cast<float>(sensor_d[1]), static_cast<float>(sensor_d[2])};
+  if (!m.runner->move_to(sensor[0], sensor[1], &error)) {
+    fail(o.poses + ": pose " + std::to_string(f + 1) + ": " + error + "; is it in the clouds' frame?");
+  }
+  if (f > 0) {
+    const LocalCorrection c = m.runner->register_frame(moved, sensor);
+    out << "registration " << (f + 1) << ": " << base_name(o.clouds[f]) << ": " << correction_text(c) << "\n";
+    if (c.status == "ok") {
+      // The new correction about the sensor o: q = Rz(a)(p - o) + o + d, composed after the old.
+      const double ca = std::cos(c.correction[3]), sa = std::sin(c.correction[3]);
+      const double ox = sensor_d[0], oy = sensor_d[1];
+      const double nx = ca * (*tx - ox) - sa * (*ty - oy) + ox + c.correction[0];
+      const double ny = sa * (*tx - ox) + ca * (*ty - oy) + oy + c.correction[1];
+      const double nc = ca * *cos_yaw - sa * *sin_yaw, ns = sa * *cos_yaw + ca * *sin_yaw;
+      *tx = nx;
+      *ty = ny;
+      *tz += c.correction[2];
+      *cos_yaw = nc;
+      *sin_yaw = ns;
+      for (std::size_t i = 0; i + 2 < xyz->size(); i += 3) {
+        const double in[3] = {(*xyz)[i], (*xyz)[i + 1], (*xyz)[i + 2]};
+        double q[3];
+        apply(*cos_yaw, *sin_yaw, *tx, *ty, *tz, in, q);
+        for (int a = 0; a < 3; ++a) moved[i + static_cast<std::size_t>(a)] = static_cast<float>(q[a]);
+      }
+      apply(*cos_yaw, *sin_yaw, *tx, *ty, *tz, pose_local, sensor_d);
+      for (int a = 0; a < 3; ++a) sensor[a] = static_cast<float>(sensor_d[a]);
+      if (!m.runner->move_to(sensor[0], sensor[1], &error)) fail(o.clouds[f] + ": " + error);
+    }
+  }
+  FrameStats lib;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!m.runner->update_frame(moved, *weights, sensor, &lib, &error)) fail(o.clouds[f] + ": " + error);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  lib.received = 0;
+  stats.add(lib);
+  m.totals.add(stats);
+  if (verbose) print_frame(o.clouds[f], cloud, f, stats, ms, out);
+}
+
 /// With --poses: the stack follows the poses, one frame per cloud, read and mapped one at a time.
 void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool verbose) {
   std::string error;
@@ -576,12 +671,19 @@ void map_along_poses(const Options& o, MappedClouds& m, std::ostream& out, bool 
          " clouds (one line per --cloud expected)");
   }
   std::vector<float> xyz, weights;
+  // --register: the correction so far, p' = R p + t in the local frame (R about z), applied to
+  // every frame before it is registered, as a rover's pose estimate carries the corrections.
+  double cos_yaw = 1.0, sin_yaw = 0.0, tx = 0.0, ty = 0.0, tz = 0.0;
   for (std::size_t f = 0; f < o.clouds.size(); ++f) {
     const Cloud cloud = read_frame(o, f, m);
     m.read += cloud.declared;
     if (f == 0) {
       if (!robust_origin({&cloud}, o.bounds, m.widths.back(), &m.origin, &error)) fail(o.clouds[f] + ": " + error);
       if (verbose) print_header(o, m, out);
+    }
+    if (o.register_frames) {
+      register_and_fold(o, m, cloud, f, poses[f], &cos_yaw, &sin_yaw, &tx, &ty, &tz, &xyz, &weights, out, verbose);
+      continue;
     }
     // Pose: re-centre, and the sensor origin for the noise model (local frame).
     const Pose& p = poses[f];
@@ -878,6 +980,9 @@ void fold_one_window(const Options& o, MappedClouds& m, std::ostream& out) {
 }
 
 int run_map(const Options& o, std::ostream& out) {
+  if (o.register_frames && o.poses.empty()) {
+    fail("--register needs --poses: the frames of a rover, in order (without, the clouds are tiles of one map)", 2);
+  }
   const std::string epsg_wkt = check_raster_options(o);
   MappedClouds m = build_map(o, out, true);
   if (o.epsg > 0) m.srs_wkt = epsg_wkt;
@@ -956,7 +1061,31 @@ int run_merge(const Options& o, std::ostream& out) {
       dx = whole_cells(o.offset_x, coarsest, "--offset x");
       dy = whole_cells(o.offset_y, coarsest, "--offset y");
     }
-    const double dz = static_cast<double>(other.origin_cells[2] - first.origin_cells[2]) * coarsest;
+    double dz = static_cast<double>(other.origin_cells[2] - first.origin_cells[2]) * coarsest;
+    if (o.align) {
+      // The correction of the other map placed by the nominal offset, about its cells' centre c:
+      // q = Rz(a)(p - c) + c + d. What the grid can take exactly: dz (heights move), and the
+      // horizontal displacement at c, d, to the nearest whole coarsest cell. The rest of d and
+      // the yaw (a cell at distance r from c moves r * a) are not applied.
+      const double nominal[3] = {static_cast<double>(dx) * coarsest, static_cast<double>(dy) * coarsest, dz};
+      const LocalCorrection c = m.runner->align_snapshot(other.snapshot, nominal);
+      out << "alignment " << o.inputs[i] << ": " << correction_text(c) << ", centre " << fmt("%.3f", c.centre[0]) << ' '
+          << fmt("%.3f", c.centre[1]) << " m (local), " << c.cells << " cells\n";
+      if (c.status == "ok") {
+        const double ax = c.observable[0] ? c.correction[0] : 0.0;
+        const double ay = c.observable[1] ? c.correction[1] : 0.0;
+        const auto rx = static_cast<std::int64_t>(std::llround(ax / coarsest));
+        const auto ry = static_cast<std::int64_t>(std::llround(ay / coarsest));
+        dx += rx;
+        dy += ry;
+        if (c.observable[2]) dz += c.correction[2];
+        out << "alignment " << o.inputs[i] << ": applied " << fmt("%.3f", static_cast<double>(rx) * coarsest) << ' '
+            << fmt("%.3f", static_cast<double>(ry) * coarsest) << ' ' << fmt("%.4f", c.observable[2] ? c.correction[2] : 0.0)
+            << " m; not applied " << fmt("%.4f", ax - static_cast<double>(rx) * coarsest) << ' '
+            << fmt("%.4f", ay - static_cast<double>(ry) * coarsest) << " m and " << fmt("%.5f", c.correction[3])
+            << " rad (whole " << fmt("%g", coarsest) << " m cells only)\n";
+      }
+    }
     const std::int64_t fx = dx * coarse_factor, fy = dy * coarse_factor;
     if (std::llabs(fx) > 0x3FFFFFFF || std::llabs(fy) > 0x3FFFFFFF || std::fabs(dz) > 1e5) {
       fail(o.inputs[i] + ": its origin is too far from the first map's to merge");

@@ -8,10 +8,29 @@
 #include "ccmap/persistence/exchange.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/alignment.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap::tools {
 namespace {
+
+LocalCorrection to_local(const RegistrationResult& r, float centre_x, float centre_y, std::uint32_t cells) {
+  LocalCorrection c;
+  c.status = to_string(r.status);
+  const float v[4] = {r.dx, r.dy, r.dz, r.dyaw};
+  const float s[4] = {r.sigma_dx, r.sigma_dy, r.sigma_dz, r.sigma_dyaw};
+  for (int k = 0; k < 4; ++k) {
+    c.correction[k] = v[k];
+    c.sigma[k] = s[k];
+    c.observable[k] = r.observable[k];
+  }
+  c.iterations = r.iterations;
+  c.matched = r.points_matched;
+  c.cells = cells;
+  c.centre[0] = centre_x;
+  c.centre[1] = centre_y;
+  return c;
+}
 
 FrameStats to_stats(const FrameCounters& c) {
   FrameStats s;
@@ -217,6 +236,27 @@ class StackRunner final : public MapRunner {
       return false;
     }
     return true;
+  }
+
+  LocalCorrection register_frame(const std::vector<float>& xyz, const float sensor_origin[3]) override {
+    points_.resize(xyz.size() / 3U);
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      points_[i] = PointXYZ{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+    }
+    const PointXYZ origin{sensor_origin[0], sensor_origin[1], sensor_origin[2]};
+    return to_local(stack_->register_frame(points_.data(), points_.size(), origin, default_registration_params()),
+                    origin.x, origin.y, 0U);
+  }
+
+  LocalCorrection align_snapshot(const std::vector<std::uint8_t>& bytes, const double offset_m[3]) const override {
+    const MapOffset offset{static_cast<float>(offset_m[0]), static_cast<float>(offset_m[1]), static_cast<float>(offset_m[2])};
+    // Maps of two rovers may be farther apart than two frames: a wider search, more iterations.
+    RegistrationParams params = default_registration_params();
+    params.max_translation_m = 2.0F;
+    params.max_yaw_rad = 0.5F;
+    params.max_iterations = 40U;
+    const AlignmentResult a = ccmap::align_snapshot(*stack_, bytes.data(), bytes.size(), offset, params);
+    return to_local(a.correction, a.centre_x_m, a.centre_y_m, a.cells);
   }
 
   bool merge_snapshot(const std::vector<std::uint8_t>& bytes, std::int32_t offset_x_cells, std::int32_t offset_y_cells,

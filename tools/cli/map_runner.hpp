@@ -24,7 +24,7 @@ struct RunnerOptions {
   double lidar_sigma_m = 0.005;           ///< range noise of the lidar model (m)
   /// The library's outlier gate in standard deviations (docs/design.md, "Outlier gate and
   /// change"); 0: off, the paper's update. Off by default here: a file is one frame, and the
-  /// gate judges at most detail::kHeldSlots cells per frame (the rest of a whole scan's held
+  /// gate judges at most Stack::kCcmHeldSlots cells per frame (the rest of a whole scan's held
   /// points would be dropped as "pool full").
   double outlier_gate_sigma = 0.0;
 };
@@ -79,6 +79,16 @@ struct LocalPath {
   std::uint32_t poses = 0;
 };
 
+/// A registration's or alignment's answer (registration/types.hpp) in the local frame.
+struct LocalCorrection {
+  std::string status;           ///< ok, or why nothing is claimed
+  double correction[4] = {0, 0, 0, 0};  ///< dx, dy, dz (m), dyaw (rad)
+  double sigma[4] = {0, 0, 0, 0};       ///< +inf where not observable
+  bool observable[4] = {false, false, false, false};
+  std::uint32_t iterations = 0, matched = 0, cells = 0;
+  double centre[2] = {0, 0};    ///< rotation centre, local metres
+};
+
 class MapRunner {
  public:
   virtual ~MapRunner() = default;
@@ -120,6 +130,12 @@ class MapRunner {
   virtual bool save_snapshot(std::vector<std::uint8_t>* bytes, std::string* error) const = 0;
   /// Replaces the map by a snapshot (load_snapshot: parameters, windows, cells).
   virtual bool load_snapshot(const std::vector<std::uint8_t>& bytes, std::string* error) = 0;
+  /// Registers a frame (xyz interleaved, local metres; sensor origin) against the map before it
+  /// is folded in (Stack::register_frame, default parameters): the map is unchanged.
+  virtual LocalCorrection register_frame(const std::vector<float>& xyz, const float sensor_origin[3]) = 0;
+  /// Team alignment (align_snapshot) of another map's snapshot placed by offset_m (its origin
+  /// minus this one's, local metres): the defaults with a +-2 m, +-0.5 rad search in 40 iterations.
+  virtual LocalCorrection align_snapshot(const std::vector<std::uint8_t>& bytes, const double offset_m[3]) const = 0;
   /// Folds a snapshot of another map into this one (merge_snapshot); offset: that map's origin
   /// minus this one's, in finest cells (a multiple of the coarsest layer's) and metres (z).
   virtual bool merge_snapshot(const std::vector<std::uint8_t>& bytes, std::int32_t offset_x_cells,

@@ -158,7 +158,7 @@ std::string render_svg(const SvgPlot& p) {
       pen_down = true;
     }
     o << "<path d=\"" << path << "\" fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << fmt(s.line_width) << "\""
-      << (s.dashed ? " stroke-dasharray=\"7,4\"" : "") << "/>\n";
+      << (s.dotted ? " stroke-dasharray=\"2,3\"" : (s.dashed ? " stroke-dasharray=\"7,4\"" : "")) << "/>\n";
     if (s.markers) {
       for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
         if (!std::isfinite(s.x[k]) || !std::isfinite(s.y[k])) continue;
@@ -185,7 +185,7 @@ std::string render_svg(const SvgPlot& p) {
       const double y = ly + 16 + 18.0 * row++;
       o << "<line x1=\"" << fmt(lx + 8) << "\" y1=\"" << fmt(y - 4) << "\" x2=\"" << fmt(lx + 34) << "\" y2=\"" << fmt(y - 4)
         << "\" stroke=\"" << color << "\" stroke-width=\"" << fmt(s.line_width) << "\""
-        << (s.dashed ? " stroke-dasharray=\"7,4\"" : "") << "/>\n";
+        << (s.dotted ? " stroke-dasharray=\"2,3\"" : (s.dashed ? " stroke-dasharray=\"7,4\"" : "")) << "/>\n";
       o << "<text x=\"" << fmt(lx + 40) << "\" y=\"" << fmt(y) << "\" font-size=\"12\">" << escape(s.name) << "</text>\n";
     }
   }

@@ -16,6 +16,7 @@ struct SvgSeries {
   bool dashed = false;
   bool markers = false;
   double line_width = 2.0;
+  bool dotted = false;  ///< drawn dotted (wins over dashed)
 };
 
 /// Horizontal (vertical = false: y = value) or vertical (x = value) reference line.

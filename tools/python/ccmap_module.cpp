@@ -514,6 +514,29 @@ bool sensor_keyword(const std::string& key, py::handle value, SensorArgs* s) {
   return true;
 }
 
+/// The unsigned 32-bit members of StackParams settable by name (the frame budget).
+struct CountField {
+  const char* name;
+  std::uint32_t StackParams::*member;
+};
+constexpr CountField kCountFields[] = {
+    {"frame_point_budget", &StackParams::frame_point_budget},
+    {"frame_time_budget_us", &StackParams::frame_time_budget_us},
+};
+
+/// A Python int in [0, 2^32) (not a bool, not a float): TypeError or ValueError otherwise.
+std::uint32_t count_arg(py::handle value, const std::string& name) {
+  if (PyBool_Check(value.ptr()) || !PyLong_Check(value.ptr())) {
+    throw py::type_error(name + " must be an int");
+  }
+  int overflow = 0;
+  const long long v = PyLong_AsLongLongAndOverflow(value.ptr(), &overflow);
+  if (overflow != 0 || v < 0 || v > 0xFFFFFFFFLL) {
+    throw py::value_error(name + " must lie in [0, 2^32)");
+  }
+  return static_cast<std::uint32_t>(v);
+}
+
 /// default_stack_params(width) with the keywords applied.
 StackParams build_params(const Preset& preset, py::handle cell_width, const py::kwargs& kwargs) {
   const float width = cell_width.is_none() ? preset.default_cell_width_m : number_arg(cell_width, "cell_width");
@@ -525,6 +548,12 @@ StackParams build_params(const Preset& preset, py::handle cell_width, const py::
     for (const ParamField& f : kParamFields) {
       if (key == f.name) {
         params.*f.member = number_arg(item.second, key);
+        known = true;
+      }
+    }
+    for (const CountField& f : kCountFields) {
+      if (key == f.name) {
+        params.*f.member = count_arg(item.second, key);
         known = true;
       }
     }
@@ -564,6 +593,61 @@ StackParams build_params(const Preset& preset, py::handle cell_width, const py::
   }  // else: default_stack_params' CADRE stereo model
   if (sensor_args.weight_mode_given) params.noise.set_weight_mode(sensor_args.weight_mode, sensor_args.reference_range_m);
   return params;
+}
+
+/// RegistrationParams from the library's defaults and keyword overrides (field names);
+/// TypeError for an unknown keyword, StatusError(invalid_argument) for values the library refuses.
+RegistrationParams registration_params(const py::kwargs& kwargs) {
+  RegistrationParams p = default_registration_params();
+  for (const auto& item : kwargs) {
+    const std::string key = py::str(item.first);
+    auto count = [&](std::uint32_t* field) {
+      const float v = number_arg(item.second, key);
+      if (!(v >= 0.0F && v <= 4294967295.0F) || std::floor(v) != v) {
+        throw StatusError(Status::kInvalidArgument, key + " must be a whole number >= 0");
+      }
+      *field = static_cast<std::uint32_t>(v);
+    };
+    if (key == "max_points") count(&p.max_points);
+    else if (key == "max_iterations") count(&p.max_iterations);
+    else if (key == "min_matches") count(&p.min_matches);
+    else if (key == "max_translation_m") p.max_translation_m = number_arg(item.second, key);
+    else if (key == "max_yaw_rad") p.max_yaw_rad = number_arg(item.second, key);
+    else if (key == "max_sigma_m") p.max_sigma_m = number_arg(item.second, key);
+    else if (key == "robust_sigmas") p.robust_sigmas = number_arg(item.second, key);
+    else if (key == "model_variance_m2") p.model_variance_m2 = number_arg(item.second, key);
+    else if (key == "convergence_m") p.convergence_m = number_arg(item.second, key);
+    else throw py::type_error("unknown registration parameter '" + key + "'");
+  }
+  check(validate_registration_params(p), "the registration parameters are refused");
+  return p;
+}
+
+/// The answer of a registration as a dict: dx, dy, dz (m), dyaw (rad), their sigmas (inf where
+/// not observable), observable (four booleans: dx, dy, dz, dyaw), iterations, status (the
+/// library's name: nothing is claimed unless "ok"), and the counts, lever, centre.
+py::dict registration_dict(const RegistrationResult& r, float centre_x, float centre_y, std::uint32_t cells) {
+  py::dict d;
+  d["dx"] = r.dx;
+  d["dy"] = r.dy;
+  d["dz"] = r.dz;
+  d["dyaw"] = r.dyaw;
+  d["sigma_dx"] = r.sigma_dx;
+  d["sigma_dy"] = r.sigma_dy;
+  d["sigma_dz"] = r.sigma_dz;
+  d["sigma_dyaw"] = r.sigma_dyaw;
+  d["observable"] = py::make_tuple(r.observable[0], r.observable[1], r.observable[2], r.observable[3]);
+  d["iterations"] = r.iterations;
+  d["status"] = std::string(to_string(r.status));
+  d["rank"] = static_cast<unsigned>(r.rank);
+  d["points_sampled"] = r.points_sampled;
+  d["points_rejected"] = r.points_rejected;
+  d["points_matched"] = r.points_matched;
+  d["lever_m"] = r.lever_m;
+  d["residual_sigma"] = r.residual_sigma;
+  d["centre"] = py::make_tuple(centre_x, centre_y);
+  d["cells"] = cells;
+  return d;
 }
 
 class Map {
@@ -648,6 +732,42 @@ class Map {
     check(map_->update_frame_sensor(points.data(), points.size(), make_pose(rotation, translation), &counters),
           "the map refused the frame");
     return counters_dict(counters);
+  }
+
+  /// Registration of a frame before it is folded in (nothing in the map changes): the dict of
+  /// registration_dict. Keywords set RegistrationParams fields (max_points, max_iterations, ...).
+  py::dict register_frame(py::handle points_obj, py::handle sensor_origin, const py::kwargs& kwargs) const {
+    const Points points(points_obj, "points");
+    const PointXYZ origin = point_arg(sensor_origin, "sensor_origin");
+    const RegistrationParams params = registration_params(kwargs);
+    return registration_dict(map_->register_frame(points.data(), points.size(), origin, params), origin.x, origin.y, 0U);
+  }
+
+  py::dict register_sensor(py::handle points_obj, py::handle rotation_obj, py::handle translation_obj,
+                           const py::kwargs& kwargs) const {
+    const Points points(points_obj, "points");
+    const std::vector<float> r = small_array(rotation_obj, "rotation", 3, 3);
+    const PointXYZ t = point_arg(translation_obj, "translation");
+    const float rotation[3][3] = {{r[0], r[1], r[2]}, {r[3], r[4], r[5]}, {r[6], r[7], r[8]}};
+    const float translation[3] = {t.x, t.y, t.z};
+    const RegistrationParams params = registration_params(kwargs);
+    return registration_dict(map_->register_frame_sensor(points.data(), points.size(), make_pose(rotation, translation), params),
+                             t.x, t.y, 0U);
+  }
+
+  /// Team alignment of another map's snapshot (bytes) placed by `offset` (x, y, z in m).
+  py::dict align_snapshot(py::handle data, py::handle offset_obj, const py::kwargs& kwargs) const {
+    PyObject* as_bytes = PyBytes_FromObject(data.ptr());
+    if (as_bytes == nullptr) throw py::error_already_set();
+    const std::string bytes = py::reinterpret_steal<py::bytes>(as_bytes);
+    const PointXYZ o = point_arg(offset_obj, "offset");
+    const float offset[3] = {o.x, o.y, o.z};
+    const RegistrationParams params = registration_params(kwargs);
+    float cx = 0.0F, cy = 0.0F;
+    std::uint32_t cells = 0U;
+    const RegistrationResult r = map_->align_snapshot(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(),
+                                                      offset, params, &cx, &cy, &cells);
+    return registration_dict(r, cx, cy, cells);
   }
 
   /// layer < 0: the stack's answer (query), else that layer's (query_layer).
@@ -764,6 +884,7 @@ class Map {
     py::dict d;
     d["cell_width"] = p.finest_cell_width_m;
     for (const ParamField& f : kParamFields) d[f.name] = p.*f.member;
+    for (const CountField& f : kCountFields) d[f.name] = p.*f.member;
     d["normal_variance_threshold"] = std::vector<float>(p.normal_variance_threshold.begin(), p.normal_variance_threshold.end());
     d["sensor_view_axis"] = std::vector<float>(p.sensor_view_axis.begin(), p.sensor_view_axis.end());
     const sensor::NoiseModel& n = p.noise;
@@ -866,7 +987,8 @@ PYBIND11_MODULE(ccmap, m) {
                   "  params: StackParams by name: weight_limit, coverage_tau, min_weight,\n"
                   "          obstacle_fraction, max_inclination, kalman_min_variance,\n"
                   "          finest_max_sigma_m, outlier_gate_sigma (0 = off), change_min_points,\n"
-                  "          change_share, normal_variance_threshold (sequence, <= 0 calibrates);\n"
+                  "          change_share, normal_variance_threshold (sequence, <= 0 calibrates),\n"
+                  "          frame_point_budget, frame_time_budget_us (ints; 0 = no limit);\n"
                   "          sensor='stereo' (default: CADRE stereo; focal_px, baseline_m,\n"
                   "          disparity_sigma_px) or 'lidar' (lidar_sigma_m = 0.005, lidar_sigma_per_m = 0);\n"
                   "          weight_mode='constant' | 'inverse_variance', reference_range_m.\n"
@@ -886,6 +1008,21 @@ PYBIND11_MODULE(ccmap, m) {
       .def("update_sensor", &Map::update_sensor, py::arg("points"), py::arg("rotation"), py::arg("translation"),
            "Fold one frame of sensor-frame points: p_map = rotation @ p + translation (3x3, 3). Returns the\n"
            "frame counters; refusals as update().")
+      .def("register", &Map::register_frame, py::arg("points"), py::arg("sensor_origin"),
+           "Registers map-frame points (N, 3) seen from sensor_origin against the map before they are\n"
+           "folded in (the map is unchanged): a dict with dx, dy, dz (m), dyaw (rad) about the vertical\n"
+           "through sensor_origin, sigma_dx .. sigma_dyaw (inf where not observable), observable (four\n"
+           "booleans: dx, dy, dz, dyaw), iterations, status ('ok', or why nothing is claimed), rank,\n"
+           "points_sampled/_rejected/_matched, lever_m, residual_sigma, centre. Keywords set\n"
+           "RegistrationParams (max_points, max_iterations, min_matches, max_translation_m, max_yaw_rad,\n"
+           "max_sigma_m, robust_sigmas, model_variance_m2, convergence_m).")
+      .def("register_sensor", &Map::register_sensor, py::arg("points"), py::arg("rotation"), py::arg("translation"),
+           "The same for sensor-frame points with the pose (rotation (3, 3), translation (3,)):\n"
+           "the rotation centre is the translation.")
+      .def("align_snapshot", &Map::align_snapshot, py::arg("data"), py::arg("offset"),
+           "Team alignment: the correction of another map's snapshot (bytes, the same preset) whose\n"
+           "map-frame point p lies at p + offset in this map; the dict of register, centre = the\n"
+           "rotation centre (the mean of their cells' positions), cells = their usable cells.")
       .def("query", &Map::query, py::arg("x"), py::arg("y"), py::arg("layer") = py::none(),
            "The map's answer at (x, y) as a dict with the keys of `ccmap query` (status, layer, cell_width_m,\n"
            "height_m (NaN unless status is 'ok'), slope_x, slope_y, inclination, inclination_deg,\n"

@@ -2,6 +2,7 @@
 
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/alignment.hpp"
 
 namespace ccmap::python {
 namespace {
@@ -20,6 +21,23 @@ class StackAdapter final : public MapAdapter {
   Status update_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& pose,
                              FrameCounters* counters) override {
     return stack_->update_frame_sensor(points, n, pose, counters);
+  }
+  RegistrationResult register_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
+                                    const RegistrationParams& params) const override {
+    return stack_->register_frame(points, n, sensor_origin, params);
+  }
+  RegistrationResult register_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& pose,
+                                           const RegistrationParams& params) const override {
+    return stack_->register_frame_sensor(points, n, pose, params);
+  }
+  RegistrationResult align_snapshot(const std::uint8_t* data, std::size_t size, const float (&offset)[3],
+                                    const RegistrationParams& params, float* centre_x, float* centre_y,
+                                    std::uint32_t* cells) const override {
+    const AlignmentResult a = ccmap::align_snapshot(*stack_, data, size, MapOffset{offset[0], offset[1], offset[2]}, params);
+    *centre_x = a.centre_x_m;
+    *centre_y = a.centre_y_m;
+    *cells = a.cells;
+    return a.correction;
   }
   QueryResult query(float x, float y) const override { return stack_->query(x, y); }
   QueryResult query_layer(int layer, float x, float y) const override { return stack_->query_layer(layer, x, y); }

@@ -13,6 +13,7 @@
 
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/types.hpp"
+#include "ccmap/registration/types.hpp"
 
 namespace ccmap::python {
 
@@ -28,6 +29,18 @@ class MapAdapter {
   /// Sensor-frame points, p_map = R p + t.
   [[nodiscard]] virtual Status update_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& pose,
                                                    FrameCounters* counters) = 0;
+  /// Registration (registration/registration.hpp): map-frame points with the sensor origin.
+  [[nodiscard]] virtual RegistrationResult register_frame(const PointXYZ* points, std::size_t n,
+                                                          const PointXYZ& sensor_origin,
+                                                          const RegistrationParams& params) const = 0;
+  /// The same for sensor-frame points with the pose.
+  [[nodiscard]] virtual RegistrationResult register_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& pose,
+                                                                 const RegistrationParams& params) const = 0;
+  /// Team alignment (registration/alignment.hpp) of a snapshot placed by `offset` (m); the
+  /// rotation centre and the snapshot's usable cells in *centre_x, *centre_y, *cells.
+  [[nodiscard]] virtual RegistrationResult align_snapshot(const std::uint8_t* data, std::size_t size, const float (&offset)[3],
+                                                          const RegistrationParams& params, float* centre_x,
+                                                          float* centre_y, std::uint32_t* cells) const = 0;
   [[nodiscard]] virtual QueryResult query(float x, float y) const = 0;
   [[nodiscard]] virtual QueryResult query_layer(int layer, float x, float y) const = 0;
   /// Every observed cell of `layer` (Stack::export_layer order: rows of increasing y).

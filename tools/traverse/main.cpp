@@ -4,6 +4,7 @@
 // and pictures. See traverse.hpp for the definitions.
 //   ccmap_traverse [--seed N] [--out DIR] [--stride K] [--frames N] [--quick] [--paper-cell]
 //                  [--mismatch P] [--gate K] [--change-points M] [--change-share S]
+//                  [--drift F] [--drift-direction DEG] [--yaw-drift RAD_PER_M] [--register]
 // (ccmap_traverse --help lists them; a refused command line is one line on stderr and exit 2).
 #include <cstdint>
 #include <cstdio>
@@ -41,6 +42,17 @@ int main(int argc, char** argv) {
   ccmap::tools::add_real(app, "--mismatch", &mismatch, 0.0, 1.0, false, "P",
                          "stereo mismatches: a share P of the pixels at a random disparity");
   ccmap::experiments::add_gate_options(app, &gate);
+  double drift = 0.0, drift_direction_deg = 45.0, yaw_drift = 0.0;
+  bool register_frames = false;
+  ccmap::tools::add_real(app, "--drift", &drift, 0.0, 1.0, false, "F",
+                         "odometry drift: the pose estimate off by F x the distance driven (default 0)");
+  ccmap::tools::add_real(app, "--drift-direction", &drift_direction_deg, -360.0, 360.0, false, "DEG",
+                         "its direction in the map frame (default 45)");
+  ccmap::tools::add_real(app, "--yaw-drift", &yaw_drift, -1.0, 1.0, false, "RAD_PER_M",
+                         "odometry heading drift per metre driven (default 0)");
+  app.add_flag("--register", register_frames,
+               "register every frame after the first against the map before folding it in, and carry\n"
+               "the correction in the pose estimate (Stack::register_frame_sensor)");
   if (const int code = ccmap::tools::parse_args(app, argc, argv); code >= 0) return code;
   if (quick) {
     const std::string out = cfg.out_dir;
@@ -51,6 +63,10 @@ int main(int argc, char** argv) {
   cfg.mismatch_share = mismatch;
   cfg.gate = gate;
   cfg.paper_cell = paper_cell;
+  cfg.drift_fraction = drift;
+  cfg.drift_direction_rad = drift_direction_deg * 3.14159265358979323846 / 180.0;
+  cfg.yaw_drift_rad_per_m = yaw_drift;
+  cfg.register_frames = register_frames;
   if (stride > 0) cfg.pixel_stride = stride;
   if (frames > 0) cfg.max_frames = frames;
   cfg.log = stdout;

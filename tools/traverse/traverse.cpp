@@ -410,13 +410,25 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
                  cfg.gate.describe(params).c_str());
   }
   std::vector<PointXYZ> points;
+  sim::DriftParams drift;
+  drift.fraction_of_distance = cfg.drift_fraction;
+  drift.direction_rad = cfg.drift_direction_rad;
+  drift.heading_rad_per_m = cfg.yaw_drift_rad_per_m;
+  const std::vector<sim::Pose2> drifted = sim::apply_drift(route, drift);
+  // Registration's corrections so far: q = Rz(c_yaw) p + (c_x, c_y), heights + c_z.
+  double c_yaw = 0.0, c_x = 0.0, c_y = 0.0, c_z = 0.0;
   for (std::size_t i = 0; i < frames; ++i) {
     const sim::Pose2& pose = route[i].pose;
     FrameRecord rec;
     rec.index = static_cast<int>(i);
     rec.pose = pose;
+    sim::Pose2 est = drifted[i];
+    {
+      const double cs = std::cos(c_yaw), sn = std::sin(c_yaw);
+      est = sim::Pose2{cs * est.x - sn * est.y + c_x, sn * est.x + cs * est.y + c_y, est.yaw + c_yaw};
+    }
     const clock_t c0 = std::clock();
-    const sim::StereoFrame frame = camera.capture(raster, pose, pose, cfg.seed * 1000003ULL + i);
+    const sim::StereoFrame frame = camera.capture(raster, pose, est, cfg.seed * 1000003ULL + i);
     rec.capture_ms = 1000.0 * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
     points.clear();
     for (const sim::Point3& p : frame.points_sensor) {
@@ -424,8 +436,41 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
     }
     rec.points = points.size();
     rec.mismatches = frame.mismatch_pixels;
-    const Status moved = map->move_to(static_cast<float>(pose.x), static_cast<float>(pose.y));
-    const Pose sensor = camera_pose(camera, frame.sensor_position_map, pose.yaw);
+    sim::Point3 position = frame.sensor_position_map;
+    position.z += c_z;
+    Pose sensor = camera_pose(camera, position, est.yaw);
+    if (cfg.register_frames && i > 0 && map->move_to(static_cast<float>(est.x), static_cast<float>(est.y)) == Status::kOk) {
+      const RegistrationResult r = map->register_frame_sensor(points.data(), points.size(), sensor, default_registration_params());
+      rec.registration = to_string(r.status);
+      if (r.status == Status::kOk) {
+        const double corr[4] = {r.dx, r.dy, r.dz, r.dyaw};
+        for (int k = 0; k < 4; ++k) {
+          rec.correction[k] = corr[k];
+          rec.observable[k] = r.observable[k];
+        }
+        // About the camera o: q' = Rz(a)(q - o) + o + d, composed after the corrections so far.
+        const double ca = std::cos(double(r.dyaw)), sa = std::sin(double(r.dyaw));
+        const double ox = sensor.translation.x, oy = sensor.translation.y;
+        auto turn = [&](double x, double y, double* qx, double* qy) {
+          *qx = ca * (x - ox) - sa * (y - oy) + ox + r.dx;
+          *qy = sa * (x - ox) + ca * (y - oy) + oy + r.dy;
+        };
+        double nx = 0.0, ny = 0.0;
+        turn(c_x, c_y, &nx, &ny);
+        c_x = nx;
+        c_y = ny;
+        c_yaw += r.dyaw;
+        c_z += r.dz;
+        turn(est.x, est.y, &est.x, &est.y);
+        est.yaw += r.dyaw;
+        position.x += r.dx;
+        position.y += r.dy;
+        position.z += r.dz;
+        sensor = camera_pose(camera, position, est.yaw);
+      }
+    }
+    rec.estimate = est;
+    const Status moved = map->move_to(static_cast<float>(est.x), static_cast<float>(est.y));
     const Status updated =
         moved == Status::kOk ? map->update_frame_sensor(points.data(), points.size(), sensor, &rec.counters) : moved;
     rec.updated = updated == Status::kOk;
@@ -517,6 +562,29 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
 
   // ---- stack query on a fine raster over the coarsest window ----
   const QueryRaster qr = query_raster(*map, truths, cfg.query_step_m, &result.stack);
+  // The map error: the stack's height against the terrain's surface where it knows the ground.
+  {
+    double sum = 0.0;
+    std::size_t known = 0, beyond = 0;
+    for (int iy = 0; iy < qr.n; ++iy) {
+      for (int ix = 0; ix < qr.n; ++ix) {
+        const double x = qr.x0 + (ix + 0.5) * qr.step, y = qr.y0 + (iy + 0.5) * qr.step;
+        const QueryResult q = map->query(static_cast<float>(x), static_cast<float>(y));
+        if (q.status != Status::kOk) continue;
+        const double e = static_cast<double>(q.height_m) - terrain->height(x, y);
+        sum += e * e;
+        ++known;
+        beyond += std::fabs(e) > 0.05 ? 1U : 0U;
+      }
+    }
+    result.height_rms_m = known > 0 ? std::sqrt(sum / static_cast<double>(known)) : 0.0;
+    result.height_beyond_5cm = known > 0 ? static_cast<double>(beyond) / static_cast<double>(known) : 0.0;
+  }
+  if (!result.frames.empty()) {
+    const FrameRecord& last = result.frames.back();
+    result.final_pose_error_m = std::hypot(last.estimate.x - last.pose.x, last.estimate.y - last.pose.y);
+    result.final_yaw_error_rad = last.estimate.yaw - last.pose.yaw;
+  }
 
   // ---- objects ----
   const double bin_edges[] = {0.04, 0.12, 0.24, result.min_size_5m_m, 1e9};
@@ -618,6 +686,27 @@ std::string traverse_report(const TraverseResult& r) {
                 "(paper: 80 ms on a Snapdragon 820 for 850 x 650 stereo)\n",
                 r.update_ms_median, r.update_ms_mean, r.update_ms_max);
   out += format("simulator ray casting: %.1f s CPU in total (not part of the map)\n", 1e-3 * r.capture_ms_total);
+  {
+    std::size_t registered = 0, ok = 0, x = 0, y = 0, z = 0, yaw = 0;
+    for (const FrameRecord& f : r.frames) {
+      if (f.registration == "-") continue;
+      ++registered;
+      if (f.registration != "ok") continue;
+      ++ok;
+      x += f.observable[0] ? 1U : 0U;
+      y += f.observable[1] ? 1U : 0U;
+      z += f.observable[2] ? 1U : 0U;
+      yaw += f.observable[3] ? 1U : 0U;
+    }
+    out += format("pose estimate: final error %.1f mm, %.2f deg; map height against the terrain: RMS %.1f mm, %.2f %% "
+                  "of the known points more than 5 cm off\n",
+                  1000.0 * r.final_pose_error_m, r.final_yaw_error_rad * 180.0 / sim::kPi, 1000.0 * r.height_rms_m,
+                  100.0 * r.height_beyond_5cm);
+    if (registered > 0) {
+      out += format("registration: %zu frames, %zu ok; observable dx %zu, dy %zu, dz %zu, dyaw %zu\n", registered, ok, x,
+                    y, z, yaw);
+    }
+  }
   out += format("look-ahead (query_path, the body along the next %.1f m, a pose every %.0f cm): median %.2f ms, max %.2f ms "
                 "CPU; a hazard ahead after %d of %zu frames, an unknown footprint ahead after %d\n",
                 r.lookahead_m, 100.0 * r.lookahead_step_m, r.ahead_ms_median, r.ahead_ms_max, r.frames_with_hazard_ahead,

@@ -28,6 +28,13 @@
 // with more than 10 % unknown area. Where the first hazard is seen is where the rover would have
 // stopped. The final pictures include the cost raster (planner/costmap.hpp) around the rover.
 //
+// Odometry drift (drift_fraction, yaw_drift_rad_per_m; sim::apply_drift): the map is fed with the
+// drifted pose estimate, the camera still sees the terrain from the true pose. With
+// register_frames every frame after the first is registered against the map first
+// (Stack::register_frame_sensor, default parameters) and the correction composed into the pose
+// estimate, which carries it to the later frames. height_rms_m: the stack query's height against
+// the terrain's surface over the known points of the final window (the map error).
+//
 // Deterministic by seed (terrain, noise); timings are measured, not simulated.
 #pragma once
 
@@ -58,6 +65,10 @@ struct TraverseConfig {
   std::FILE* log = nullptr;         ///< progress lines (one per frame) and the report; nullptr = quiet
   double mismatch_share = 0.0;      ///< stereo mismatches: share of pixels at a random disparity (sim/stereo.hpp)
   experiments::GateSetting gate;    ///< the map's outlier gate (default: the library's)
+  double drift_fraction = 0.0;      ///< odometry position drift, share of the distance driven
+  double drift_direction_rad = 0.785398;  ///< its direction in the map frame (default: 45 deg)
+  double yaw_drift_rad_per_m = 0.0; ///< odometry heading drift per metre driven
+  bool register_frames = false;     ///< register every frame after the first before it is folded in
   /// A short run: 8 frames at pixel stride 4.
   static TraverseConfig quick() {
     TraverseConfig c;
@@ -76,6 +87,10 @@ struct FrameRecord {
   double update_ms = 0.0;          ///< Stack::last_update_ns() of this frame
   double capture_ms = 0.0;         ///< simulator CPU time (ray casting), not part of the map
   bool updated = false;            ///< update_frame_sensor answered kOk
+  sim::Pose2 estimate;             ///< the pose the map was given (drifted; corrected when registered)
+  std::string registration = "-";  ///< the registration's status (- when none)
+  bool observable[4] = {false, false, false, false};  ///< its observable axes
+  double correction[4] = {0, 0, 0, 0};  ///< its correction (dx, dy, dz m, dyaw rad)
   // The look-ahead after this frame (query_path along the next lookahead_m of the route).
   bool route_end = false;          ///< nothing ahead: no look-ahead after the last frame
   bool ahead_ok = false;           ///< the path query answered kOk (or there was none to ask)
@@ -136,6 +151,10 @@ struct TraverseResult {
   double path_length_m = 0.0;
   std::size_t rocks = 0, boxes = 0;
   std::vector<std::string> pictures;    ///< files written
+  double height_rms_m = 0.0;            ///< stack query height against the terrain, known points of the final window
+  double height_beyond_5cm = 0.0;       ///< share of those points more than 5 cm off
+  double final_pose_error_m = 0.0;      ///< the last frame's estimate from the true pose (horizontal)
+  double final_yaw_error_rad = 0.0;
   std::string error;                    ///< empty on success
   bool ok() const { return error.empty(); }
   /// The objects >= min_size_5m_m (the last bin).

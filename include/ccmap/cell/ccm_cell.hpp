@@ -21,6 +21,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "ccmap/core/assert.hpp"
 #include "ccmap/core/status.hpp"
 
 namespace ccmap {
@@ -159,9 +160,11 @@ inline void ccm_scale_comoments(Cell& cell, float scale) noexcept {
 
 /// If W > W_l: S *= W_l / W (eq. 7, every co-moment, s_xy included), W = W_l (eq. 6). The
 /// variances S/W and the mean are unchanged; only the relative weight of future measurements is
-/// held at w / W_l. Precondition: weight_limit > 0 (checked by the public update functions).
+/// held at w / W_l. Precondition: weight_limit > 0 (checked by the public update functions); a
+/// violation (NaN included) is reported to the assert hook and leaves the cell unchanged.
 template <typename Cell, detail::IfCcmCell<Cell> = 0>
 inline void ccm_apply_weight_limit(Cell& cell, float weight_limit) noexcept {
+  CCMAP_ASSERT_OR_RETURN(weight_limit > 0.0F, );
   if (cell.weight > weight_limit) {
     detail::ccm_scale_comoments(cell, weight_limit / cell.weight);
     cell.weight = weight_limit;

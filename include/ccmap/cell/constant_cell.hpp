@@ -16,6 +16,7 @@
 #include <cstdint>
 
 #include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/core/status.hpp"
 
 namespace ccmap {
@@ -56,9 +57,10 @@ namespace detail {
 /// P = K R (= P R / (P + R)), P >= min_variance; weight += count. An empty cell becomes the
 /// measurement (P = R, floored). The single update (count 1), the frame batch (the mean of n
 /// measurements with R / n, count n) and the merge of two cells (the other cell's height and
-/// variance, its weight) are this function. Precondition (unchecked: callers validate):
-/// variance > 0 and finite, z finite, min_variance > 0.
+/// variance, its weight) are this function. Precondition: variance > 0 and finite, min_variance
+/// > 0 (callers validate; asserted: the cell is left unchanged if not).
 inline void kalman_fuse(KalmanCell& cell, float z, float variance, float count, float min_variance) noexcept {
+  CCMAP_ASSERT_OR_RETURN(variance > 0.0F && variance <= 3.4e38F && min_variance > 0.0F, );
   if (!(cell.weight > 0.0F)) {
     cell.height = z;
     cell.variance = variance > min_variance ? variance : min_variance;

@@ -6,6 +6,14 @@
 
 #include <cstdint>
 
+// Every refusal of NaN and Inf (kNonFiniteInput) is a comparison or std::isfinite, which
+// -ffinite-math-only (implied by -ffast-math) folds to "finite"; -ffast-math also reorders sums,
+// so host and target results would differ. Most of the core is templates compiled in the
+// consumer's translation units: refuse to compile them so (tested in tests/core/CMakeLists.txt).
+#if (defined(__FINITE_MATH_ONLY__) && __FINITE_MATH_ONLY__) || defined(__FAST_MATH__)
+#error "ccmap needs IEEE float semantics: compile its headers without -ffast-math / -ffinite-math-only"
+#endif
+
 namespace ccmap {
 
 enum class Status : std::uint8_t {
@@ -23,6 +31,9 @@ enum class Status : std::uint8_t {
   kDuplicate,          ///< map exchange: data already merged (same sender and sequence), or this map's own
   kMisaligned,         ///< map exchange: the grids disagree (cell width, or an origin offset that is not a
                        ///< whole number of the coarsest layer's cells)
+  kInsufficientOverlap,  ///< registration: too few samples on known cells of the map
+  kDegenerateInput,      ///< registration: no usable points, or all of them at one spot
+  kNotConverged,         ///< registration: no solution within the iteration or search bounds
 };
 
 /// Short, stable, lower-case name of a status ("ok", "non_finite_input", ...). Never nullptr.

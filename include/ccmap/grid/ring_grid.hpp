@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "ccmap/core/assert.hpp"
 #include "ccmap/core/status.hpp"
 #include "ccmap/grid/ring_index.hpp"
 
@@ -107,20 +108,23 @@ class RingGrid {
 
   /// The cell at a global index; nullptr when outside the window (or not initialised).
   [[nodiscard]] Cell* cell(CellIndex index) noexcept {
-    return contains(index) ? &storage_[grid::buffer_offset(index, side_)] : nullptr;
+    return contains(index) ? &storage_[grid::detail::buffer_offset_unchecked(index, side_)] : nullptr;
   }
   [[nodiscard]] const Cell* cell(CellIndex index) const noexcept {
-    return contains(index) ? &storage_[grid::buffer_offset(index, side_)] : nullptr;
+    return contains(index) ? &storage_[grid::detail::buffer_offset_unchecked(index, side_)] : nullptr;
   }
 
-  /// No window check, for hot loops. Precondition: contains(index) (hence initialised).
-  /// Once initialised it never touches memory outside the storage (the slot is wrapped), but an
-  /// index outside the window silently aliases the window cell in the same slot.
+  /// No nullptr answer, for hot loops. Precondition: contains(index) (hence initialised). A
+  /// violation is reported to the assert hook and answered with the window cell in the same slot
+  /// (the slot is wrapped: never memory outside the storage), or before init with a scratch cell
+  /// that is no part of any map.
   [[nodiscard]] Cell& cell_unchecked(CellIndex index) noexcept {
-    return storage_[grid::buffer_offset(index, side_)];
+    CCMAP_ASSERT_OR_RETURN(contains(index), slot_or_scratch(index));
+    return storage_[grid::detail::buffer_offset_unchecked(index, side_)];
   }
   [[nodiscard]] const Cell& cell_unchecked(CellIndex index) const noexcept {
-    return storage_[grid::buffer_offset(index, side_)];
+    CCMAP_ASSERT_OR_RETURN(contains(index), slot_or_scratch(index));
+    return storage_[grid::detail::buffer_offset_unchecked(index, side_)];
   }
 
   /// Global index of the cell holding the map-frame position (x, y) metres, if it is inside
@@ -141,11 +145,11 @@ class RingGrid {
   /// non-finite or huge positions and before init. Same rounding limit as locate().
   [[nodiscard]] Cell* cell_at(float x, float y) noexcept {
     CellIndex index{0, 0};
-    return locate(x, y, &index) ? &storage_[grid::buffer_offset(index, side_)] : nullptr;
+    return locate(x, y, &index) ? &storage_[grid::detail::buffer_offset_unchecked(index, side_)] : nullptr;
   }
   [[nodiscard]] const Cell* cell_at(float x, float y) const noexcept {
     CellIndex index{0, 0};
-    return locate(x, y, &index) ? &storage_[grid::buffer_offset(index, side_)] : nullptr;
+    return locate(x, y, &index) ? &storage_[grid::detail::buffer_offset_unchecked(index, side_)] : nullptr;
   }
 
   /// Scrolls so that the window is centred on new_centre (global index). Cells that leave the
@@ -191,7 +195,7 @@ class RingGrid {
       for (std::int32_t r = 0; r < staying_rows; ++r) {
         Cell* const row = row_begin(first_staying_row + r);
         for (std::int32_t c = 0; c < leaving_cols; ++c) {
-          row[grid::wrap(first_leaving_col + c, side_)] = Cell{};
+          row[grid::detail::wrap_unchecked(first_leaving_col + c, side_)] = Cell{};
         }
       }
     }
@@ -221,7 +225,7 @@ class RingGrid {
       Cell* const row = row_begin(y);
       for (std::int32_t c = 0; c < side_; ++c) {
         const std::int32_t x = min_.x + c;
-        fn(CellIndex{x, y}, row[grid::wrap(x, side_)]);
+        fn(CellIndex{x, y}, row[grid::detail::wrap_unchecked(x, side_)]);
       }
     }
   }
@@ -232,13 +236,13 @@ class RingGrid {
       const Cell* const row = row_begin(y);
       for (std::int32_t c = 0; c < side_; ++c) {
         const std::int32_t x = min_.x + c;
-        fn(CellIndex{x, y}, row[grid::wrap(x, side_)]);
+        fn(CellIndex{x, y}, row[grid::detail::wrap_unchecked(x, side_)]);
       }
     }
   }
 
   /// Raw storage for serialisation: cell_count() cells in buffer order (the cell of global
-  /// index i is at grid::buffer_offset(i, side())); to restore, also restore the window
+  /// index i is at grid::detail::buffer_offset_unchecked(i, side())); to restore, also restore the window
   /// (move_to on an empty grid, then copy). nullptr before init.
   [[nodiscard]] const Cell* storage() const noexcept { return storage_; }
   [[nodiscard]] Cell* storage() noexcept { return storage_; }
@@ -248,6 +252,18 @@ class RingGrid {
   [[nodiscard]] std::uint64_t cells_cleared_by_moves() const noexcept { return cleared_by_moves_; }
 
  private:
+  /// cell_unchecked's answer to an index outside the window: its wrapped slot, or before init
+  /// (no storage) a zeroed scratch cell shared by the grids of this cell type, no part of a map.
+  [[nodiscard]] Cell& slot_or_scratch(CellIndex index) noexcept {
+    return storage_ != nullptr ? storage_[grid::detail::buffer_offset_unchecked(index, side_)] : scratch_cell();
+  }
+  [[nodiscard]] const Cell& slot_or_scratch(CellIndex index) const noexcept {
+    return storage_ != nullptr ? storage_[grid::detail::buffer_offset_unchecked(index, side_)] : scratch_cell();
+  }
+  [[nodiscard]] static Cell& scratch_cell() noexcept {
+    static Cell scratch{};  // constant-initialised (zeroed, .bss): no guard, no heap
+    return scratch;
+  }
   [[nodiscard]] static bool centre_in_range(CellIndex centre) noexcept {
     return centre.x >= -grid::kMaxCellIndex && centre.x <= grid::kMaxCellIndex &&
            centre.y >= -grid::kMaxCellIndex && centre.y <= grid::kMaxCellIndex;
@@ -262,11 +278,11 @@ class RingGrid {
   }
   [[nodiscard]] Cell* row_begin(std::int32_t global_y) noexcept {
     return storage_ +
-           static_cast<std::size_t>(grid::wrap(global_y, side_)) * static_cast<std::size_t>(side_);
+           static_cast<std::size_t>(grid::detail::wrap_unchecked(global_y, side_)) * static_cast<std::size_t>(side_);
   }
   [[nodiscard]] const Cell* row_begin(std::int32_t global_y) const noexcept {
     return storage_ +
-           static_cast<std::size_t>(grid::wrap(global_y, side_)) * static_cast<std::size_t>(side_);
+           static_cast<std::size_t>(grid::detail::wrap_unchecked(global_y, side_)) * static_cast<std::size_t>(side_);
   }
   void clear_row(std::int32_t global_y) noexcept {
     Cell* const row = row_begin(global_y);

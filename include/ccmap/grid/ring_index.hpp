@@ -19,6 +19,8 @@
 #include <limits>
 #include <cstring>
 
+#include "ccmap/core/assert.hpp"
+
 namespace ccmap {
 
 /// Global cell index of a layer (stable across moves): cell (x, y) covers
@@ -43,6 +45,7 @@ inline constexpr std::int32_t kMaxCellIndex = std::int32_t{1} << 30;
 /// Largest side of a ring buffer (cells per axis): 2^15, so side*side = 2^30 cells fits int32
 /// and a 32-bit size_t. (Memory runs out long before: 2^30 cells of one byte are 1 GiB.)
 inline constexpr std::int32_t kMaxSide = std::int32_t{1} << 15;
+static_assert(std::int64_t{kMaxSide} * kMaxSide == std::int64_t{1} << 30, "kMaxSide^2 is 2^30 cells");
 
 /// True if n is a positive power of two (1, 2, 4, ..., 2^30). False for 0, negatives and
 /// INT32_MIN.
@@ -50,43 +53,59 @@ inline constexpr std::int32_t kMaxSide = std::int32_t{1} << 15;
   return n > 0 && (n & (n - 1)) == 0;
 }
 
-/// Ring position of a global index on a power-of-two side: in [0, side) for any int32, negative
-/// included (the mask of the two's complement bit pattern, i.e. the mathematical
-/// global_index mod side_pow2). wrap(-1, 8) == 7, wrap(INT32_MIN, s) == 0,
-/// wrap(INT32_MAX, s) == s - 1.
-/// Precondition: is_power_of_two(side_pow2) (not checked here: this is the innermost hot path;
-/// RingGrid::init checks it). Never undefined behaviour, whatever the arguments.
-[[nodiscard]] constexpr std::int32_t wrap(std::int32_t global_index,
-                                          std::int32_t side_pow2) noexcept {
+namespace detail {
+/// wrap() without the check of its precondition: for RingGrid, whose side is checked once by
+/// RingGrid::init (its invariant). Never undefined behaviour, whatever the arguments.
+[[nodiscard]] constexpr std::int32_t wrap_unchecked(std::int32_t global_index, std::int32_t side_pow2) noexcept {
   // Unsigned arithmetic: int32 -> uint32 is defined modulo 2^32, so the mask is the remainder
   // for negative indices too, and side_pow2 - 1 cannot overflow in uint32.
   const std::uint32_t mask = static_cast<std::uint32_t>(side_pow2) - 1U;
   return static_cast<std::int32_t>(static_cast<std::uint32_t>(global_index) & mask);
 }
+/// buffer_offset() without the check of its precondition (for RingGrid, as wrap_unchecked).
+[[nodiscard]] constexpr std::size_t buffer_offset_unchecked(CellIndex index, std::int32_t side_pow2) noexcept {
+  return static_cast<std::size_t>(wrap_unchecked(index.y, side_pow2)) * static_cast<std::size_t>(side_pow2) +
+         static_cast<std::size_t>(wrap_unchecked(index.x, side_pow2));
+}
+}  // namespace detail
+
+/// Ring position of a global index on a power-of-two side: in [0, side) for any int32, negative
+/// included (the mask of the two's complement bit pattern, i.e. the mathematical
+/// global_index mod side_pow2). wrap(-1, 8) == 7, wrap(INT32_MIN, s) == 0,
+/// wrap(INT32_MAX, s) == s - 1.
+/// Precondition: is_power_of_two(side_pow2); a violation is reported to the assert hook and
+/// answered 0. Never undefined behaviour, whatever the arguments.
+[[nodiscard]] constexpr std::int32_t wrap(std::int32_t global_index,
+                                          std::int32_t side_pow2) noexcept {
+  CCMAP_ASSERT_OR_RETURN(is_power_of_two(side_pow2), 0);
+  return detail::wrap_unchecked(global_index, side_pow2);
+}
 
 /// Offset of a global cell in a side x side buffer (row-major by ring position):
 /// wrap(y)*side + wrap(x), in [0, side*side). Any side consecutive global indices on each axis
 /// (any window) map onto every offset exactly once.
-/// Precondition: is_power_of_two(side_pow2) and side_pow2 <= kMaxSide.
+/// Precondition: is_power_of_two(side_pow2) and side_pow2 <= kMaxSide; a violation is reported
+/// to the assert hook and answered 0.
 [[nodiscard]] constexpr std::size_t buffer_offset(CellIndex index,
                                                   std::int32_t side_pow2) noexcept {
-  return static_cast<std::size_t>(wrap(index.y, side_pow2)) * static_cast<std::size_t>(side_pow2) +
-         static_cast<std::size_t>(wrap(index.x, side_pow2));
+  CCMAP_ASSERT_OR_RETURN(is_power_of_two(side_pow2) && side_pow2 <= kMaxSide, 0U);
+  return detail::buffer_offset_unchecked(index, side_pow2);
 }
 
 namespace detail {
 /// floor(v * mult * 2^-q) for the float v with bit pattern `bits`, in integer operations only,
 /// exact: the product of the 24-bit significand and mult (< 2^39) is formed in 64 bits, signed,
-/// and shifted arithmetically (which floors negative values). Precondition for a meaningful
-/// result: v finite and 150 + q - exponent(v) >= 0, i.e. |v * mult * 2^-q| below 2^(63-24)
-/// or so (callers check the magnitude first; a negative shift is undefined behaviour, so
-/// they must); shifts beyond 63 saturate (tiny v: 0 or -1).
+/// and shifted arithmetically (which floors negative values). Precondition: v finite and
+/// 150 + q - exponent(v) >= 0, i.e. |v * mult * 2^-q| below 2^(63-24) or so (callers check the
+/// magnitude first); a violation (a negative shift would be undefined behaviour) is reported to
+/// the assert hook and answered 0. Shifts beyond 63 saturate (tiny v: 0 or -1).
 [[nodiscard]] inline std::int64_t floor_scaled_bits(std::uint32_t bits, std::uint64_t mult, std::int32_t q) noexcept {
   const std::uint32_t biased = (bits >> 23) & 0xFFU;
   const std::uint64_t significand =
       (bits & 0x7FFFFFU) | (static_cast<std::uint64_t>(biased != 0U) << 23);  // subnormal: no implicit bit
   const std::int32_t exponent = static_cast<std::int32_t>(biased) + static_cast<std::int32_t>(biased == 0U);
-  const std::int32_t shift = 150 + q - exponent;  // v = significand * 2^(exponent - 150); >= 0 by precondition
+  const std::int32_t shift = 150 + q - exponent;  // v = significand * 2^(exponent - 150)
+  CCMAP_ASSERT_OR_RETURN(biased != 0xFFU && shift >= 0, 0);
   const auto product = static_cast<std::int64_t>(significand * mult);
   const std::int64_t sign = -static_cast<std::int64_t>(bits >> 31);  // 0 or -1
   const std::int64_t signed_product = (product ^ sign) - sign;

@@ -102,12 +102,20 @@ struct ConfigOutlierGate<Config, std::void_t<decltype(Config::kOutlierGate)>> {
   static constexpr bool value = Config::kOutlierGate;
 };
 template <typename Config, typename = void>
-struct ConfigHeldSlots {
+struct ConfigCcmHeldSlots {
   static constexpr std::size_t value = 0U;  // the update path's default (map/update/held_pool.hpp)
 };
 template <typename Config>
-struct ConfigHeldSlots<Config, std::void_t<decltype(Config::kHeldSlots)>> {
-  static constexpr std::size_t value = Config::kHeldSlots;
+struct ConfigCcmHeldSlots<Config, std::void_t<decltype(Config::kCcmHeldSlots)>> {
+  static constexpr std::size_t value = Config::kCcmHeldSlots;
+};
+template <typename Config, typename = void>
+struct ConfigFineHeldSlots {
+  static constexpr std::size_t value = 0U;
+};
+template <typename Config>
+struct ConfigFineHeldSlots<Config, std::void_t<decltype(Config::kFineHeldSlots)>> {
+  static constexpr std::size_t value = Config::kFineHeldSlots;
 };
 }  // namespace detail
 
@@ -118,10 +126,13 @@ struct ConfigHeldSlots<Config, std::void_t<decltype(Config::kHeldSlots)>> {
 template <typename Config>
 inline constexpr bool kConfigOutlierGate = detail::ConfigOutlierGate<Config>::value;
 
-/// The held-point slots per pool of a Config with the gate: its `kHeldSlots` member, or 0 for
-/// the update path's default.
+/// The held-point slots of a Config with the gate, per pool (the CCM layers', the finest
+/// layer's): its `kCcmHeldSlots` / `kFineHeldSlots` members, or 0 for the update path's defaults
+/// (map/update/held_pool.hpp: kHeldSlots, kFineHeldSlots).
 template <typename Config>
-inline constexpr std::size_t kConfigHeldSlots = detail::ConfigHeldSlots<Config>::value;
+inline constexpr std::size_t kConfigCcmHeldSlots = detail::ConfigCcmHeldSlots<Config>::value;
+template <typename Config>
+inline constexpr std::size_t kConfigFineHeldSlots = detail::ConfigFineHeldSlots<Config>::value;
 
 /// A configuration without the outlier gate compiled in: WithoutOutlierGate<CadreConfig> is the
 /// CADRE stack that runs the paper's update and carries no gate memory. Everything else of Base

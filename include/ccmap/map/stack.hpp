@@ -11,17 +11,17 @@
 //
 // Where the work is done (integrators need not read these):
 //   map/detail/layers.hpp       the layers' storage and windows
-//   map/update/front.hpp        the integer front: validation, transform, range, routing, index
-//   map/update/update_path.hpp  the per-point back half and the Kalman frame batches
-//   map/query/pooling.hpp      pooling at query time
-//   map/query/answers.hpp      answers, classes, the roughness filter baseline
+//   map/update/front.hpp        the float front: validation, transform, range, routing, index
+//   map/update/update_path.hpp  the chunk loop; the Kalman batch, the walk, the gate beside it
+//   map/query/pooling.hpp       pooling at query time
+//   map/query/answers.hpp       answers, classes, the roughness filter baseline
 //   map/detail/motion.hpp       what an uncertain move does to the cells
 //   map/visibility/free_space.hpp  lines of sight: ghosts cleared, drop-offs marked
 //
 // Positions are map-frame metres relative to the stack origin (see map/types.hpp).
 //
 // Usage (two-phase life):
-//   static ccmap::Stack<ccmap::CadreConfig> map;     // ~0.6 MB, static storage (.bss)
+//   static ccmap::Stack<ccmap::CadreConfig> map;     // static storage (.bss); sizes: docs/integration.md section 7
 //   if (map.init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) { ...fault... }
 //   map.move_to(robot_x, robot_y);
 //   map.update_frame_sensor(points, n, camera_pose, &counters);
@@ -46,6 +46,7 @@
 #include "ccmap/map/types.hpp"
 #include "ccmap/map/visibility/free_space.hpp"
 #include "ccmap/platform/platform.hpp"
+#include "ccmap/registration/types.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap {
@@ -58,6 +59,8 @@ template <typename Config>
 struct PlannerAccess;   // planner/detail/region_walk.hpp: the planner queries read the query view
 template <typename Config>
 struct ExchangeAccess;  // persistence/exchange.hpp: delta export and merge read and fold cells
+template <typename Config>
+struct RegistrationAccess;  // registration/registration.hpp: register_frame(_sensor), public reads only
 }  // namespace detail
 
 template <typename Config>
@@ -75,6 +78,12 @@ class Stack {
   /// function (ccm_surface, ccm_merge, ccm_pool4, ccm_is_covered, ...) takes both.
   using CcmCellType = typename Layers::CcmCellType;
   static constexpr CcmCellKind kCcmCellKind = kConfigCcmCell<Config>;
+  /// Held-point slots of the outlier gate's pools (CCM layers, finest layer; 0 without the gate
+  /// compiled in): a frame judges at most this many cells of each (docs/design.md section 9).
+  static constexpr std::size_t kCcmHeldSlots =
+      kConfigOutlierGate<Config> ? detail::OutlierGate<Config>::kCcmSlots : std::size_t{0};
+  static constexpr std::size_t kFineHeldSlots =
+      kConfigOutlierGate<Config> && Layers::kHasFine ? detail::OutlierGate<Config>::kFineSlots : std::size_t{0};
 
   Stack() noexcept = default;
   Stack(const Stack&) = delete;
@@ -250,6 +259,25 @@ class Stack {
   }
 
   // -------------------------------------------------------------------------------------------
+  // Registration (registration/registration.hpp; docs/design.md, "Registration")
+  // -------------------------------------------------------------------------------------------
+
+  /// The rigid correction (dx, dy, dz, dyaw about the vertical through sensor_origin) that best
+  /// aligns this frame's map-frame points with the map, with its standard deviations and which
+  /// of the four are observable (registration/types.hpp). Changes nothing in the map; the caller
+  /// applies it to its pose and then updates. Statuses: registration/registration.hpp.
+  [[nodiscard]] RegistrationResult register_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
+                                                  const RegistrationParams& params) const noexcept {
+    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_origin, nullptr, params);
+  }
+  /// The same for sensor-frame points with the sensor pose (rotation centre: the sensor position).
+  [[nodiscard]] RegistrationResult register_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& sensor_pose,
+                                                         const RegistrationParams& params) const noexcept {
+    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_pose.translation,
+                                                              &sensor_pose.rotation[0][0], params);
+  }
+
+  // -------------------------------------------------------------------------------------------
   // Queries (const, constant time in map size and point count)
   // -------------------------------------------------------------------------------------------
 
@@ -371,7 +399,7 @@ class Stack {
     return update_.pending_ccm_cells() + update_.pending_fine_cells();
   }
   /// Cells with held points at the end of the last frame, before the change rule decided (the
-  /// held-point slots it took; at most detail::kHeldSlots per pool: CCM layers, finest layer).
+  /// held-point slots it took; at most kCcmHeldSlots + kFineHeldSlots).
   [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
   /// Frame updates accepted since init (wraps at 2^32): the sequence number that map exchange
   /// (persistence/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().
@@ -474,3 +502,7 @@ class Stack {
 };
 
 }  // namespace ccmap
+
+// Stack::register_frame(_sensor)'s implementation (it includes this header, then defines the
+// templates the two members forward to).
+#include "ccmap/registration/registration.hpp"

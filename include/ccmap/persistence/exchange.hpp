@@ -70,12 +70,12 @@
 //                   the cell in the snapshot's cell codec (snapshot_write_cell: CCM 40 bytes
 //                   for CcmCell with s_xy, 36 for CcmPaperCell; Kalman and OMG 12 bytes)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib) of every byte before it
-// Size: 88 + 12 per layer + 4 bytes of frame (152 for CADRE), and per cell the varint (1 byte for
-// a gap below 128 positions, 2 below 16,384: every gap of a 64 x 64 layer, 3 in a 256 x 256 one)
-// and 40 bytes (CCM, full cell; 36 paper cell) or 12 (Kalman, OMG); docs/integration.md gives
-// typical exchanges. Version history: 1 carried the 9-float CCM cell only; 2 (the cell kinds,
-// as snapshot version 2) is refused by a version-1 reader and refuses version 1 with
-// kVersionMismatch.
+// Size: 88 + 12 per layer + 4 bytes of frame (152 for CADRE: src/capi/capi.cpp asserts it), and
+// per cell the varint (1 byte for a gap below 128 positions, 2 below 16,384: every gap of a
+// 64 x 64 layer, 3 in a 256 x 256 one) and 40 bytes (CCM, full cell; 36 paper cell) or 12
+// (Kalman, OMG); docs/integration.md gives typical exchanges. Version history: 1 carried the
+// 9-float CCM cell only; 2 (the cell kinds, as snapshot version 2) is refused by a version-1
+// reader and refuses version 1 with kVersionMismatch.
 //
 // Statuses of merge_delta, all before anything is written (on any refusal the map and the sent
 // copy are bitwise unchanged; the refusal is counted in counters()):
@@ -106,6 +106,7 @@
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/core/status.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
@@ -391,11 +392,27 @@ struct ExchangeAccess {
     }
   }
 
+  /// True if settle() ran since the last move: every layer's kept rectangle is its window.
+  [[nodiscard]] static bool settled(const StackType& stack) noexcept {
+    for (int layer = 0; layer < kLayers; ++layer) {
+      const KeptWindow& kept = stack.layers_.kept[layer];
+      const CellIndex min = stack.layers_.window_min(layer);
+      const std::int32_t side = StackType::layer_side(layer);
+      if (kept.min != min || kept.end != CellIndex{min.x + side, min.y + side}) {
+        return false;
+      }
+    }
+    return true;
+  }
+
   /// Writes the gains of every layer (coarsest first) after the header; updates the sent copies
   /// of what it wrote. Precondition: settle() ran, the writer has room for the layer headers
-  /// and the trailer (capacity checked by the caller).
+  /// and the trailer (capacity checked by the caller); a violation is reported to the assert
+  /// hook and writes nothing (no cell counts as sent).
   static void write_layers(StackType& stack, SentCells& sent, SnapshotWriter& w, std::size_t capacity,
                            const ExportOptions& options, ExportReport& report) noexcept {
+    CCMAP_ASSERT_OR_RETURN(settled(stack) && w.position() + static_cast<std::size_t>(kLayers) * kDeltaLayerHeaderBytes +
+                                                     kDeltaTrailerBytes <= capacity, );
     const StackParams& params = stack.params_;
     for (int layer = kLayers - 1; layer >= 0; --layer) {
       const bool skipped = layer < options.finest_layer;

@@ -13,7 +13,8 @@
 // Not stored: RingGrid::cells_cleared_by_moves() and Stack::accepted_frames() (restart at 0 on
 // load), map exchange's bookkeeping (a load retires a bound MapExchange, persistence/exchange.hpp) and
 // the outlier gate's held points awaiting the change rule (map/update/held_pool.hpp: at most
-// kHeldSlots cells per pool; after a load such a cell needs change_min_points held points anew).
+// Stack::kCcmHeldSlots / kFineHeldSlots cells; after a load such a cell needs change_min_points
+// held points anew).
 //
 // Format (version 5: version 4, the frame budget's parameters and counter, with free space from
 // lines of sight: its parameters, counters and per-cell records). Every field is little-endian,
@@ -102,6 +103,7 @@ namespace detail {
 static_assert(kMaxLayers == 8, "snapshot format version 3 stores 8 sides and 8 thresholds");
 
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
+static_assert(kSnapshotHeaderBytes == 4U + 2U + 2U + 4U, "header: magic, version, reserved, size");
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
 
 inline constexpr std::size_t kSnapshotFreeSpaceShapeBytes = 8U;
@@ -443,9 +445,8 @@ struct SnapshotAccess {
 }  // namespace detail
 
 /// Bytes of a snapshot of a Stack<Config> (fixed by the configuration).
-/// CadreConfig: 516,420 bytes (PaperCell<CadreConfig>: 475,460; WithFreeSpace<CadreConfig, false>:
-/// 459,076;
-/// docs/integration.md lists every preset).
+/// CadreConfig: CCMAP_CADRE_SNAPSHOT_SIZE of ccmap/ccmap.h (src/capi/capi.cpp asserts it);
+/// docs/integration.md section 7 lists every preset.
 template <typename Config>
 [[nodiscard]] constexpr std::size_t snapshot_size() noexcept {
   return detail::SnapshotAccess<Config>::size();

@@ -46,8 +46,9 @@ inline constexpr std::uint8_t kCostMaxTraversable = 252U;
 inline constexpr std::uint8_t kCostInscribed = 253U;
 inline constexpr std::uint8_t kCostLethal = 254U;
 inline constexpr std::uint8_t kCostUnknown = 255U;
-/// Largest raster side (pixels): a 1 MiB buffer.
+/// Largest raster side (pixels): a 1 MiB buffer (asserted below).
 inline constexpr std::uint32_t kMaxCostmapSide = 1024U;
+static_assert(std::uint64_t{kMaxCostmapSide} * kMaxCostmapSide == std::uint64_t{1} << 20, "1 MiB of cost bytes");
 /// Largest inflation radius, in pixels.
 inline constexpr std::int32_t kMaxInflationPixels = 32;
 

@@ -66,6 +66,19 @@ class Construction(unittest.TestCase):
         self.assertGreater(calibrated, 0.0)
         self.assertNotEqual(calibrated, m.normal_variance_thresholds[0])
 
+    def test_frame_budget_by_name(self):
+        m = ccmap.Map("cadre", frame_point_budget=1000, frame_time_budget_us=0)
+        self.assertEqual(m.params["frame_point_budget"], 1000)
+        pts = np.array([[0.5 + 0.001 * i, 0.0, 0.0] for i in range(3000)], dtype=np.float32)
+        counts = m.update(pts, SENSOR)
+        # Whole chunks of 128 points while the next one fits: 7 chunks of 128 = 896 points.
+        self.assertEqual(counts["skipped_budget"], 3000 - 896)
+        self.assertEqual(counts["received"], 3000)
+        with self.assertRaises(TypeError):
+            ccmap.Map("cadre", frame_point_budget=1.5)
+        with self.assertRaises(ValueError):
+            ccmap.Map("cadre", frame_time_budget_us=-1)
+
     def test_sensor_choice(self):
         self.assertEqual(ccmap.Map().params["sensor"], "stereo")
         self.assertAlmostEqual(ccmap.Map().params["stereo_sigma_per_range_sq"], 1 / 300, places=9)  # CADRE
@@ -287,6 +300,92 @@ class PaperCell(unittest.TestCase):
             ccmap.Map("omg", paper_cell=True)
         with self.assertRaises(TypeError):
             ccmap.Map("ccm", paper_cell=1)
+
+
+def rolling(n, seed, shift=(0.0, 0.0, 0.0)):
+    """n points over rolling ground in front of SENSOR (0.3 .. 4.5 m, +-57 deg), float32; the
+    ground seen by a rover whose pose is off by -shift (the registration should answer +shift)."""
+    rng = np.random.default_rng(seed)
+    r = np.sqrt(0.09 + rng.random(n) * (4.5 ** 2 - 0.09))
+    a = (2.0 * rng.random(n) - 1.0) * 1.0
+    x, y = r * np.cos(a), r * np.sin(a)
+    z = 0.06 * np.sin(2 * np.pi * x / 1.3) * np.cos(2 * np.pi * y / 1.1) + 0.04 * np.sin(2 * np.pi * (x + 0.6 * y) / 2.3)
+    return np.column_stack([x - shift[0], y - shift[1], z - shift[2]]).astype(np.float32)
+
+
+REGISTRATION_KEYS = {"dx", "dy", "dz", "dyaw", "sigma_dx", "sigma_dy", "sigma_dz", "sigma_dyaw", "observable",
+                     "iterations", "status"}
+
+
+class Registration(unittest.TestCase):
+    def setUp(self):
+        self.m = ccmap.Map("cadre")
+        for k in range(3):
+            self.m.update(rolling(40000, 100 + k), sensor_origin=SENSOR)
+
+    def test_register_answers_the_shift_and_leaves_the_map_alone(self):
+        before = state(self.m)
+        r = self.m.register(rolling(40000, 7, shift=(0.03, -0.02, 0.015)), SENSOR)
+        self.assertEqual(state(self.m), before, "registration changed the map")
+        self.assertTrue(REGISTRATION_KEYS <= set(r), "keys missing: %s" % (REGISTRATION_KEYS - set(r)))
+        self.assertEqual(r["status"], "ok")
+        self.assertEqual(r["observable"], (True, True, True, True))
+        for key, truth in (("dx", 0.03), ("dy", -0.02), ("dz", 0.015)):
+            self.assertLess(abs(r[key] - truth), 3 * r["sigma_" + key] + 1e-3, "%s off: %r" % (key, r))
+        self.assertLess(abs(r["dyaw"]), 3 * r["sigma_dyaw"] + 1e-3)
+        self.assertGreaterEqual(r["iterations"], 1)
+
+    def test_register_sensor_agrees_with_register(self):
+        f = rolling(40000, 8, shift=(0.01, 0.0, 0.01))
+        a = self.m.register(f, SENSOR)
+        b = self.m.register_sensor(f - np.array(SENSOR, dtype=np.float32), np.eye(3), SENSOR)
+        self.assertEqual(b["status"], "ok")
+        for key in ("dx", "dy", "dz", "dyaw"):
+            self.assertAlmostEqual(a[key], b[key], delta=2e-4)
+
+    def test_flat_ground_claims_the_height_only(self):
+        m = ccmap.Map("cadre")
+        flat = rolling(40000, 1)
+        flat[:, 2] = 0.0
+        m.update(flat, sensor_origin=SENSOR)
+        m.update(flat, sensor_origin=SENSOR)
+        flat[:, 2] = -0.02
+        r = m.register(flat, SENSOR)
+        self.assertEqual(r["status"], "ok")
+        self.assertEqual(r["observable"], (False, False, True, False))
+        self.assertEqual((r["dx"], r["dy"], r["dyaw"]), (0.0, 0.0, 0.0))
+        self.assertTrue(math.isinf(r["sigma_dx"]) and math.isinf(r["sigma_dyaw"]))
+        self.assertAlmostEqual(r["dz"], 0.02, delta=1e-3)
+
+    def test_refusals_are_answers_not_exceptions(self):
+        f = rolling(1000, 9)
+        for origin, status in (((math.nan, 0.0, 0.2), "non_finite_input"), ((40.0, 0.0, 0.2), "outside_map")):
+            r = self.m.register(f, origin)
+            self.assertEqual(r["status"], status)
+            self.assertEqual((r["dx"], r["dz"]), (0.0, 0.0))
+            self.assertEqual(r["observable"], (False, False, False, False))
+            self.assertTrue(math.isinf(r["sigma_dz"]))
+        self.assertEqual(self.m.register(f[:0], SENSOR)["status"], "degenerate_input")
+        self.assertEqual(ccmap.Map("cadre").register(f, SENSOR)["status"], "insufficient_overlap")
+
+    def test_bad_arguments_raise(self):
+        with self.assertRaises(ccmap.StatusError) as e:
+            self.m.register(np.zeros((10, 2)), SENSOR)
+        self.assertEqual(e.exception.status, "invalid_argument")
+        with self.assertRaises(TypeError):
+            self.m.register(rolling(100, 1), SENSOR, max_pointz=5)
+        with self.assertRaises(ccmap.StatusError):
+            self.m.register(rolling(100, 1), SENSOR, max_points=0)
+        r = self.m.register(rolling(40000, 10), SENSOR, max_points=200)
+        self.assertLessEqual(r["points_sampled"], 200, "max_points did not reach the library")
+
+    def test_align_snapshot_takes_a_believed_offset_back(self):
+        r = self.m.align_snapshot(self.m.snapshot(), (0.02, 0.0, 0.0))
+        self.assertEqual(r["status"], "ok")
+        self.assertTrue(r["observable"][0])
+        self.assertAlmostEqual(r["dx"], -0.02, delta=2e-3)
+        self.assertGreater(r["cells"], 100)
+        self.assertEqual(self.m.align_snapshot(b"junk", (0.0, 0.0, 0.0))["status"], "corrupt")
 
 
 class SaveLoad(unittest.TestCase):

@@ -15,6 +15,7 @@
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/grid/ring_grid.hpp"
 #include "ccmap/map/config.hpp"
 
@@ -134,9 +135,16 @@ struct LayerSet {
     return Status::kOk;
   }
 
-  /// The CCM grid of stack layer `layer`. Precondition: is_ccm(layer).
-  [[nodiscard]] RingGrid<CcmCellType>& ccm_grid(int layer) noexcept { return ccm[layer - kFineLayerCount]; }
-  [[nodiscard]] const RingGrid<CcmCellType>& ccm_grid(int layer) const noexcept { return ccm[layer - kFineLayerCount]; }
+  /// The CCM grid of stack layer `layer`. Precondition: is_ccm(layer); a violation is reported
+  /// to the assert hook and answered with the first CCM grid (never a grid outside the set).
+  [[nodiscard]] RingGrid<CcmCellType>& ccm_grid(int layer) noexcept {
+    CCMAP_ASSERT_OR_RETURN(is_ccm(layer), ccm[0]);  // issue 23: precondition asserted
+    return ccm[layer - kFineLayerCount];
+  }
+  [[nodiscard]] const RingGrid<CcmCellType>& ccm_grid(int layer) const noexcept {
+    CCMAP_ASSERT_OR_RETURN(is_ccm(layer), ccm[0]);  // issue 23: precondition asserted
+    return ccm[layer - kFineLayerCount];
+  }
 
   /// Global index of (x, y) in `layer` if its window holds it.
   [[nodiscard]] bool locate(int layer, float x, float y, CellIndex* index) const noexcept {

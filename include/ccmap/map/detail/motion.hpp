@@ -23,9 +23,11 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/detail/layers.hpp"
 
@@ -46,9 +48,11 @@ void ccm_forget_for_motion(CcmPaperCell& cell, float sigma_sq, float min_weight)
 /// height h, cell width w: central, one-sided, or 0.
 [[nodiscard]] float neighbour_gradient(bool low_seen, float low, bool high_seen, float high, float h, float w) noexcept;
 
-/// Applies the rule to every observed cell of every layer. Precondition: sigma_sq > 0, finite.
+/// Applies the rule to every observed cell of every layer. Precondition: sigma_sq > 0, finite; a
+/// violation is reported to the assert hook and changes no cell.
 template <typename Config>
 void forget_for_motion(LayerSet<Config>& layers, const StackParams& params, float sigma_sq) noexcept {
+  CCMAP_ASSERT_OR_RETURN(sigma_sq > 0.0F && sigma_sq <= std::numeric_limits<float>::max(), );
   using Layers = LayerSet<Config>;
   for (int c = 0; c < Layers::kCcmLayerCount; ++c) {
     layers.ccm[c].for_each([&](CellIndex, typename Layers::CcmCellType& cell) {

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/map/classify.hpp"
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/detail/layers.hpp"
@@ -86,8 +87,10 @@ class QueryView {
 
   /// The answer of `layer` at `index` for the point (x, y) inside that cell. With
   /// require_known, a cell that is not known gives kUnknown. Precondition: the layer's window
-  /// contains `index`.
+  /// contains `index`; a violation (a bad layer included) is reported to the assert hook and
+  /// answered kOutsideMap.
   [[nodiscard]] QueryResult answer_at(int layer, CellIndex index, float x, float y, bool require_known) const noexcept {
+    CCMAP_ASSERT_OR_RETURN(layers_.contains(layer, index), empty_result(Status::kOutsideMap, -1));
     const float width = layers_.widths[layer];
     QueryResult out = empty_result(Status::kOk, layer);
     out.cell_width_m = width;
@@ -156,8 +159,12 @@ class QueryView {
 
   [[nodiscard]] const Layers& layers() const noexcept { return layers_; }
   [[nodiscard]] const StackParams& params() const noexcept { return params_; }
-  /// Normal-variance threshold of a layer (m^2). Precondition: 0 <= layer < kLayerCount.
-  [[nodiscard]] float threshold(int layer) const noexcept { return thresholds_[layer]; }
+  /// Normal-variance threshold of a layer (m^2). Precondition: 0 <= layer < kLayerCount; a
+  /// violation is reported to the assert hook and answered 0 (every rough cell an obstacle).
+  [[nodiscard]] float threshold(int layer) const noexcept {
+    CCMAP_ASSERT_OR_RETURN(layer >= 0 && layer < Layers::kLayerCount, 0.0F);
+    return thresholds_[layer];
+  }
 
   /// Roughness filter of the piece-wise constant layer (the baseline of Section V-B): the
   /// cell is an obstacle if any known neighbour differs in height by more than the maximum

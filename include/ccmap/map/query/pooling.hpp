@@ -11,6 +11,7 @@
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/map/detail/layers.hpp"
 
 namespace ccmap::detail {
@@ -35,12 +36,14 @@ struct ReadCount {
 
 /// The statistics of CCM stack layer `layer`'s cell `index` as a query sees them.
 /// Preconditions: LayerSet<Config>::is_ccm(layer) and the layer's window contains `index`
-/// (so 2 * index fits int32: windows stay within +-2^30). `count` is told every cell read.
+/// (so 2 * index fits int32: windows stay within +-2^30); a violation is reported to the assert
+/// hook and answered with the empty cell (unknown). `count` is told every cell read.
 template <typename Config, typename Count>
 [[nodiscard]] typename LayerSet<Config>::CcmCellType pooled(const LayerSet<Config>& layers, float weight_limit,
                                                             int layer, CellIndex index, Count& count) noexcept {
   using Layers = LayerSet<Config>;
   using Cell = typename Layers::CcmCellType;
+  CCMAP_ASSERT_OR_RETURN(Layers::is_ccm(layer) && layers.contains(layer, index), Cell{});
   const Cell* own = layers.ccm_grid(layer).cell(index);
   count.add(1U);
   Cell result = own != nullptr ? *own : Cell{};

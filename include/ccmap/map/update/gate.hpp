@@ -25,6 +25,7 @@
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/cell/outlier_gate.hpp"
+#include "ccmap/core/assert.hpp"
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/types.hpp"
@@ -64,7 +65,9 @@ class OutlierGate {
   static constexpr bool kKalman = Config::kFineKind == FineKind::kKalman;
   static constexpr bool kCcmPool = Layers::kCcmLayerCount > 0;
   static constexpr bool kFinePool = Layers::kHasFine;
-  static constexpr std::size_t kSlots = kConfigHeldSlots<Config> > 0U ? kConfigHeldSlots<Config> : kHeldSlots;
+  static constexpr std::size_t kCcmSlots = kConfigCcmHeldSlots<Config> > 0U ? kConfigCcmHeldSlots<Config> : kHeldSlots;
+  static constexpr std::size_t kFineSlots =
+      kConfigFineHeldSlots<Config> > 0U ? kConfigFineHeldSlots<Config> : kFineHeldSlots;
 
   /// CCM cells as the layers store them.
   using CcmCellType = typename Layers::CcmCellType;
@@ -79,13 +82,15 @@ class OutlierGate {
     float spread_sum;             ///< sum of squared deviations from that mean (m^2)
   };
   using FineHeld = std::conditional_t<kKalman, KalmanHeld, OmgCell>;
-  using CcmPool = HeldPool<CcmCellType, kCcmPool ? Layers::kCcmCellCount : 1U, kCcmPool ? kSlots : 1U>;
-  using FinePool = HeldPool<FineHeld, kFinePool ? Layers::kFineCellCount : 1U, kFinePool ? kSlots : 1U>;
+  using CcmPool = HeldPool<CcmCellType, kCcmPool ? Layers::kCcmCellCount : 1U, kCcmPool ? kCcmSlots : 1U>;
+  using FinePool = HeldPool<FineHeld, kFinePool ? Layers::kFineCellCount : 1U, kFinePool ? kFineSlots : 1U>;
 
   /// Gate constants of every layer (k from the params, V from the routing bounds max_range_sq_m2),
   /// empty pools. The gate is on iff params.outlier_gate_sigma > 0.
   void init(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
     on_ = params.outlier_gate_sigma > 0.0F;
+    // A cell is known from min_weight on (and never while empty).
+    mature_weight_ = params.min_weight > 1.0e-30F ? params.min_weight : 1.0e-30F;
     line_of_sight_ = on_ && params.noise.kind() == sensor::SensorKind::kStereo;
     rule_ = ChangeRule{params.change_min_points, params.change_share};
     for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
@@ -119,16 +124,25 @@ class OutlierGate {
 
   /// Judges a point of a CCM cell (cell number `number` of layer `layer`, global index `index`)
   /// at height z (m) with position (x, y) relative to the cell's centre and weight w; a held
-  /// point is folded into its slot here.
+  /// point is folded into its slot here. The range-error checks (finer layer, line of sight)
+  /// judge the points that their own cell cannot: those outside its gate, and every point of a
+  /// cell that is not yet known (weight below min_weight: its statistics are no judge yet). A
+  /// point inside the gate of a known cell agrees with ground that was itself judged when it
+  /// was young; it is folded in with the own gate's 6 float operations alone (docs/design.md,
+  /// "Outlier gate and change": what this costs and what it changes).
   [[nodiscard]] __attribute__((always_inline)) GateOutcome judge_ccm(const Layers& layers, const LayerWalk<Config>& walk, int layer,
                                       std::uint32_t number, CellIndex index, const FrontChunk& chunk, std::size_t i,
                                       float x, float y, float w, float weight_limit) noexcept {
     const float z = chunk.z[i];
-    const GateOutcome first = range_error(layers, walk, layer, chunk, i);
-    if (first != GateOutcome::kFold) {
-      return first;
+    const auto& cell = layers.ccm_storage[number];
+    const bool outside = ccm_outside_gate(cell, z, constants_[layer]);
+    if (outside || !(cell.weight >= mature_weight_)) {
+      const GateOutcome first = range_error(layers, walk, layer, chunk, i);
+      if (first != GateOutcome::kFold) {
+        return first;
+      }
     }
-    if (ccm_outside_gate(layers.ccm_storage[number], z, constants_[layer])) {
+    if (outside) {
       auto* slot = ccm_held_.hold(number, index, layer);
       if (slot == nullptr) {
         return GateOutcome::kPoolFull;
@@ -207,7 +221,6 @@ class OutlierGate {
   [[nodiscard]] std::uint32_t last_frame_slots() const noexcept { return last_frame_slots_; }
   void note_frame_slots() noexcept { last_frame_slots_ = ccm_held_.used() + fine_held_.used(); }
 
- private:
   /// The two range-error checks of a coarse layer's point: the next finer layer's cell, then
   /// the line of sight.
   [[nodiscard]] GateOutcome range_error(const Layers& layers, const LayerWalk<Config>& walk, int layer,
@@ -227,11 +240,12 @@ class OutlierGate {
   /// lies outside that cell's gate with the constants of the point's own layer (its range noise
   /// class). A point routed by its range to a coarse layer while a finer layer knows the ground
   /// there is, when the two disagree, a range error: the finer cell, made of more precise points,
-  /// is the better judge. Precondition: layer >= 1. Consecutive points of a stereo row mostly
+  /// is the better judge. Precondition: layer >= 1 (asserted; false if not). Consecutive points of a stereo row mostly
   /// share the finer cell: its number is kept from the last point (windows do not move within
   /// a frame, so the same index names the same cell).
   [[nodiscard]] bool contradicted_by_finer(const Layers& layers, const LayerWalk<Config>& walk, int layer,
                                            std::int32_t ix0, std::int32_t iy0, float z) noexcept {
+    CCMAP_ASSERT_OR_RETURN(layer >= 1, false);  // no finer layer: nothing contradicts
     const int finer = layer - 1;
     const std::int32_t fx = ix0 >> finer;
     const std::int32_t fy = iy0 >> finer;
@@ -269,6 +283,7 @@ class OutlierGate {
     bool holds = false;
   };
 
+ private:
   // ---- zero-initialised (a static stack lives in .bss); derived at init ----
   CcmPool ccm_held_{};                         ///< held points of CCM cells
   FinePool fine_held_{};                       ///< held points of finest-layer cells
@@ -278,6 +293,7 @@ class OutlierGate {
   FinerCache finer_{};
   ChangeRule rule_{};
   std::uint32_t last_frame_slots_ = 0U;
+  float mature_weight_ = 0.0F;  ///< the weight from which a cell's own gate judges alone (min_weight)
   bool on_ = false;
   bool line_of_sight_ = false;
 };

@@ -26,10 +26,13 @@
 
 namespace ccmap::detail {
 
-/// Slots of a pool by default (Config::kHeldSlots overrides it, map/config.hpp): cells with
-/// held points. docs/performance.md ("Outlier gate: what it costs") gives the slots a CADRE
-/// traverse with 1 % of its pixels mismatched takes.
+/// Slots of the CCM layers' pool by default (Config::kCcmHeldSlots overrides it, map/config.hpp):
+/// cells with held points. The CADRE traverse with 1 % of its pixels mismatched (the heaviest
+/// case measured, docs/performance.md "Outlier gate: what it costs") takes at most 356.
 inline constexpr std::size_t kHeldSlots = 512U;
+/// Slots of the finest layer's pool by default (Config::kFineHeldSlots): that traverse takes at
+/// most 866 (with 512 it dropped 76,533 held points for want of a slot).
+inline constexpr std::size_t kFineHeldSlots = 1024U;
 /// A slot whose points have not come to a decision after this many frames is dropped.
 inline constexpr std::uint32_t kMaxHeldFrames = 8U;
 

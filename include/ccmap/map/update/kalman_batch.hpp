@@ -29,10 +29,12 @@ namespace ccmap::detail {
   return static_cast<std::int32_t>(std::floor(v * 16384.0F));
 }
 
-/// floor(v 2^14) of a gate half-width v >= 0 (m), saturated at 2^31 - 1 units (131 km).
+/// floor(v 2^14) of a gate half-width v >= 0 (m), saturated at 2^31 - 128 units (131 km). The
+/// conversion is to int32 (a float -> int64 conversion is a soft-double call on 32-bit Arm: no
+/// double may enter the core's image, tests/baremetal link.no_soft_double).
 [[nodiscard]] inline std::int64_t q14_half_width(float v) noexcept {
   const float units = v * 16384.0F;
-  return units < 2147483520.0F ? static_cast<std::int64_t>(units) : std::int64_t{0x7FFFFFFF};
+  return units < 2147483520.0F ? std::int64_t{static_cast<std::int32_t>(units)} : std::int64_t{2147483520};
 }
 
 /// The gate's interval of one cell for one frame in Q14: [low, low + span], clamped to int32
@@ -136,6 +138,36 @@ class KalmanBatch {
     run.sum_height_q14 += h;
     run.sum_range_key += key;
     return true;
+  }
+
+  /// Adds entries i, i+1, ... to the run while they are points of the run's cell (slots[j] ==
+  /// run.slot) inside its gate (kGate; all of them without); returns the first entry not taken
+  /// (i itself when entry i is outside the gate: the caller takes it alone with add()). The
+  /// common case of the frame batch, in a loop of its own: about a dozen instructions a point.
+  template <bool kGate>
+  [[nodiscard]] std::size_t add_while_inside(Run& run, const std::int32_t* slots, const std::int32_t* heights,
+                                             const std::int32_t* keys, std::size_t i, std::size_t count) noexcept {
+    const std::int32_t slot = run.slot;
+    const auto low = static_cast<std::uint32_t>(run.low);
+    const std::uint32_t span = run.span;
+    std::int64_t sum_height = 0;
+    std::int64_t sum_key = 0;
+    std::size_t j = i;
+    do {
+      const std::int32_t h = heights[j];
+      if constexpr (kGate) {
+        if (static_cast<std::uint32_t>(h) - low > span) {
+          break;
+        }
+      }
+      sum_height += h;
+      sum_key += keys[j];
+      ++j;
+    } while (j < count && slots[j] == slot);
+    run.count += static_cast<std::uint32_t>(j - i);
+    run.sum_height_q14 += sum_height;
+    run.sum_range_key += sum_key;
+    return j;
   }
 
   /// Adds the run's sums to its cell's record; the run is then empty (same cell).

@@ -228,15 +228,23 @@ class UpdatePath {
         // Pass 1: the Kalman batch entries, the common case, in runs of one cell.
         const GateConstants& gate0 = gate_constants(0);
         typename Batch::Run run{};
-        for (std::size_t i = 0; i < count; ++i) {
+        for (std::size_t i = 0; i < count;) {
           const std::int32_t slot = chunk_.fine_slot[i];
           if (slot < 0) {
             others_[others++] = static_cast<std::uint16_t>(i);
+            ++i;
             continue;
           }
           if (slot != run.slot) {
             batch_.start(run, slot);
           }
+          const std::size_t next =
+              batch_.template add_while_inside<kGate>(run, chunk_.fine_slot, chunk_.height_q14, chunk_.range_key, i, count);
+          if (next > i) {
+            i = next;
+            continue;
+          }
+          // Entry i is outside its cell's gate (or opens a never-observed cell's interval).
           if constexpr (kGate) {
             if (!batch_.template add<true>(run, chunk_.height_q14[i], chunk_.range_key[i], gate0)) {
               const CellIndex index{chunk_.ix0[i], chunk_.iy0[i]};
@@ -244,9 +252,8 @@ class UpdatePath {
                                               chunk_.range_key[i]),
                             c);
             }
-          } else {
-            (void)batch_.template add<false>(run, chunk_.height_q14[i], chunk_.range_key[i], gate0);
           }
+          ++i;
         }
         batch_.flush(run);
         c.used += run.flushed;
@@ -319,13 +326,13 @@ class UpdatePath {
       case GateOutcome::kOccluded: ++c.occluded; break;
       case GateOutcome::kHeld: ++c.held; break;
       case GateOutcome::kPoolFull: ++c.pool_full; break;
-      case GateOutcome::kFold: ++c.used; break;
+      case GateOutcome::kFold: ++c.used; break;  // GCOVR_EXCL_LINE: callers pass the other outcomes only
     }
   }
 
   /// Every other entry: refusals, weights, the walk, one CCM, Kalman or OMG cell.
   template <bool kGate>
-  void apply(Layers& layers, const StackParams& params, std::size_t i, const float* weights, bool unit_weights,
+  __attribute__((always_inline)) void apply(Layers& layers, const StackParams& params, std::size_t i, const float* weights, bool unit_weights,
              ChunkCounts& c) noexcept {
     const std::int32_t code = chunk_.code[i];
     if (code >= std::int32_t{kFrontNonFinite}) {

@@ -43,7 +43,8 @@ struct PlannerAccess {
 };
 
 /// The answer of a map cell to every point of a piece inside it (what Stack::query answers
-/// there, less the point-dependent height). Compact (60 bytes): the walk keeps one per layer.
+/// there, less the point-dependent height). Compact (60 bytes, asserted below): the walk keeps one
+/// per layer.
 struct RegionAnswer {
   std::int16_t layer;        ///< answering layer; the finest holding the piece if none knows it; -1 if none holds it
   std::int16_t class_layer;  ///< layer whose cell gave class, slopes and normal variance
@@ -66,6 +67,7 @@ struct RegionAnswer {
   float height_slope_y;
 };
 static_assert(kMaxLayers <= 32767, "layers fit int16");
+static_assert(sizeof(RegionAnswer) == 60U, "RegionAnswer is documented as 60 bytes");
 
 /// One part of the rectangle inside one leaf cell.
 struct RegionPiece {

@@ -1,0 +1,66 @@
+// Non-template parts of registration: the default parameters, their validation, the pose check.
+#include <cmath>
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/registration/detail/solver.hpp"
+#include "ccmap/registration/types.hpp"
+
+namespace ccmap {
+
+RegistrationParams default_registration_params() noexcept {
+  RegistrationParams p{};
+  p.max_points = 1024U;
+  p.max_iterations = 10U;
+  p.min_matches = 30U;
+  p.max_translation_m = 0.5F;
+  p.max_yaw_rad = 0.2F;
+  p.max_sigma_m = 0.03F;
+  p.robust_sigmas = 3.0F;
+  p.model_variance_m2 = 1.0e-6F;
+  p.convergence_m = 3.0e-4F;
+  return p;
+}
+
+Status validate_registration_params(const RegistrationParams& p) noexcept {
+  const float values[] = {p.max_translation_m, p.max_yaw_rad, p.max_sigma_m, p.robust_sigmas, p.model_variance_m2,
+                          p.convergence_m};
+  for (const float v : values) {
+    if (!std::isfinite(v)) {
+      return Status::kNonFiniteInput;
+    }
+  }
+  const bool counts = p.max_points >= 1U && p.max_points <= kMaxRegistrationPoints && p.max_iterations >= 1U &&
+                      p.max_iterations <= kMaxRegistrationIterations &&
+                      p.min_matches >= 3U;
+  const bool bounds = p.max_translation_m > 0.0F && p.max_translation_m <= kMaxAbsCoordinateM && p.max_yaw_rad > 0.0F &&
+                      p.max_yaw_rad <= 0.5F && p.max_sigma_m > 0.0F && p.robust_sigmas > 0.0F &&
+                      p.model_variance_m2 >= 0.0F && p.convergence_m > 0.0F;
+  return counts && bounds ? Status::kOk : Status::kInvalidArgument;
+}
+
+namespace detail {
+
+Status check_registration_rotation(const float* r) noexcept {
+  for (int i = 0; i < 9; ++i) {
+    if (!std::isfinite(r[i])) {
+      return Status::kNonFiniteInput;
+    }
+    if (!(std::fabs(r[i]) <= 1.001F)) {
+      return Status::kInvalidArgument;
+    }
+  }
+  // R^T R = I within 1e-3 per entry.
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      const float dot = r[a] * r[b] + r[3 + a] * r[3 + b] + r[6 + a] * r[6 + b];
+      const float expected = a == b ? 1.0F : 0.0F;
+      if (!(std::fabs(dot - expected) <= 1.0e-3F)) {
+        return Status::kInvalidArgument;
+      }
+    }
+  }
+  return Status::kOk;
+}
+
+}  // namespace detail
+}  // namespace ccmap
