@@ -10,8 +10,9 @@
 // walked, so the cost per ray follows. On other targets the markers are empty and the program
 // checks that every call succeeds and that the stage walked rays.
 //
-//   icount_free_space_example [frames width_px height_px]   default: 2 80 50
-//   (3 850 650: the figures of docs/performance.md)
+//   icount_free_space_example [frames width_px height_px [rays]]   default: 2 80 50, the CADRE
+//   default's lines of sight (3 850 650: the figures of docs/performance.md; `rays` measures the
+//   stage at another free_space_rays, 1..65535)
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -28,11 +29,12 @@ using Map = ccmap::Stack<ccmap::CadreConfig>;
 }  // namespace
 
 int main(int argc, char** argv) {
-  int frames = 2, width_px = 80, height_px = 50;
-  if (argc != 1 && (argc != 4 || !ccmap::test::parse_count(argv[1], 1000, &frames) ||
+  int frames = 2, width_px = 80, height_px = 50, rays_per_frame = 0;
+  if (argc != 1 && ((argc != 4 && argc != 5) || !ccmap::test::parse_count(argv[1], 1000, &frames) ||
                     !ccmap::test::parse_count(argv[2], 4000, &width_px) ||
-                    !ccmap::test::parse_count(argv[3], 4000, &height_px))) {
-    std::fprintf(stderr, "usage: icount_free_space_example [frames width_px height_px]\n");
+                    !ccmap::test::parse_count(argv[3], 4000, &height_px) ||
+                    (argc == 5 && !ccmap::test::parse_count(argv[4], 65535, &rays_per_frame)))) {
+    std::fprintf(stderr, "usage: icount_free_space_example [frames width_px height_px [rays]]\n");
     return 2;
   }
   // On the heap, as the timing test and icount_stack_example (the counts are of the same code).
@@ -41,11 +43,15 @@ int main(int argc, char** argv) {
   auto map_on = std::make_unique<Map>();
   auto map_off = std::make_unique<Map>();
   ccmap::StackParams params = ccmap::default_stack_params(0.04F);
+  if (rays_per_frame > 0) {
+    params.free_space_rays = static_cast<float>(rays_per_frame);
+  }
   if (!(params.free_space_rays > 0.0F) || sensor_on->init(params) != ccmap::Status::kOk ||
       map_on->init(params) != ccmap::Status::kOk) {
     std::fprintf(stderr, "icount_free_space_example: the CADRE default should have free space on\n");
     return 1;
   }
+  const float params_on_rays = params.free_space_rays;
   params.free_space_rays = 0.0F;
   if (sensor_off->init(params) != ccmap::Status::kOk || map_off->init(params) != ccmap::Status::kOk) {
     std::fprintf(stderr, "icount_free_space_example: init failed\n");
@@ -89,9 +95,9 @@ int main(int argc, char** argv) {
     cleared += a.cleared_cells + c.cleared_cells;
     drops += a.drop_cells + c.drop_cells;
   }
-  std::printf("icount_free_space_example: %d frames of %d x %d points; lines of sight walked %llu (sensor frame), "
+  std::printf("icount_free_space_example: %d frames of %d x %d points, %d rays per frame; lines of sight walked %llu (sensor frame), "
               "%llu (map frame); refused %llu, %llu; cells cleared %llu, drop-offs %llu\n",
-              frames, width_px, height_px, static_cast<unsigned long long>(rays[0]),
+              frames, width_px, height_px, static_cast<int>(params_on_rays), static_cast<unsigned long long>(rays[0]),
               static_cast<unsigned long long>(rays[1]), static_cast<unsigned long long>(refused[0]),
               static_cast<unsigned long long>(refused[1]), static_cast<unsigned long long>(cleared),
               static_cast<unsigned long long>(drops));

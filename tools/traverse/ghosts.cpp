@@ -77,6 +77,7 @@ StackParams map_params(const GhostConfig& config, bool free_space) {
   StackParams p = default_stack_params(0.04F);
   config.gate.apply(&p);
   p.sensor_view_axis = {0.0F, 0.0F, 1.0F};  // the simulator's optical frame looks along +z
+  if (config.free_space_rays > 0) p.free_space_rays = static_cast<float>(config.free_space_rays);
   if (!free_space) p.free_space_rays = 0.0F;
   return p;
 }
@@ -416,7 +417,7 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
     draw_class_panel(img, 20, 30, scale, ras, *before[0], final_bodies, tracks,
                      format("ROVER 1 MAP, FRAME %d, WITHOUT FREE SPACE", cfg.team_frames - 1));
     draw_class_panel(img, 40 + panel_w, 30, scale, ras, *after[0], final_bodies, tracks,
-                     format("WITH FREE SPACE (%d RAYS PER FRAME)", static_cast<int>(default_stack_params(0.04F).free_space_rays)));
+                     format("WITH FREE SPACE (%d RAYS PER FRAME)", static_cast<int>(map_params(cfg, true).free_space_rays)));
     int x = 20;
     for (const char* c : {"traversable", "obstacle", "steep", "drop", "unknown"}) {
       std::uint8_t v[3];
@@ -625,6 +626,7 @@ GhostResult run_ghosts(const GhostConfig& config) {
 
 std::string ghost_report(const GhostResult& r, const GhostConfig& c) {
   std::string s;
+  s += format("AFTER: %d lines of sight per frame\n\n", static_cast<int>(map_params(c, true).free_space_rays));
   s += format("Team of three rovers, %d frames, pixel stride %d: ghosts (map obstacle or steep where a rover stood,\n"
               "no rover stands and the ground is free), per rover's map\n\n",
               c.team_frames, c.pixel_stride);

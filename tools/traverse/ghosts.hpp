@@ -46,6 +46,7 @@ struct GhostConfig {
   double raster_resolution_m = 0.01;  ///< terrain raster the cameras ray-cast against
   double query_step_m = 0.02;         ///< raster of the stack-query evaluation
   experiments::GateSetting gate;      ///< the maps' outlier gate (default: the library's)
+  int free_space_rays = 0;            ///< AFTER's lines of sight per frame; 0 = the library's default
   std::string out_dir;                ///< pictures; empty = none
   std::FILE* log = nullptr;
   static GhostConfig quick() {

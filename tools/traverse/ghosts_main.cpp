@@ -2,6 +2,7 @@
 // "Ghosts and drop-offs"): a team of three rovers seeing each other drive off, negative obstacles
 // approached, rock shadows on open ground.
 //   ccmap_ghosts [--seed N] [--quick] [--out DIR] [--gate K] [--change-points M] [--change-share S]
+//                [--rays N]   (AFTER's free_space_rays; default: the library's, StackParams)
 // (the experiments' options, experiments/common.hpp; --data and --paper-cell are accepted and unused).
 #include <cstdio>
 
@@ -20,10 +21,15 @@ int main(int argc, char** argv) {
       "Free space from lines of sight, without and with it: ghosts of rovers that drove on, drop-offs\n"
       "approached, rock shadows (--data and --paper-cell are accepted and unused)",
       &args);
+  int rays = 0;
+  app->add_option("--rays", rays, "AFTER's lines of sight per frame (1..65535; default: the library's)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 65535));
   if (const int rc = experiments::parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   traverse::GhostConfig cfg = args.quick ? traverse::GhostConfig::quick() : traverse::GhostConfig{};
   cfg.seed = args.seed;
   cfg.gate = args.gate;
+  cfg.free_space_rays = rays;
   cfg.out_dir = args.out_dir;
   cfg.log = stderr;
   const traverse::GhostResult r = traverse::run_ghosts(cfg);
