@@ -54,8 +54,11 @@ inline void exact_cell(float x, float c, std::int32_t* index, float* fraction) n
     *fraction = product < 0 ? tiny + 1.0F : tiny;
     return;
   }
-  const std::int64_t whole = product >> (shift < 0 ? 0 : shift);  // arithmetic shift: floor
-  const std::int64_t rest = product - (whole << (shift < 0 ? 0 : shift));  // in [0, 2^shift)
+  const std::int32_t s = shift < 0 ? 0 : shift;
+  const std::int64_t whole = product >> s;  // arithmetic shift (two's complement): the floor
+  // product - whole 2^s, in [0, 2^s): the low s bits (masked, not shifted back: whole may be < 0)
+  const auto rest = static_cast<std::int64_t>(static_cast<std::uint64_t>(product) &
+                                              ((std::uint64_t{1} << static_cast<std::uint32_t>(s)) - 1U));
   std::uint32_t scale_bits = static_cast<std::uint32_t>(127 - shift) << 23U;  // 2^-shift, normal for shift <= 62
   float scale = 0.0F;
   std::memcpy(&scale, &scale_bits, sizeof scale);

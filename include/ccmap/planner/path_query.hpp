@@ -31,6 +31,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "ccmap/core/sin_cos.hpp"
 #include "ccmap/planner/footprint.hpp"
 #include "ccmap/map/stack.hpp"
 
@@ -79,10 +80,6 @@ struct PathResult {
 };
 
 namespace detail {
-
-/// sin and cos of theta, |theta| <= 7 (a full circle and a little): quadrant reduction with a
-/// two-part pi/2, then polynomials on [-pi/4, pi/4]; error < 2e-7. + - * and floor only.
-void sin_cos(float theta, float* sine, float* cosine) noexcept;
 
 /// Poses along a path (validated by make_*): pose(t) for 0 <= t <= length.
 class PathSampler {

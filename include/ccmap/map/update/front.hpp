@@ -121,7 +121,7 @@ struct FrontChunk {
   std::int32_t height_q14[kFrontChunkPoints];  ///< floor(z * 2^14) (61 um units)
   std::int32_t range_key[kFrontChunkPoints];   ///< floor(min(range_sq, 2^19 m^2) * 2^12) (2^-12 m^2 units)
 };
-static_assert(sizeof(FrontChunk) == 10U * 4U * kFrontChunkPoints, "ten 4-byte lanes per point, no padding");
+static_assert(sizeof(FrontChunk) == std::size_t{40U} * kFrontChunkPoints, "ten 4-byte lanes per point, no padding");
 
 /// Range key units (m^2) of FrontChunk::range_key.
 inline constexpr float kRangeKeyM2 = 2.44140625e-4F;  // 2^-12

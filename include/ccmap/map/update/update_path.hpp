@@ -420,7 +420,8 @@ class UpdatePath {
       if (gate_.on()) {
         apply_change_rule(
             gate_, layers, params, frame, [&](std::uint32_t cell) { return batch_.sum(cell).count; },
-            [&](auto& cell, const auto& held, std::uint32_t count) {
+            [&]([[maybe_unused]] auto& cell, [[maybe_unused]] const auto& held,
+                [[maybe_unused]] std::uint32_t count) {  // only a Kalman layer fuses its held points here
               if constexpr (kKalman) {
                 // The held points as one more batch: their mean, the variance at their mean squared range.
                 fuse_sums(cell, params, held.sum_height_q14, held.sum_range_key, count);

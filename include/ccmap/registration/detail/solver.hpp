@@ -48,16 +48,12 @@
 #include <cstdint>
 #include <limits>
 
+#include "ccmap/core/sin_cos.hpp"
 #include "ccmap/core/status.hpp"
 #include "ccmap/registration/detail/normal_equations.hpp"
 #include "ccmap/registration/types.hpp"
 
 namespace ccmap::detail {
-
-/// sin and cos of theta (|theta| <= 7), + - * and floor only: declared with the planner's path
-/// sweep (planner/path_query.hpp), defined in src/planner/planner_support.cpp. Declared here
-/// too so that this header does not pull the planner into the stack's own header.
-void sin_cos(float theta, float* sine, float* cosine) noexcept;
 
 /// One sample (frame point or cell mean), map frame, before the correction.
 struct RegistrationSample {
@@ -340,7 +336,10 @@ template <typename Samples, typename Surface>
     const float sd = std::sqrt(variance);
     r.observable[i] = final_solve.axis_observable[i] && sd <= limit;
     out[i] = final_solve.axis_share[i] < kAxisAbsent ? 0.0F : values[i];
-    sigma[i] = r.observable[i] ? sd : kInf;
+    sigma[i] = kInf;
+    if (r.observable[i]) {
+      sigma[i] = sd;
+    }
   }
   r.dx = out[0];
   r.dy = out[1];
