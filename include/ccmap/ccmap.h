@@ -82,10 +82,10 @@ typedef enum ccmap_preset {
  * is its constant); ccmap_storage_size() gives the exact figure (docs/integration.md, section 7,
  * lists them). The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
-#define CCMAP_CADRE_STORAGE_SIZE 770048u          /* 752 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 2949120u    /* 2880 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3342336u /* 3264 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1114112u    /* 1088 KiB */
+#define CCMAP_CADRE_STORAGE_SIZE 835584u          /* 816 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3211264u    /* 3136 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3375104u /* 3296 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1376256u    /* 1344 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \
@@ -107,10 +107,10 @@ size_t ccmap_cadre_storage_size(void);
 size_t ccmap_cadre_storage_align(void);
 
 /* Bytes of a snapshot of each preset (exact, fixed by the preset). */
-#define CCMAP_CADRE_SNAPSHOT_SIZE 459040u
-#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2621696u
-#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 786688u
-#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 786688u
+#define CCMAP_CADRE_SNAPSHOT_SIZE 516428u
+#define CCMAP_SINGLE_CCM_SNAPSHOT_SIZE 2883884u
+#define CCMAP_SINGLE_KALMAN_SNAPSHOT_SIZE 1048876u
+#define CCMAP_SINGLE_OMG_SNAPSHOT_SIZE 1048876u
 
 /* ---- the map handle ------------------------------------------------------------------------- */
 typedef struct ccmap_map ccmap_map; /* opaque: lives at the start of the caller's storage */
@@ -161,6 +161,11 @@ typedef struct ccmap_params {
   uint32_t frame_point_budget;   /* frame budget: at most this many points per frame (0: all) */
   uint32_t frame_time_budget_us; /* and no new 128-point chunk after this many us (0: no limit);
                                     docs/integration.md, "The frame budget" */
+  float free_space_rays;      /* lines of sight walked per frame (whole number, 0..65535); 0 = no
+                                 free space: no ghost cleared, no drop-off (docs/design.md) */
+  float free_space_clear_frames; /* frames of rays clearly below a surface before it is cleared (1..255) */
+  float sensor_view_axis[3];  /* the sensor's viewing direction in its own frame (all 0: not given);
+                                 sensor-frame points behind it cast no line of sight */
   ccmap_noise_params noise;
 } ccmap_params;
 
@@ -201,6 +206,11 @@ typedef struct ccmap_frame_counters {
   uint32_t skipped_budget;   /* not processed: the frame budget was spent */
   uint32_t corrupted_cells;  /* single-event upsets: cells whose bits disagreed with their check, reset */
   uint32_t corrupted_slots;  /* held-point slots whose bits disagreed with their seal, dropped */
+  uint32_t free_rays;        /* lines of sight walked (free space; not points) */
+  uint32_t free_rays_refused; /* sampled points whose line of sight was refused (bad point, behind
+                                 the sensor, sensor outside the map): they change nothing */
+  uint32_t cleared_cells;    /* cells emptied: lines of sight passed clearly below their surface */
+  uint32_t drop_cells;       /* unobserved cells that became drop-offs */
 } ccmap_frame_counters;
 
 /* Re-centres every layer on the robot at (x, y) (m). Refused (counted): a non-finite position
@@ -302,10 +312,12 @@ typedef enum ccmap_cell_class {
   CCMAP_CLASS_UNKNOWN = 0,
   CCMAP_CLASS_TRAVERSABLE = 1,
   CCMAP_CLASS_OBSTACLE = 2,
-  CCMAP_CLASS_STEEP = 3
+  CCMAP_CLASS_STEEP = 3,
+  CCMAP_CLASS_DROP = 4  /* unobserved, lines of sight passed far below the ground before it: a
+                           crater, ditch or ledge; a hazard (docs/design.md, free space) */
 } ccmap_cell_class;
 
-/* "unknown", "traversable", "obstacle", "steep"; never NULL. */
+/* "unknown", "traversable", "obstacle", "steep", "drop"; never NULL. */
 const char* ccmap_cell_class_string(int32_t cell_class);
 
 /* Answer of a point query (ccmap::QueryResult). On status != CCMAP_OK the numbers are 0. */
@@ -386,7 +398,7 @@ typedef struct ccmap_footprint {
 /* Answer of a footprint query (ccmap::FootprintResult). */
 typedef struct ccmap_footprint_result {
   int32_t status;          /* CCMAP_OK, CCMAP_OUTSIDE_MAP (no layer holds any part), or the refusal */
-  int32_t worst_class;     /* ccmap_cell_class of the known parts (obstacle > steep > traversable);
+  int32_t worst_class;     /* ccmap_cell_class of the known parts (drop > obstacle > steep > traversable);
                               CCMAP_CLASS_UNKNOWN if none is known */
   float unknown_share;     /* [0, 1] of the area */
   float max_step_m;        /* height range over the known parts, or 4 sigma_s relief if larger */

@@ -47,6 +47,7 @@ static_assert(static_cast<int>(CCMAP_CLASS_UNKNOWN) == static_cast<int>(CellClas
 static_assert(static_cast<int>(CCMAP_CLASS_TRAVERSABLE) == static_cast<int>(CellClass::kTraversable), "class");
 static_assert(static_cast<int>(CCMAP_CLASS_OBSTACLE) == static_cast<int>(CellClass::kObstacle), "class");
 static_assert(static_cast<int>(CCMAP_CLASS_STEEP) == static_cast<int>(CellClass::kSteep), "class");
+static_assert(static_cast<int>(CCMAP_CLASS_DROP) == static_cast<int>(CellClass::kDropOff), "class");
 static_assert(CCMAP_MAX_LAYERS == kMaxLayers, "CCMAP_MAX_LAYERS != kMaxLayers");
 static_assert(sizeof(ccmap_frame_counters) == sizeof(FrameCounters), "ccmap_frame_counters != FrameCounters");
 
@@ -166,8 +167,8 @@ static_assert(MapExchange<CadreConfig>::max_delta_size() == CCMAP_CADRE_DELTA_MA
 // The smallest CADRE delta, as persistence/exchange.hpp documents it (header, five layer headers, CRC).
 static_assert(MapExchange<CadreConfig>::min_delta_size() == 152U, "the empty CADRE delta is documented as 152 bytes");
 // The KiB figures beside the storage constants in ccmap.h.
-static_assert(CCMAP_CADRE_STORAGE_SIZE == 752U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 2880U * 1024U &&
-                  CCMAP_SINGLE_KALMAN_STORAGE_SIZE == 3264U * 1024U && CCMAP_SINGLE_OMG_STORAGE_SIZE == 1088U * 1024U,
+static_assert(CCMAP_CADRE_STORAGE_SIZE == 816U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 3136U * 1024U &&
+                  CCMAP_SINGLE_KALMAN_STORAGE_SIZE == 3296U * 1024U && CCMAP_SINGLE_OMG_STORAGE_SIZE == 1344U * 1024U,
               "ccmap.h: a map storage constant and its KiB comment disagree");
 static_assert(CCMAP_CADRE_EXCHANGE_STORAGE_SIZE == 464U * 1024U &&
                   CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE == 2624U * 1024U &&
@@ -405,6 +406,11 @@ void params_to_c(const StackParams& p, ccmap_params* out) noexcept {
   out->change_share = p.change_share;
   out->frame_point_budget = p.frame_point_budget;
   out->frame_time_budget_us = p.frame_time_budget_us;
+  out->free_space_rays = p.free_space_rays;
+  out->free_space_clear_frames = p.free_space_clear_frames;
+  for (std::size_t i = 0; i < 3U; ++i) {
+    out->sensor_view_axis[i] = p.sensor_view_axis[i];
+  }
   // default_stack_params uses the CADRE stereo model (sensor::cadre_stereo()).
   out->noise.sensor = CCMAP_SENSOR_STEREO;
   out->noise.stereo_focal_px = sensor::kCadreStereoParams.focal_px;
@@ -434,6 +440,11 @@ Status params_from_c(const ccmap_params& c, StackParams* out) noexcept {
   p.change_share = c.change_share;
   p.frame_point_budget = c.frame_point_budget;
   p.frame_time_budget_us = c.frame_time_budget_us;
+  p.free_space_rays = c.free_space_rays;
+  p.free_space_clear_frames = c.free_space_clear_frames;
+  for (std::size_t i = 0; i < 3U; ++i) {
+    p.sensor_view_axis[i] = c.sensor_view_axis[i];
+  }
   if (c.noise.sensor == CCMAP_SENSOR_STEREO) {
     p.noise = sensor::NoiseModel::stereo(sensor::StereoParams{
         c.noise.stereo_focal_px, c.noise.stereo_baseline_m, c.noise.stereo_disparity_sigma_px});
@@ -490,7 +501,7 @@ FootprintResult footprint_from_c(const ccmap_footprint_result& c) noexcept {
   FootprintResult r{};
   r.status = c.status >= 0 && c.status <= static_cast<std::int32_t>(CCMAP_VERSION_MISMATCH) ? static_cast<Status>(c.status)
                                                                                            : Status::kInvalidArgument;
-  r.worst_class = c.worst_class >= CCMAP_CLASS_UNKNOWN && c.worst_class <= CCMAP_CLASS_STEEP
+  r.worst_class = c.worst_class >= CCMAP_CLASS_UNKNOWN && c.worst_class <= CCMAP_CLASS_DROP
                       ? static_cast<CellClass>(c.worst_class)
                       : CellClass::kUnknown;
   r.unknown_share = c.unknown_share;
@@ -526,7 +537,9 @@ void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
                               f.too_noisy,     f.gated_finer,   f.gated_occluded,
                               f.gated_held,    f.gated_pool_full, f.gated_admitted,
                               f.gated_dropped, f.reseeded_cells, f.merged_cells,
-                              f.skipped_budget, f.corrupted_cells, f.corrupted_slots};
+                              f.skipped_budget, f.corrupted_cells, f.corrupted_slots,
+                              f.free_rays,     f.free_rays_refused, f.cleared_cells,
+                              f.drop_cells};
 }
 
 }  // namespace
@@ -545,7 +558,7 @@ const char* ccmap_status_string(ccmap_status status) {
 }
 
 const char* ccmap_cell_class_string(int32_t cell_class) {
-  if (cell_class < CCMAP_CLASS_UNKNOWN || cell_class > CCMAP_CLASS_STEEP) {
+  if (cell_class < CCMAP_CLASS_UNKNOWN || cell_class > CCMAP_CLASS_DROP) {
     return "unknown";
   }
   return ccmap::to_string(static_cast<ccmap::CellClass>(cell_class));

@@ -12,6 +12,7 @@ const char* to_string(CellClass cell_class) noexcept {
     case CellClass::kTraversable: return "traversable";
     case CellClass::kObstacle: return "obstacle";
     case CellClass::kSteep: return "steep";
+    case CellClass::kDropOff: return "drop";
   }
   return "unknown";
 }
@@ -42,6 +43,10 @@ void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept {
   total.skipped_budget = saturating_add(total.skipped_budget, frame.skipped_budget);
   total.corrupted_cells = saturating_add(total.corrupted_cells, frame.corrupted_cells);
   total.corrupted_slots = saturating_add(total.corrupted_slots, frame.corrupted_slots);
+  total.free_rays = saturating_add(total.free_rays, frame.free_rays);
+  total.free_rays_refused = saturating_add(total.free_rays_refused, frame.free_rays_refused);
+  total.cleared_cells = saturating_add(total.cleared_cells, frame.cleared_cells);
+  total.drop_cells = saturating_add(total.drop_cells, frame.drop_cells);
 }
 }  // namespace detail
 
@@ -65,6 +70,13 @@ StackParams default_stack_params(float finest_cell_width_m) noexcept {
   p.outlier_gate_sigma = 3.0F;
   p.change_min_points = 3.0F;
   p.change_share = 0.08F;
+  // Free space from lines of sight, its ray count set by the headroom budget: 128 lines of sight
+  // cost 1.25 M aarch64 instructions per CADRE frame (512 cost 5.1 M, over the frame's allowance).
+  // docs/performance.md section 13 gives the cost, docs/evaluation.md what 128 rays do and do not
+  // achieve against 512 (docs/design.md, "Free space from lines of sight").
+  p.free_space_rays = 128.0F;
+  p.free_space_clear_frames = 3.0F;
+  p.sensor_view_axis = {0.0F, 0.0F, 0.0F};
   p.noise = sensor::cadre_stereo();
   return p;
 }
@@ -73,7 +85,8 @@ Status validate_stack_params(const StackParams& p, int layer_count) noexcept {
   const float values[] = {p.finest_cell_width_m, p.coverage_tau,         p.min_weight,
                           p.obstacle_fraction,   p.max_inclination,      p.kalman_min_variance,
                           p.finest_max_sigma_m,  p.outlier_gate_sigma,   p.change_min_points,
-                          p.change_share};
+                          p.change_share,        p.free_space_rays,      p.free_space_clear_frames,
+                          p.sensor_view_axis[0], p.sensor_view_axis[1],  p.sensor_view_axis[2]};
   for (const float v : values) {
     if (!std::isfinite(v)) {
       return Status::kNonFiniteInput;
@@ -109,6 +122,12 @@ Status validate_stack_params(const StackParams& p, int layer_count) noexcept {
   const bool gate_valid = gate_off || (p.outlier_gate_sigma >= 1.0F && p.outlier_gate_sigma <= 100.0F);
   if (!gate_valid || !(p.change_min_points >= 1.0F) || p.change_min_points > 65535.0F ||
       !(p.change_share > 0.0F) || p.change_share > 0.5F) {
+    return Status::kInvalidArgument;
+  }
+  // Free space: whole numbers of rays (0 = off) and frames.
+  if (!(p.free_space_rays >= 0.0F) || p.free_space_rays > 65535.0F ||
+      std::floor(p.free_space_rays) < p.free_space_rays || !(p.free_space_clear_frames >= 1.0F) ||
+      p.free_space_clear_frames > 255.0F || std::floor(p.free_space_clear_frames) < p.free_space_clear_frames) {
     return Status::kInvalidArgument;
   }
   return p.noise.validate();

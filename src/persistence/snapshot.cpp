@@ -29,11 +29,11 @@ constexpr std::array<std::uint32_t, 256> kCrcTable = make_crc_table();
 
 // The format (snapshot.hpp) lists every field of these types; a new field needs a new format
 // version, not a silent omission.
-static_assert(sizeof(FrameCounters) == 18U * sizeof(std::uint32_t),
+static_assert(sizeof(FrameCounters) == 22U * sizeof(std::uint32_t),
               "FrameCounters changed: update the snapshot format and kSnapshotFormatVersion");
 static_assert(sizeof(sensor::NoiseModel) == 4U + 5U * sizeof(float),
               "NoiseModel changed: update the snapshot format and kSnapshotFormatVersion");
-static_assert(sizeof(StackParams) == (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U) * sizeof(float) +
+static_assert(sizeof(StackParams) == (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U + 5U) * sizeof(float) +
                                          sizeof(sensor::NoiseModel),
               "StackParams changed: update the snapshot format and kSnapshotFormatVersion");
 
@@ -234,6 +234,11 @@ void snapshot_write_params(SnapshotWriter& w, const StackParams& p) noexcept {
   w.f32(p.change_share);
   w.u32(p.frame_point_budget);
   w.u32(p.frame_time_budget_us);
+  w.f32(p.free_space_rays);
+  w.f32(p.free_space_clear_frames);
+  for (const float a : p.sensor_view_axis) {
+    w.f32(a);
+  }
   w.u8(static_cast<std::uint8_t>(p.noise.kind()));
   w.u8(static_cast<std::uint8_t>(p.noise.weight_mode()));
   w.u16(0U);
@@ -273,6 +278,11 @@ Status snapshot_read_params(SnapshotReader& r, int layer_count, bool has_fine, S
   p.change_share = finite_f32();
   p.frame_point_budget = r.u32();
   p.frame_time_budget_us = r.u32();
+  p.free_space_rays = finite_f32();
+  p.free_space_clear_frames = finite_f32();
+  for (float& a : p.sensor_view_axis) {
+    a = finite_f32();
+  }
   const std::uint8_t kind = r.u8();
   const std::uint8_t mode = r.u8();
   const std::uint16_t reserved = r.u16();
@@ -410,6 +420,18 @@ bool snapshot_read_cell(SnapshotReader& r, OmgCell* out) noexcept {
   return r.ok() && all_finite(f, 3U) && f[0] >= 0.0F;
 }
 
+// ---- free-space records ----
+void snapshot_write_record(SnapshotWriter& w, const FreeSpaceCell& c) noexcept {
+  w.u16(c.bound_code);
+  w.u8(c.evidence);
+  w.u8(c.state);
+}
+void snapshot_read_record(SnapshotReader& r, FreeSpaceCell* out) noexcept {
+  out->bound_code = r.u16();
+  out->evidence = r.u8();
+  out->state = r.u8();
+}
+
 // ---- counters, trailer ----
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uint32_t rejected_moves,
                              std::uint32_t rejected_frames, std::uint64_t last_update_ns) noexcept {
@@ -419,7 +441,8 @@ void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uin
                                   t.gated_held,      t.gated_pool_full, t.gated_admitted,
                                   t.gated_dropped,   t.reseeded_cells, t.merged_cells,
                                   t.skipped_budget,  t.corrupted_cells, t.corrupted_slots,
-                                  rejected_moves,    rejected_frames};
+                                  t.free_rays,       t.free_rays_refused, t.cleared_cells,
+                                  t.drop_cells,      rejected_moves,    rejected_frames};
   for (const std::uint32_t v : values) {
     w.u32(v);
   }
@@ -446,6 +469,10 @@ void snapshot_read_counters(SnapshotReader& r, FrameCounters* t, std::uint32_t* 
   t->skipped_budget = r.u32();
   t->corrupted_cells = r.u32();
   t->corrupted_slots = r.u32();
+  t->free_rays = r.u32();
+  t->free_rays_refused = r.u32();
+  t->cleared_cells = r.u32();
+  t->drop_cells = r.u32();
   *rejected_moves = r.u32();
   *rejected_frames = r.u32();
   *last_update_ns = r.u64();

@@ -11,7 +11,7 @@ CellClass footprint_class(const FootprintResult& result, float max_unknown_share
   if (result.status != Status::kOk && result.status != Status::kOutsideMap) {
     return CellClass::kUnknown;
   }
-  if (result.worst_class == CellClass::kObstacle || result.worst_class == CellClass::kSteep) {
+  if (is_lethal(result.worst_class)) {
     return result.worst_class;
   }
   // NaN max_unknown_share: every share "exceeds" it (the safe answer).

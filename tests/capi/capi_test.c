@@ -200,6 +200,7 @@ static void test_frames_queries_export(ccmap_map* map) {
   CHECK_STATUS(ccmap_query(map, 0.0f, 0.0f, NULL), CCMAP_INVALID_ARGUMENT);
   CHECK_STATUS(ccmap_query_layer(map, 9, 0.0f, 0.0f, &r), CCMAP_INVALID_ARGUMENT);
   CHECK(strcmp(ccmap_cell_class_string(CCMAP_CLASS_OBSTACLE), "obstacle") == 0);
+  CHECK(strcmp(ccmap_cell_class_string(CCMAP_CLASS_DROP), "drop") == 0);
   CHECK(strcmp(ccmap_cell_class_string(42), "unknown") == 0);
 
   CHECK_STATUS(ccmap_export_layer(map, 1, g_records, ccmap_layer_capacity(map, 1) - 1, &written),

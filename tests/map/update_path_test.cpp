@@ -30,10 +30,15 @@ struct SmallPoolCadre : CadreConfig {
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
+/// A stack of `params` with free space off: the model (tests/support/model_stack.hpp) is the
+/// update path's; lines of sight through these frames' points (computed as if the terrain hid
+/// nothing) would clear cells it keeps. Free space has its own tests (tests/map/free_space_test.cpp).
 template <typename Config>
 std::unique_ptr<Stack<Config>> make_stack(const StackParams& params) {
   auto stack = std::make_unique<Stack<Config>>();
-  EXPECT_EQ(stack->init(params), Status::kOk);
+  StackParams p = params;
+  p.free_space_rays = 0.0F;
+  EXPECT_EQ(stack->init(p), Status::kOk);
   return stack;
 }
 

@@ -65,13 +65,15 @@ std::vector<TraverseFrame> make_traverse(int frames, int width_px, int height_px
   return out;
 }
 
-/// The defaults with the outlier gate off (the paper's update). The exact-merge claims tested
-/// here hold for it only: with the gate on, which points a cell takes depends on what the cell
-/// held when they came (docs/design.md, "Outlier gate and change"), so a rover fed half the
-/// points gates differently from one fed all of them.
+/// The defaults with the outlier gate and free space off (the paper's update). The exact-merge
+/// claims tested here hold for it only: with the gate on, which points a cell takes depends on
+/// what the cell held when they came (docs/design.md, "Outlier gate and change"), so a rover fed
+/// half the points gates differently from one fed all of them; free space clears a cell from the
+/// rays of its own frames, which a rover fed half the frames sees differently.
 StackParams paper_params(float finest_cell_width_m) {
   StackParams p = default_stack_params(finest_cell_width_m);
   p.outlier_gate_sigma = 0.0F;
+  p.free_space_rays = 0.0F;
   return p;
 }
 

@@ -60,8 +60,9 @@ using test::reseal;
 // Byte offsets of the format (snapshot.hpp).
 constexpr std::size_t kVersionAt = 4;
 constexpr std::size_t kSizeAt = 8;
-constexpr std::size_t kParamsAt = detail::kSnapshotHeaderBytes + detail::kSnapshotFingerprintBytes;
-constexpr std::size_t kNoiseKindAt = kParamsAt + 84;
+constexpr std::size_t kFreeSpaceShapeAt = detail::kSnapshotHeaderBytes + detail::kSnapshotFingerprintBytes;
+constexpr std::size_t kParamsAt = kFreeSpaceShapeAt + detail::kSnapshotFreeSpaceShapeBytes;
+constexpr std::size_t kNoiseKindAt = kParamsAt + 104;
 constexpr std::size_t kFirstLayerAt = kParamsAt + detail::kSnapshotParamsBytes;
 
 // Terrain with a slope, a 30 cm step and a 12 cm box, sampled by a stereo-like fan in front of
@@ -301,11 +302,15 @@ TEST(SnapshotFormat, SizesHeaderAndCrcAreAsDocumented) {
       << "not the IEEE 802.3 / zlib CRC-32";
   const auto* abc = reinterpret_cast<const std::uint8_t*>("123456789");
   EXPECT_EQ(crc32_update(crc32_update(0U, abc, 4U), abc + 4, 5U), 0xCBF43926U) << "CRC does not continue";
-  EXPECT_EQ(snapshot_size<CadreConfig>(), 459040U);  // docs/integration.md quotes this figure
-  EXPECT_EQ(snapshot_size<PaperCell<CadreConfig>>(), 418080U);
-  EXPECT_EQ(snapshot_size<TinyConfig>(), 248U + 3U * 8U + 16U * 12U + 32U * 40U);
-  static_assert(snapshot_size<SingleCcmConfig>() == 248U + 8U + 65536U * 40U, "single CCM size");
-  static_assert(snapshot_size<PaperCell<SingleCcmConfig>>() == 248U + 8U + 65536U * 36U, "single paper CCM size");
+  EXPECT_EQ(snapshot_size<CadreConfig>(), 516428U);  // docs/integration.md quotes this figure
+  EXPECT_EQ(snapshot_size<PaperCell<CadreConfig>>(), 475468U);
+  EXPECT_EQ((snapshot_size<WithFreeSpace<CadreConfig, false>>()), 459084U);
+  // 292 bytes of header, shape, parameters, counters and CRC; per layer its centre, its cells and
+  // (with free space) a 4-byte record per cell.
+  EXPECT_EQ(snapshot_size<TinyConfig>(), 292U + 3U * 8U + 16U * (12U + 4U) + 32U * (40U + 4U));
+  EXPECT_EQ((snapshot_size<WithFreeSpace<TinyConfig, false>>()), 292U + 3U * 8U + 16U * 12U + 32U * 40U);
+  static_assert(snapshot_size<SingleCcmConfig>() == 292U + 8U + 65536U * 44U, "single CCM size");
+  static_assert(snapshot_size<PaperCell<SingleCcmConfig>>() == 292U + 8U + 65536U * 40U, "single paper CCM size");
 
   auto stack = make_stack<TinyConfig>(default_stack_params(0.5F));
   ASSERT_EQ(stack->move_to(3.0F, -2.0F), Status::kOk);
@@ -452,6 +457,10 @@ TEST_F(SnapshotTiny, ForgedContentWithAValidCrcIsRejected) {
       {"change of 0 points", kParamsAt + 68, 0.0F},
       {"change share above one half", kParamsAt + 72, 0.6F},
       {"change share 0", kParamsAt + 72, 0.0F},
+      {"fractional free-space rays", kParamsAt + 84, 10.5F},
+      {"free-space rays beyond 65535", kParamsAt + 84, 70000.0F},
+      {"free-space clear frames 0", kParamsAt + 88, 0.0F},
+      {"NaN sensor view axis", kParamsAt + 96, nan},
       {"negative lidar sigma", kNoiseKindAt + 8, -1.0F},
       {"NaN Kalman height", first_cell, nan},
       {"inf Kalman variance", first_cell + 4, inf},
@@ -473,6 +482,7 @@ TEST_F(SnapshotTiny, ForgedContentWithAValidCrcIsRejected) {
   };
   const ByteForgery bytes[] = {
       {"reserved header", 6, 1},        {"reserved fingerprint", 14, 1},
+      {"reserved free-space shape", kFreeSpaceShapeAt + 2, 1},
       {"noise kind 7", kNoiseKindAt, 7}, {"weight mode 9", kNoiseKindAt + 1, 9},
       {"reserved noise", kNoiseKindAt + 2, 1},
       {"odd centre", kFirstLayerAt, static_cast<std::uint8_t>(snapshot_[kFirstLayerAt] ^ 1U)},

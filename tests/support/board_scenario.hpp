@@ -66,7 +66,8 @@ inline bool hash_stack(const StackT& stack, CellRecord* records, std::size_t cap
   const FrameCounters c = stack.total_counters();
   for (const std::uint32_t v : {c.received, c.used, c.rejected_non_finite, c.rejected_out_of_range, c.rejected_weight,
                                 c.outside_map, c.too_noisy, c.gated_finer, c.gated_occluded, c.gated_held,
-                                c.gated_pool_full, c.gated_admitted, c.gated_dropped, c.reseeded_cells, c.merged_cells}) {
+                                c.gated_pool_full, c.gated_admitted, c.gated_dropped, c.reseeded_cells, c.merged_cells,
+                                c.free_rays, c.free_rays_refused, c.cleared_cells, c.drop_cells}) {
     h.u32(v);
   }
   for (int k = 0; k < StackT::kLayerCount; ++k) {

@@ -24,3 +24,7 @@ ccmap_tools_gtest(ccmap_test_tools_detection 300)
 add_executable(ccmap_test_tools_team ${CMAKE_CURRENT_LIST_DIR}/team_test.cpp)
 target_link_libraries(ccmap_test_tools_team PRIVATE GTest::gtest_main ccmap_team_lib ccmap_host_flags)
 ccmap_tools_gtest(ccmap_test_tools_team 300)
+
+add_executable(ccmap_test_tools_ghosts ${CMAKE_CURRENT_LIST_DIR}/ghosts_test.cpp)
+target_link_libraries(ccmap_test_tools_ghosts PRIVATE GTest::gtest_main ccmap_ghosts_lib ccmap_host_flags)
+ccmap_tools_gtest(ccmap_test_tools_ghosts 300)

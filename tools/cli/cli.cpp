@@ -316,14 +316,14 @@ void add_output_options(CLI::App* app, Options& o) {
   add_name(app, "--out", "DIR", "a directory",
            "writes DIR/layer_<k>.csv (finest first) and layer_<k>_{height,slope,\n"
            "normal_var,class}.png; class colours: unknown grey, traversable green,\n"
-           "obstacle red, steep orange, unobserved black",
+           "obstacle red, steep orange, drop purple, unobserved black",
            &o.out_dir)
       ->required();
   CLI::Option* geotiff = app->add_flag("--geotiff", o.geotiff,
                                        "also writes DIR/layer_<k>.tif per layer (GDAL): the pictures' area, one pixel\n"
                                        "per cell in absolute coordinates; Float64 bands height, slope_x, slope_y,\n"
-                                       "normal_var, class (0 unknown, 1 traversable, 2 obstacle, 3 steep), NaN where\n"
-                                       "unobserved");
+                                       "normal_var, class (0 unknown, 1 traversable, 2 obstacle, 3 steep, 4 drop),\n"
+                                       "NaN where unobserved");
   add_value(app, "--epsg", "CODE",
             "with --geotiff: the coordinate system written (default: the first --dem's, if\n"
             "it has one, else none)",
@@ -345,8 +345,8 @@ void add_map_command(CLI::App& app, Options& o) {
                                        "also writes DIR/costmap_<k>.png and .pgm per layer: a planner's cost raster\n"
                                        "of layer k's cells (one pixel per cell of the picture's area, north up) in\n"
                                        "costmap_2d values as grey levels: 0 free .. 252 cost (inclination and\n"
-                                       "relief against the layer's limits), 253 inscribed, 254 lethal (obstacle or\n"
-                                       "steep), 255 unknown or unobserved");
+                                       "relief against the layer's limits), 253 inscribed, 254 lethal (obstacle,\n"
+                                       "steep or drop), 255 unknown or unobserved");
   add_value(map, "--inflate", "M", "with --costmap: cost pixels within M metres of a lethal one are inscribed",
             [&o](const std::string& v) {
               o.inflate = parse_number("--inflate", v);
@@ -835,8 +835,8 @@ void write_costmap_images(const std::string& prefix, const std::vector<std::uint
   if (!pgm) fail("cannot write " + prefix + ".pgm");
 }
 
-/// The cost raster of layer k's cells over `extent` (one pixel per cell): lethal for obstacle
-/// and steep cells, unknown for unknown or unobserved ones, else the library's cost function of
+/// The cost raster of layer k's cells over `extent` (one pixel per cell): lethal for obstacle,
+/// steep and drop-off cells, unknown for unknown or unobserved ones, else the library's cost function of
 /// the cell's inclination and normal variance against layer k's threshold; then the inflation.
 std::vector<std::uint8_t> layer_costmap(const MappedClouds& m, int k, const std::vector<LayerCellRow>& rows,
                                         const LayerWindow& extent, double inflate_m) {
@@ -847,7 +847,7 @@ std::vector<std::uint8_t> layer_costmap(const MappedClouds& m, int k, const std:
     const std::int64_t ix = r.ix - extent.ix_min, iy = r.iy - extent.iy_min;
     if (ix < 0 || iy < 0 || ix >= extent.nx || iy >= extent.ny) continue;
     std::uint8_t v = kCostUnknown;
-    if (r.cell_class == "obstacle" || r.cell_class == "steep") {
+    if (r.cell_class == "obstacle" || r.cell_class == "steep" || r.cell_class == "drop") {
       v = kCostLethal;
     } else if (r.cell_class == "traversable") {
       v = traversable_cost(static_cast<float>(std::hypot(r.slope_x, r.slope_y)), max_inclination,
@@ -920,11 +920,12 @@ void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
             << ".{png,pgm}\n";
       }
     }
-    std::size_t counts[4] = {0, 0, 0, 0};
+    std::size_t counts[5] = {0, 0, 0, 0, 0};
     for (const LayerCellRow& r : rows) {
       if (r.cell_class == "traversable") ++counts[1];
       else if (r.cell_class == "obstacle") ++counts[2];
       else if (r.cell_class == "steep") ++counts[3];
+      else if (r.cell_class == "drop") ++counts[4];
       else ++counts[0];
     }
     out << "layer " << k << " (" << fmt("%g", m.widths[static_cast<std::size_t>(k)]) << " m, "
@@ -932,14 +933,14 @@ void write_outputs(MappedClouds& m, const Options& o, std::ostream& out) {
         << (m.runner->layer_is_ccm(k) ? "CCM" : (o.preset == "omg" ? "OMG" : "Kalman"))
         << "): " << (rows.size() - counts[0]) << " cells known of " << rows.size() << " observed (traversable "
         << counts[1] << ", obstacle " << counts[2] << ", steep " << counts[3] << ", unknown " << counts[0]
-        << ") -> " << prefix << ".csv\n";
+        << (counts[4] > 0 ? ", drop " + std::to_string(counts[4]) : std::string()) << ") -> " << prefix << ".csv\n";
   }
   out << "pictures: " << o.out_dir << "/layer_<k>_{height,slope,normal_var,class}.png, north up, observed area"
-      << " (class: unknown grey, traversable green, obstacle red, steep orange; unobserved black)\n";
+      << " (class: unknown grey, traversable green, obstacle red, steep orange, drop purple; unobserved black)\n";
   if (o.geotiff) {
     out << "geotiff: " << o.out_dir << "/layer_<k>.tif, the pictures' area in absolute coordinates ("
         << (o.epsg > 0 ? "EPSG:" + std::to_string(o.epsg) : (m.srs_wkt.empty() ? "no coordinate system" : "the DEM's coordinate system"))
-        << "); bands height, slope_x, slope_y, normal_var, class (0 unknown, 1 traversable, 2 obstacle, 3 steep), NaN unobserved\n";
+        << "); bands height, slope_x, slope_y, normal_var, class (0 unknown, 1 traversable, 2 obstacle, 3 steep, 4 drop), NaN unobserved\n";
   }
 }
 

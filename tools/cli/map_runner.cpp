@@ -57,6 +57,10 @@ class StackRunner final : public MapRunner {
     StackParams params = default_stack_params(width);
     if (options.weight_limit > 0.0) params.weight_limit = static_cast<float>(options.weight_limit);
     params.outlier_gate_sigma = static_cast<float>(options.outlier_gate_sigma);
+    // Free space from lines of sight needs the scanner's position: a file's frame comes with a
+    // nominal origin (the tile's centre, the pose's ground point), so its lines of sight would
+    // clear and bound the wrong cells. Off here (docs/design.md, "Free space from lines of sight").
+    params.free_space_rays = 0.0F;
     if (options.sensor == SensorChoice::kLidar) {
       params.noise = sensor::NoiseModel::lidar(sensor::LidarParams{static_cast<float>(options.lidar_sigma_m), 0.0F});
     }

@@ -11,6 +11,7 @@ void class_colour(const std::string& cell_class, std::uint8_t out[3]) {
   if (cell_class == "traversable") { r = 40; g = 170; b = 60; }
   else if (cell_class == "obstacle") { r = 220; g = 30; b = 30; }
   else if (cell_class == "steep") { r = 255; g = 150; b = 0; }
+  else if (cell_class == "drop") { r = 130; g = 30; b = 190; }
   out[0] = r;
   out[1] = g;
   out[2] = b;

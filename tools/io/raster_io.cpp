@@ -43,6 +43,7 @@ double class_number(const std::string& cell_class) {
   if (cell_class == "traversable") return kGeoTiffClassTraversable;
   if (cell_class == "obstacle") return kGeoTiffClassObstacle;
   if (cell_class == "steep") return kGeoTiffClassSteep;
+  if (cell_class == "drop") return kGeoTiffClassDrop;
   return kGeoTiffClassUnknown;
 }
 

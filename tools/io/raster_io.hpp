@@ -32,6 +32,7 @@ inline constexpr double kGeoTiffClassUnknown = 0.0;
 inline constexpr double kGeoTiffClassTraversable = 1.0;
 inline constexpr double kGeoTiffClassObstacle = 2.0;
 inline constexpr double kGeoTiffClassSteep = 3.0;
+inline constexpr double kGeoTiffClassDrop = 4.0;  ///< a drop-off (weight 0, height its upper bound)
 
 /// The WKT of EPSG:`code`, or false with a message (an unknown code). For --epsg, checked
 /// before any mapping.

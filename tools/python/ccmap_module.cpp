@@ -106,6 +106,10 @@ constexpr CounterField kCounterFields[] = {
     {"skipped_budget", &FrameCounters::skipped_budget},
     {"corrupted_cells", &FrameCounters::corrupted_cells},
     {"corrupted_slots", &FrameCounters::corrupted_slots},
+    {"free_rays", &FrameCounters::free_rays},
+    {"free_rays_refused", &FrameCounters::free_rays_refused},
+    {"cleared_cells", &FrameCounters::cleared_cells},
+    {"drop_cells", &FrameCounters::drop_cells},
 };
 static_assert(sizeof(FrameCounters) == std::size(kCounterFields) * sizeof(std::uint32_t),
               "FrameCounters gained a member: add it to kCounterFields");
@@ -132,6 +136,8 @@ constexpr ParamField kParamFields[] = {
     {"outlier_gate_sigma", &StackParams::outlier_gate_sigma},
     {"change_min_points", &StackParams::change_min_points},
     {"change_share", &StackParams::change_share},
+    {"free_space_rays", &StackParams::free_space_rays},
+    {"free_space_clear_frames", &StackParams::free_space_clear_frames},
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -565,6 +571,13 @@ StackParams build_params(const Preset& preset, py::handle cell_width, const py::
                                                         " values (one per layer; <= 0 calibrates)");
       }
       for (std::size_t i = 0; i < values.size(); ++i) params.normal_variance_threshold[i] = number_arg(values[i], key);
+    } else if (key == "sensor_view_axis") {
+      if (PyUnicode_Check(item.second.ptr()) || !PySequence_Check(item.second.ptr()) ||
+          py::reinterpret_borrow<py::sequence>(item.second).size() != 3U) {
+        throw py::type_error(key + " must be a sequence of 3 numbers (the sensor frame's viewing direction)");
+      }
+      const auto values = py::reinterpret_borrow<py::sequence>(item.second);
+      for (std::size_t i = 0; i < 3U; ++i) params.sensor_view_axis[i] = number_arg(values[i], key);
     } else if (!sensor_keyword(key, item.second, &sensor_args)) {
       throw py::type_error("Map() got an unexpected keyword argument '" + key + "'");
     }
@@ -875,6 +888,7 @@ class Map {
     for (const ParamField& f : kParamFields) d[f.name] = p.*f.member;
     for (const CountField& f : kCountFields) d[f.name] = p.*f.member;
     d["normal_variance_threshold"] = std::vector<float>(p.normal_variance_threshold.begin(), p.normal_variance_threshold.end());
+    d["sensor_view_axis"] = std::vector<float>(p.sensor_view_axis.begin(), p.sensor_view_axis.end());
     const sensor::NoiseModel& n = p.noise;
     if (n.kind() == sensor::SensorKind::kLidar) {
       d["sensor"] = "lidar";
@@ -948,7 +962,7 @@ PYBIND11_MODULE(ccmap, m) {
   for (const cp::Preset& p : cp::presets()) preset_names.append(p.name);
   m.attr("PRESETS") = py::tuple(preset_names);
   py::list class_names;
-  for (int c = 0; c <= static_cast<int>(ccmap::CellClass::kSteep); ++c) {
+  for (int c = 0; c <= static_cast<int>(ccmap::CellClass::kDropOff); ++c) {
     class_names.append(ccmap::to_string(static_cast<ccmap::CellClass>(c)));
   }
   m.attr("CLASS_NAMES") = py::tuple(class_names);

@@ -113,6 +113,17 @@ void ProceduralTerrain::add_box(const Box& box) { boxes_.push_back(box); }
 
 void ProceduralTerrain::add_crater(const Crater& crater) { craters_.push_back(crater); }
 
+void ProceduralTerrain::add_ditch(const Ditch& ditch) { ditches_.push_back(ditch); }
+
+double ProceduralTerrain::negative_depth(double x, double y) const {
+  double depth = 0.0;
+  for (const Crater& c : craters_) depth -= std::min(0.0, crater_profile(c, x, y));
+  for (const Ditch& d : ditches_) {
+    if (x >= d.x0 && x <= d.x1 && y >= d.y0 && y <= d.y1) depth += d.depth_m;
+  }
+  return depth;
+}
+
 void ProceduralTerrain::rebuild_rock_index() {
   bin_start_.clear();
   bin_items_.clear();
@@ -191,6 +202,9 @@ double ProceduralTerrain::ground_height(double x, double y) const {
     frequency *= 2.0;
   }
   for (const Crater& c : craters_) h += crater_profile(c, x, y);
+  for (const Ditch& d : ditches_) {
+    if (x >= d.x0 && x <= d.x1 && y >= d.y0 && y <= d.y1) h -= d.depth_m;
+  }
   return h;
 }
 
@@ -295,6 +309,31 @@ void HeightRaster::build_blocks(int block_size) {
   }
   blocks_max_ = -std::numeric_limits<float>::infinity();
   for (float m : bmax_) blocks_max_ = std::max(blocks_max_, m);
+}
+
+void HeightRaster::rebuild_blocks(const Rect& area) {
+  if (bmax_.empty() || bx_ == 0 || by_ == 0) return;
+  const auto block_of = [&](double v, double origin, int count) {
+    const int b = static_cast<int>(std::floor((v - origin) / res_)) / block_;
+    return std::clamp(b, 0, count - 1);
+  };
+  // A vertex on a block boundary belongs to two blocks: widen by one block on each side.
+  const int a0 = std::max(0, block_of(area.x0, ox_, bx_) - 1), a1 = std::min(bx_ - 1, block_of(area.x1, ox_, bx_) + 1);
+  const int b0 = std::max(0, block_of(area.y0, oy_, by_) - 1), b1 = std::min(by_ - 1, block_of(area.y1, oy_, by_) + 1);
+  for (int b = b0; b <= b1; ++b) {
+    for (int a = a0; a <= a1; ++a) {
+      float m = -std::numeric_limits<float>::infinity();
+      const int i1 = std::min(nx_ - 1, (a + 1) * block_), j1 = std::min(ny_ - 1, (b + 1) * block_);
+      for (int j = b * block_; j <= j1; ++j) {
+        for (int i = a * block_; i <= i1; ++i) {
+          const float v = at(i, j);
+          m = std::isfinite(v) ? std::max(m, v) : std::numeric_limits<float>::infinity();
+        }
+      }
+      bmax_[static_cast<std::size_t>(b) * static_cast<std::size_t>(bx_) + static_cast<std::size_t>(a)] = m;
+      blocks_max_ = std::max(blocks_max_, m);
+    }
+  }
 }
 
 HeightRaster rasterize(const Terrain& terrain, const Rect& area, double resolution_m, HeightRaster* ground) {

@@ -7,8 +7,10 @@
 //
 // Terrains provided:
 //  - ProceduralTerrain: planar slope + rolling ground (a few long sinusoids) + fractal value
-//    noise + craters (bowl and raised rim), plus discrete obstacles: rocks as half-ellipsoid
-//    domes with a lunar-like power-law size-frequency distribution, and flat-topped boxes.
+//    noise + craters (bowl and raised rim) + ditches (flat-floored trenches with vertical walls),
+//    plus discrete obstacles: rocks as half-ellipsoid domes with a lunar-like power-law
+//    size-frequency distribution, and flat-topped boxes. Craters and ditches are the negative
+//    obstacles: negative_depth() says how far the surface lies below the ground without them.
 //  - WaveTerrain: sinusoidal waves (the drift experiment's worst case, paper Section V-D).
 //  - HeightRaster: a regular grid of heights sampled bilinearly; the ray caster's input (with
 //    a block-maximum acceleration grid), the output of rasterize(), and the ESRI ASCII DTM
@@ -121,6 +123,13 @@ struct Crater {
   double x = 0.0, y = 0.0, diameter_m = 0.0, depth_m = 0.0, rim_m = 0.0;
 };
 
+/// A trench: inside the axis-aligned rectangle [x0,x1]x[y0,y1] the ground lies depth_m lower
+/// (a flat floor, vertical walls): a negative obstacle a rover sees only its far wall of.
+struct Ditch {
+  double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;
+  double depth_m = 0.0;
+};
+
 /// A few examples with sensible values (documented in the .cpp).
 TerrainParams lunar_terrain_params(const Rect& area, std::uint64_t seed);
 
@@ -136,14 +145,20 @@ class ProceduralTerrain : public Terrain {
   /// Height of discrete obstacles above the ground at (x, y): the max of the rock domes and
   /// boxes covering the point (they do not stack), 0 where there is none.
   double obstacle_height(double x, double y) const;
+  /// How far the ground at (x, y) lies below the ground without craters and ditches (m, >= 0):
+  /// the depth of a crater's bowl below its surroundings plus a ditch's depth; 0 elsewhere and
+  /// on a crater's raised rim.
+  double negative_depth(double x, double y) const;
 
   void add_rock(const Rock& rock);
   void add_box(const Box& box);
   void add_crater(const Crater& crater);
+  void add_ditch(const Ditch& ditch);
 
   const std::vector<Rock>& rocks() const { return rocks_; }
   const std::vector<Box>& boxes() const { return boxes_; }
   const std::vector<Crater>& craters() const { return craters_; }
+  const std::vector<Ditch>& ditches() const { return ditches_; }
   const TerrainParams& params() const { return params_; }
 
  private:
@@ -158,6 +173,7 @@ class ProceduralTerrain : public Terrain {
   std::vector<Rock> rocks_;
   std::vector<Box> boxes_;
   std::vector<Crater> craters_;
+  std::vector<Ditch> ditches_;
   // Rock spatial hash: bins of size bin_size_ over the rocks' bounding box, CSR layout.
   double bin_size_ = 1.0, bin_x0_ = 0.0, bin_y0_ = 0.0;
   int bins_x_ = 0, bins_y_ = 0;
@@ -220,6 +236,9 @@ class HeightRaster : public Terrain {
   /// (Re)builds the block-maximum grid used by the ray caster: the max vertex height of each
   /// block of block_size x block_size cells. Must be called after editing heights.
   void build_blocks(int block_size = 16);
+  /// Rebuilds only the blocks whose vertices overlap `area` (after editing heights there; the
+  /// block size stays). blocks_max() becomes an upper bound (it never decreases here).
+  void rebuild_blocks(const Rect& area);
   int block_size() const { return block_; }
   int blocks_x() const { return bx_; }
   int blocks_y() const { return by_; }

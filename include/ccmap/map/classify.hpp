@@ -10,7 +10,9 @@ namespace ccmap {
 /// kOk if the parameters describe a usable stack of `layer_count` layers: finite, positive
 /// width (0.19 mm = kMaxAbsCoordinateM / 2^29 <= width, coarsest <= 100 m), W_l > 0, tau in (0, 1], min_weight >= 0, obstacle_fraction in (0, 4],
 /// max_inclination > 0, kalman_min_variance > 0, finite thresholds, the outlier gate 0 (off) or
-/// in [1, 100], change_min_points in [1, 65535], change_share in (0, 0.5], a valid noise model. Otherwise kInvalidArgument or kNonFiniteInput.
+/// in [1, 100], change_min_points in [1, 65535], change_share in (0, 0.5], free_space_rays a whole
+/// number in [0, 65535], free_space_clear_frames a whole number in [1, 255], a finite
+/// sensor_view_axis, a valid noise model. Otherwise kInvalidArgument or kNonFiniteInput.
 [[nodiscard]] Status validate_stack_params(const StackParams& params, int layer_count) noexcept;
 
 /// kOk for a finite position within kMaxAbsCoordinateM of the origin.

@@ -142,6 +142,30 @@ template <typename Base>
 struct WithoutOutlierGate : Base {
   static constexpr bool kOutlierGate = false;
 };
+/// A configuration with or without free space from lines of sight (docs/design.md, "Free space
+/// from lines of sight"): WithFreeSpace<CadreConfig, false> is the CADRE stack that carries none
+/// of its memory (4 bytes per cell, the ray scratch) and never clears a cell or marks a drop-off.
+template <typename Base, bool kOn>
+struct WithFreeSpace : Base {
+  // cppcheck-suppress duplInheritedMember ; hiding Base::kFreeSpace is the point of WithFreeSpace
+  static constexpr bool kFreeSpace = kOn;
+};
+
+namespace detail {
+template <typename Config, typename = void>
+struct ConfigFreeSpace {
+  static constexpr bool value = true;
+};
+template <typename Config>
+struct ConfigFreeSpace<Config, std::void_t<decltype(Config::kFreeSpace)>> {
+  static constexpr bool value = Config::kFreeSpace;
+};
+}  // namespace detail
+
+/// Whether a Config carries free space: its `kFreeSpace` member, true if it has none (every
+/// preset of the library carries it; StackParams::free_space_rays = 0 switches it off at run time).
+template <typename Config>
+inline constexpr bool kConfigFreeSpace = detail::ConfigFreeSpace<Config>::value;
 
 /// Largest number of layers a stack may have (bounds the per-layer parameter arrays).
 inline constexpr int kMaxLayers = 8;
@@ -187,14 +211,30 @@ struct StackParams {
   /// the chunks are taken in order (the update of earlier versions, bitwise).
   std::uint32_t frame_point_budget = 0U;
   std::uint32_t frame_time_budget_us = 0U;
+  /// Free space from lines of sight (docs/design.md, "Free space from lines of sight"): the
+  /// lines of sight walked per frame, from the sensor to an evenly spread subsample of the
+  /// frame's points (a whole number in [0, 65535]; 0 switches the feature off at run time: no
+  /// cell is cleared, no drop-off marked, the frame costs what it did without it). A stack whose
+  /// Config has kFreeSpace = false ignores it.
+  float free_space_rays = 0.0F;
+  /// Frames (a whole number in [1, 255]) in which rays must pass clearly below a cell's surface,
+  /// with no ray ending on it in between, before the cell is cleared.
+  float free_space_clear_frames = 0.0F;
+  /// The sensor's viewing direction in the sensor frame of update_frame_sensor (any length; all
+  /// zero: not given). A sensor-frame point whose dot product with it is <= 0 lies behind the
+  /// sensor: its line of sight is refused (counted in FrameCounters::free_rays_refused). Map-frame
+  /// input carries no orientation, so update_frame has no "behind".
+  std::array<float, 3> sensor_view_axis{};
   sensor::NoiseModel noise;           ///< routes points and gives their weight and variance
 };
 
 /// CADRE defaults: W_l = 1000, tau = 0.8, min weight 5, obstacles at 75 % of a cell,
 /// 20 deg maximum inclination (tan 20 deg = 0.364), the CADRE stereo model, calibrated
 /// thresholds; the outlier gate at 3 sigma with the change rule 3 points / 8 % (docs/design.md,
-/// "Outlier gate and change", says how they were chosen). Set outlier_gate_sigma = 0 for the
-/// paper's update.
+/// "Outlier gate and change", says how they were chosen); free space from 128 lines of sight per
+/// frame (the count the flight cycle's budget allows), a cell cleared after 3 contradicting frames, no sensor view axis (docs/design.md, "Free
+/// space from lines of sight"). Set outlier_gate_sigma = 0 for the paper's update,
+/// free_space_rays = 0 for no free space.
 [[nodiscard]] StackParams default_stack_params(float finest_cell_width_m) noexcept;
 
 }  // namespace ccmap

@@ -16,6 +16,7 @@
 //   map/query/pooling.hpp       pooling at query time
 //   map/query/answers.hpp       answers, classes, the roughness filter baseline
 //   map/detail/motion.hpp       what an uncertain move does to the cells
+//   map/visibility/free_space.hpp  lines of sight: ghosts cleared, drop-offs marked
 //
 // Positions are map-frame metres relative to the stack origin (see map/types.hpp).
 //
@@ -44,6 +45,7 @@
 #include "ccmap/map/query/pooling.hpp"
 #include "ccmap/map/update/update_path.hpp"
 #include "ccmap/map/types.hpp"
+#include "ccmap/map/visibility/free_space.hpp"
 #include "ccmap/platform/platform.hpp"
 #include "ccmap/registration/types.hpp"
 #include "ccmap/sensor/noise_model.hpp"
@@ -129,6 +131,13 @@ class Stack {
     if (update_.init(params_, routing_.max_range_sq, layers_) != Status::kOk) {
       return Status::kInvalidArgument;
     }
+    // [free-space hook 1/4] records bound beside the layers, margins derived.
+    if (free_space_.init(params_, routing_.max_range_sq, layers_) != Status::kOk) {
+      return Status::kInvalidArgument;
+    }
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      drops_.layer[layer] = free_space_.records(layer);
+    }
     totals_ = FrameCounters{};
     rejected_moves_ = 0U;
     rejected_frames_ = 0U;
@@ -199,6 +208,7 @@ class Stack {
       // Integrity: the cells the move cleared have check 0 again.
       detail::clear_checks_after_move(detail::layer_checks(layers_, layer), Layers::side(layer), old_min,
                                       layers_.window_min(layer));
+      free_space_.follow(layer, layers_.centre(layer));  // [free-space hook 2/4] records move with the window
     }
     seal_state();
     return Status::kOk;
@@ -268,6 +278,8 @@ class Stack {
       return status;
     }
     update_.run_map(layers_, params_, points, weights, n, pose, frame);
+    // [free-space hook 3/4] lines of sight over the updated layers.
+    free_space_.run_map(layers_, params_, update_.front(), points, weights, n, pose, frame);
     finish_frame(frame, start, counters);
     return Status::kOk;
   }
@@ -289,6 +301,8 @@ class Stack {
       return status;
     }
     update_.run_sensor(layers_, params_, points, n, pose, frame);
+    // [free-space hook 4/4] lines of sight over the updated layers.
+    free_space_.run_sensor(layers_, params_, update_.front(), points, n, pose, frame);
     finish_frame(frame, start, counters);
     return Status::kOk;
   }
@@ -322,6 +336,9 @@ class Stack {
   /// For an answer from the piece-wise constant layer, height and elevation variance come from
   /// it and slope, normal variance and class from the first CCM layer's pooled cell there when
   /// that is known (hazards are a CCM matter); otherwise the roughness filter classifies.
+  /// A cell that lines of sight proved a drop-off (docs/design.md, "Free space from lines of
+  /// sight"), unobserved and with no finer point below it, answers in that order like a known
+  /// cell: kOk with class kDropOff, weight 0 and height_m the upper bound of the terrain there.
   /// kOutsideMap if no layer holds (x, y); kUnknown if none knows it; kNotInitialised; kCorrupt.
   /// A cell whose bits disagree with its check is read as never observed (map/detail/integrity.hpp).
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
@@ -361,7 +378,8 @@ class Stack {
     return detail::pooled(layers_, params_.weight_limit, layer, index);
   }
 
-  /// Writes every observed cell (weight > 0) of `layer` into out[0..*written), rows of
+  /// Writes every observed cell (weight > 0) of `layer`, and every unobserved drop-off cell
+  /// (weight 0, height its upper bound, class kDropOff), into out[0..*written), rows of
   /// increasing y. kBufferTooSmall (nothing written) if capacity < layer_capacity(layer).
   [[nodiscard]] Status export_layer(int layer, CellRecord* out, std::size_t capacity,
                                     std::size_t* written) const noexcept {
@@ -385,7 +403,7 @@ class Stack {
       const float cx = grid::cell_centre(index.x, width);
       const float cy = grid::cell_centre(index.y, width);
       const QueryResult q = answers.answer_at(layer, index, cx, cy, /*require_known=*/false);
-      if (q.weight > 0.0F) {
+      if (q.weight > 0.0F || q.cell_class == CellClass::kDropOff) {
         out[count] = CellRecord{index, cx, cy, q.weight, q.height_m, q.slope_x, q.slope_y,
                                 q.normal_variance, q.elevation_variance, q.cell_class};
         ++count;
@@ -489,7 +507,7 @@ class Stack {
   }
 
   [[nodiscard]] detail::QueryView<Config> view() const noexcept {
-    return detail::QueryView<Config>(layers_, params_, thresholds_);
+    return detail::QueryView<Config>(layers_, params_, thresholds_, &drops_);
   }
 
   /// Prologue of every frame update: a refused frame (bad arguments, bad origin or rotation) is
@@ -604,6 +622,9 @@ class Stack {
   static constexpr RingGrid<CcmCellType> kNoGrid{};
   // ---- update-path scratch and derived constants (not map state: not in snapshots) ----
   detail::UpdatePath<Config> update_{};
+  // ---- free space from lines of sight: records per cell (map state: in snapshots), its scratch ----
+  detail::FreeSpace<Config> free_space_{};
+  detail::DropRecords drops_{};  ///< the record grids queries read (all nullptr without free space)
 };
 
 }  // namespace ccmap

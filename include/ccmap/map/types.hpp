@@ -38,13 +38,25 @@ enum class CellClass : std::uint8_t {
   kTraversable = 1,  ///< covered, normal variance and inclination below their thresholds
   kObstacle = 2,     ///< surface-normal variance above the layer's threshold (sub-cell step)
   kSteep = 3,        ///< inclination above the maximum
+  /// Not observed, but lines of sight passed over it far below the ground before it: the
+  /// terrain drops there by more than the layer's obstacle height (a crater, a ditch, a ledge's
+  /// far side). A hazard, like an obstacle (docs/design.md, "Free space from lines of sight").
+  kDropOff = 4,
 };
 
-/// "unknown", "traversable", "obstacle", "steep"; never nullptr.
+/// True for the classes a rover must not drive into (lethal in the cost raster): obstacle, steep,
+/// drop-off.
+[[nodiscard]] constexpr bool is_lethal(CellClass c) noexcept {
+  return c == CellClass::kObstacle || c == CellClass::kSteep || c == CellClass::kDropOff;
+}
+
+/// "unknown", "traversable", "obstacle", "steep", "drop"; never nullptr.
 [[nodiscard]] const char* to_string(CellClass cell_class) noexcept;
 
 /// Answer of a point query. On status != kOk the numbers are 0 and the class is kUnknown;
-/// `layer` is the finest layer that contains the point (-1 if no layer does).
+/// `layer` is the finest layer that contains the point (-1 if no layer does). A drop-off answer
+/// (kDropOff) is kOk with weight 0, height_m the upper bound the lines of sight proved (the
+/// terrain lies at or below it) and every other number 0.
 struct QueryResult {
   Status status;
   std::int32_t layer;          ///< layer that answered (0 = finest)
@@ -59,7 +71,8 @@ struct QueryResult {
   CellClass cell_class;
 };
 
-/// One cell of an exported layer (only cells with weight > 0 are exported).
+/// One cell of an exported layer (cells with weight > 0, and unobserved drop-off cells: weight 0,
+/// height_m their upper bound, class kDropOff).
 struct CellRecord {
   CellIndex index;             ///< global index in that layer (stable across moves)
   float centre_x;              ///< cell centre, map frame (m)
@@ -78,7 +91,9 @@ struct CellRecord {
 /// rejected_non_finite + rejected_out_of_range + rejected_weight + outside_map + too_noisy +
 /// gated_finer + gated_occluded + gated_held + gated_pool_full + skipped_budget. A held point is counted again when the change rule decides it
 /// (gated_admitted or gated_dropped, in that frame or a later one: docs/design.md, "Outlier gate
-/// and change"). The gate counters are 0 with the outlier gate off.
+/// and change"). The gate counters are 0 with the outlier gate off. The free-space counters
+/// (free_rays .. drop_cells) count lines of sight and cells, not points, and are outside that
+/// partition (docs/design.md, "Free space from lines of sight"); 0 with free space off.
 struct FrameCounters {
   std::uint32_t received;
   std::uint32_t used;                   ///< folded into a cell
@@ -99,6 +114,13 @@ struct FrameCounters {
   /// Single-event upsets (docs/integration.md, "Radiation: single-event upsets"); not points:
   std::uint32_t corrupted_cells;        ///< cells whose bits disagreed with their check: reset to never observed
   std::uint32_t corrupted_slots;        ///< held-point slots whose bits disagreed with their seal: dropped
+  std::uint32_t free_rays;              ///< lines of sight walked from the sensor to a sampled point
+  /// Sampled points whose line of sight was refused: refused points (non-finite, out of range,
+  /// too noisy, a bad weight), points behind the sensor, or all of them when no window holds the
+  /// sensor. They change nothing.
+  std::uint32_t free_rays_refused;
+  std::uint32_t cleared_cells;          ///< cells emptied: rays passed clearly below their surface
+  std::uint32_t drop_cells;             ///< unobserved cells that became drop-offs
 };
 
 }  // namespace ccmap

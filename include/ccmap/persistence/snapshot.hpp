@@ -16,7 +16,9 @@
 // Stack::kCcmHeldSlots / kFineHeldSlots cells; after a load such a cell needs change_min_points
 // held points anew).
 //
-// Format (version 5: version 4 with the single-event-upset counters). Every field is little-endian, written byte by byte (never a memcpy of a
+// Format (version 5: version 4, the frame budget's parameters and counter, with the
+// single-event-upset counters and free space from lines of sight: its parameters, counters and
+// per-cell records). Every field is little-endian, written byte by byte (never a memcpy of a
 // struct), floats as their IEEE-754 binary32 bit pattern; sizes in bytes:
 //
 //   header       4  magic "CCMS" (0x43 0x43 0x4D 0x53)
@@ -27,12 +29,17 @@
 //               32  side of each layer, finest first (uint32 x kMaxLayers, 0 past the last layer)
 //                2  bytes per fine cell on the wire (12), 2 bytes per CCM cell (40 for CcmCell,
 //                   36 for CcmPaperCell: the cell kind is part of the shape)
+//   free space   2  bytes per free-space record (4, or 0 for a Config without free space: part of
+//                   the shape), 2 reserved 0
+//                4  frames the free-space stage has seen (uint32; its sampling phase and the
+//                   records' frame stamps follow it, so a loaded stack goes on as the saved one)
 //   params      60  StackParams floats: finest_cell_width_m, weight_limit, coverage_tau,
 //                   min_weight, obstacle_fraction, max_inclination, kalman_min_variance,
 //                   normal_variance_threshold[0..7]
 //                4  finest_max_sigma_m
 //               12  outlier_gate_sigma, change_min_points, change_share
 //                8  frame_point_budget, frame_time_budget_us (uint32 each)
+//               20  free_space_rays, free_space_clear_frames, sensor_view_axis[0..2]
 //               20  noise model: kind (u8), weight mode (u8), 2 reserved 0, stereo k = sigma_d/(f b)
 //                   (1/m), lidar sigma0 (m), lidar sigma per m, reference range (m)
 //   per layer    8  window centre (int32 x, int32 y; global cell indices), then
@@ -41,7 +48,10 @@
 //                   Kalman cell: height, variance, weight. OMG cell: weight, height, s.
 //                   CCM cell: weight, mean_x, mean_y, mean_z, s_xx, s_yy, s_zz, s_xz, s_yz, then
 //                   s_xy for CcmCell (CcmPaperCell has none).
-//   counters    72  total FrameCounters (18 x uint32, in declaration order)
+//   records         with free space, per layer (finest first) side*side free-space records in the
+//                   same window order: bound code (uint16), evidence (uint8), state (uint8)
+//                   (map/visibility/free_space_cell.hpp); nothing without free space
+//   counters    88  total FrameCounters (22 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
 //                8  last update duration (uint64, ns)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
@@ -49,16 +59,20 @@
 // Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
 // (CcmCell with s_xy); version 3 the outlier gate's parameters and counters; version 4 the frame
 // budget's; version 5 the counters corrupted_cells and corrupted_slots (docs/integration.md,
-// "Radiation: single-event upsets"). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells
-// hold no lateral covariance, and a full-cell map rebuilt from them would answer differently.
+// "Radiation: single-event upsets") and free space (its shape field, parameters, counters and
+// records). A version-1 snapshot is refused with kVersionMismatch: its 9-float cells hold no
+// lateral covariance, and a full-cell map rebuilt from them would answer differently. Versions 2
+// to 4 are refused likewise (a map without the records would answer no drop-off the saved one
+// answered).
 //
 // Statuses of load_snapshot, checked in this order, before anything is written to the stack:
 //   kInvalidArgument  data == nullptr
 //   kCorrupt          shorter than the header, wrong magic, a non-zero reserved header field
 //   kVersionMismatch  another format version (also version 1, before the cell kinds)
 //   kCorrupt          size field != size (truncated or trailing bytes), CRC mismatch
-//   kVersionMismatch  fingerprint of another stack configuration (another preset or another CCM
-//                     cell kind): the data is intact but describes another map shape
+//   kVersionMismatch  fingerprint of another stack configuration (another preset, another CCM
+//                     cell kind, with or without free space): the data is intact but describes
+//                     another map shape
 //   kCorrupt          anything inside that a save could not have written: parameters that
 //                     init() would refuse, a non-finite float (weight_limit may be +inf, the
 //                     "no limit" value), a negative cell weight, an odd or out-of-range window
@@ -93,9 +107,12 @@ static_assert(kMaxLayers == 8, "snapshot format version 5 stores 8 sides and 8 t
 inline constexpr std::size_t kSnapshotHeaderBytes = 12U;
 static_assert(kSnapshotHeaderBytes == 4U + 2U + 2U + 4U, "header: magic, version, reserved, size");
 inline constexpr std::size_t kSnapshotFingerprintBytes = 4U + 4U * static_cast<std::size_t>(kMaxLayers) + 4U;
-inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U) + 20U;
+
+inline constexpr std::size_t kSnapshotFreeSpaceShapeBytes = 8U;
+inline constexpr std::size_t kSnapshotParamsBytes = 4U * (7U + static_cast<std::size_t>(kMaxLayers) + 1U + 3U + 2U + 5U) + 20U;
 inline constexpr std::size_t kSnapshotLayerHeaderBytes = 8U;
-inline constexpr std::size_t kSnapshotCountersBytes = 18U * 4U + 2U * 4U + 8U;
+inline constexpr std::size_t kSnapshotFreeSpaceRecordBytes = 4U;
+inline constexpr std::size_t kSnapshotCountersBytes = 22U * 4U + 2U * 4U + 8U;
 inline constexpr std::size_t kSnapshotTrailerBytes = 4U;
 inline constexpr std::size_t kSnapshotFineCellBytes = std::size_t{3} * 4U;  // Kalman and OMG: 3 floats
 /// Bytes of a CCM cell on the wire: 4 per float (10 for CcmCell, 9 for CcmPaperCell).
@@ -193,6 +210,9 @@ void snapshot_write_cell(SnapshotWriter& w, const OmgCell& c) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, CcmPaperCell* out) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, KalmanCell* out) noexcept;
 [[nodiscard]] bool snapshot_read_cell(SnapshotReader& r, OmgCell* out) noexcept;
+void snapshot_write_record(SnapshotWriter& w, const FreeSpaceCell& c) noexcept;
+/// Every bit pattern of a record is one a stack can hold: never refused.
+void snapshot_read_record(SnapshotReader& r, FreeSpaceCell* out) noexcept;
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& totals, std::uint32_t rejected_moves,
                              std::uint32_t rejected_frames, std::uint64_t last_update_ns) noexcept;
 void snapshot_read_counters(SnapshotReader& r, FrameCounters* totals, std::uint32_t* rejected_moves,
@@ -207,13 +227,15 @@ struct SnapshotAccess {
   using CcmCellType = typename StackType::CcmCellType;
   static constexpr int kLayers = StackType::kLayerCount;
   static constexpr std::size_t kCcmCellBytes = kSnapshotCcmCellBytes<CcmCellType>;
+  static constexpr bool kFreeSpace = kConfigFreeSpace<Config>;
+  static constexpr std::uint16_t kRecordBytes = kFreeSpace ? static_cast<std::uint16_t>(kSnapshotFreeSpaceRecordBytes) : 0U;
 
   [[nodiscard]] static constexpr std::size_t size() noexcept {
-    std::size_t total = kSnapshotHeaderBytes + kSnapshotFingerprintBytes + kSnapshotParamsBytes +
-                        kSnapshotCountersBytes + kSnapshotTrailerBytes;
+    std::size_t total = kSnapshotHeaderBytes + kSnapshotFingerprintBytes + kSnapshotFreeSpaceShapeBytes +
+                        kSnapshotParamsBytes + kSnapshotCountersBytes + kSnapshotTrailerBytes;
     for (int layer = 0; layer < kLayers; ++layer) {
       const std::size_t cell_bytes = StackType::layer_is_ccm(layer) ? kCcmCellBytes : kSnapshotFineCellBytes;
-      total += kSnapshotLayerHeaderBytes + StackType::layer_capacity(layer) * cell_bytes;
+      total += kSnapshotLayerHeaderBytes + StackType::layer_capacity(layer) * (cell_bytes + kRecordBytes);
     }
     return total;
   }
@@ -247,6 +269,9 @@ struct SnapshotAccess {
     }
     SnapshotWriter w(buffer, capacity);
     snapshot_write_header(w, size(), fingerprint());
+    w.u16(kRecordBytes);
+    w.u16(0U);
+    w.u32(stack.free_space_.frames());
     snapshot_write_params(w, stack.params_);
     for (int layer = 0; layer < kLayers; ++layer) {
       if (StackType::layer_is_ccm(layer)) {
@@ -261,6 +286,11 @@ struct SnapshotAccess {
         stack.layers_.fine.for_each([&w, &stack](CellIndex, const typename StackType::FineCell& cell) {
           snapshot_write_cell(w, intact_or_empty(stack.layers_, cell));
         });
+      }
+    }
+    if constexpr (kFreeSpace) {
+      for (int layer = 0; layer < kLayers; ++layer) {
+        stack.free_space_.records(layer)->for_each([&w](CellIndex, const FreeSpaceCell& c) { snapshot_write_record(w, c); });
       }
     }
     snapshot_write_counters(w, stack.totals_, stack.rejected_moves_, stack.rejected_frames_, stack.last_update_ns_);
@@ -293,6 +323,18 @@ struct SnapshotAccess {
     if (shape != Status::kOk) {
       return shape;
     }
+    const std::uint16_t record_bytes = r.u16();
+    const std::uint16_t reserved = r.u16();
+    const std::uint32_t frames = r.u32();
+    if (!r.ok() || reserved != 0U) {
+      return Status::kCorrupt;
+    }
+    if (record_bytes != kRecordBytes) {
+      return Status::kVersionMismatch;  // saved by a stack with (or without) free space
+    }
+    if (!kFreeSpace && frames != 0U) {
+      return Status::kCorrupt;  // a stack without free space counts no frames
+    }
     if (data_size != size()) {
       return Status::kCorrupt;
     }
@@ -313,6 +355,14 @@ struct SnapshotAccess {
         } else {
           typename StackType::FineCell cell{};
           valid = snapshot_read_cell(r, &cell);
+        }
+      }
+    }
+    if constexpr (kFreeSpace) {
+      for (int layer = 0; layer < kLayers; ++layer) {
+        for (std::size_t i = 0; i < StackType::layer_capacity(layer); ++i) {
+          FreeSpaceCell record{};
+          snapshot_read_record(r, &record);
         }
       }
     }
@@ -371,6 +421,8 @@ struct SnapshotAccess {
     if (init_status != Status::kOk) {
       return init_status;  // not reachable: the parameters were validated as init() does
     }
+    r.seek(kSnapshotHeaderBytes + kSnapshotFingerprintBytes + 4U);
+    stack.free_space_.set_frames(r.u32());
     r.seek(layers_begin);
     for (int layer = 0; layer < kLayers; ++layer) {
       CellIndex centre{};
@@ -383,6 +435,13 @@ struct SnapshotAccess {
         auto& grid = stack.layers_.fine;
         (void)grid.init(grid.storage(), grid.side(), grid.cell_width(), centre);
         grid.for_each([&r](CellIndex, typename StackType::FineCell& cell) { (void)snapshot_read_cell(r, &cell); });
+      }
+    }
+    if constexpr (kFreeSpace) {
+      for (int layer = 0; layer < kLayers; ++layer) {
+        RingGrid<FreeSpaceCell>& records = *stack.free_space_.records(layer);
+        (void)records.init(records.storage(), records.side(), records.cell_width(), stack.layers_.centre(layer));
+        records.for_each([&r](CellIndex, FreeSpaceCell& c) { snapshot_read_record(r, &c); });
       }
     }
     snapshot_read_counters(r, &stack.totals_, &stack.rejected_moves_, &stack.rejected_frames_,

@@ -12,7 +12,7 @@
 // Values (costmap_2d's): 0 free .. 252 cost, 253 inscribed, 254 lethal, 255 unknown. A pixel takes
 // the worst of the map's answers over its whole square (each part answered by the finest layer
 // that knows it, as Stack::query would: planner/detail/region_walk.hpp), in the order
-//   lethal (a part is obstacle or steep) > unknown (a part is not known, or off the map) > cost,
+//   lethal (a part is obstacle, steep or a drop-off) > unknown (a part is not known, or off the map) > cost,
 // so a pixel is free only if all of it is known and traversable. The cost of a traversable part:
 //   cost = min(252, round(252 * max(inclination / max_inclination,
 //                                   sqrt(normal_variance / threshold))))
@@ -155,7 +155,7 @@ class CostmapSink {
     if (!a.known) {
       return kRankUnknown;
     }
-    if (a.cell_class == CellClass::kObstacle || a.cell_class == CellClass::kSteep) {
+    if (is_lethal(a.cell_class)) {
       return kRankLethal;
     }
     return traversable_cost(a.inclination, view_.params().max_inclination, a.normal_variance,

@@ -8,8 +8,10 @@
 // Stack::query would answer each of its points (the answer of a map cell is computed once, not
 // per point: planner/detail/region_walk.hpp). The result aggregates those answers over the exact
 // area (cells clipped to the rectangle):
-//  - worst_class: of the known parts, obstacle before steep before traversable; kUnknown when
-//    no part is known. How much unknown area a caller tolerates is its own threshold
+//  - worst_class: of the known parts, drop-off before obstacle before steep before traversable;
+//    kUnknown when no part is known. A drop-off part (no layer knows it, lines of sight proved
+//    the terrain drops there: map/visibility/free_space.hpp) counts as known, at the height
+//    bound the rays proved, with no slope. How much unknown area a caller tolerates is its own threshold
 //    (footprint_class).
 //  - unknown_share: the share of the area no layer knows (or none holds: off the map).
 //  - max_step_m: the larger of (a) max - min of the sub-cell height (eq. 10; a constant cell's
@@ -79,7 +81,7 @@ struct FootprintResult {
   std::uint32_t cells_visited;  ///< map cells read
 };
 
-/// The footprint's verdict: obstacle or steep if any known part is (obstacle first); else
+/// The footprint's verdict: drop-off, obstacle or steep if any known part is (in that order); else
 /// unknown if unknown_share > max_unknown_share or no part is known; else traversable.
 /// kUnknown for a result whose status is neither kOk nor kOutsideMap.
 [[nodiscard]] CellClass footprint_class(const FootprintResult& result, float max_unknown_share) noexcept;
@@ -100,9 +102,12 @@ namespace detail {
 [[nodiscard]] Status make_footprint_rect(const Footprint& footprint, float finest_width_m, std::uint32_t max_cells,
                                          OrientedRect* out) noexcept;
 
-/// Rank of a known class in the worst-part order (obstacle 3, steep 2, traversable 1; 0 unknown).
+/// Rank of a known class in the worst-part order (drop-off 4, obstacle 3, steep 2, traversable 1;
+/// 0 unknown).
 [[nodiscard]] constexpr int hazard_rank(CellClass c) noexcept {
-  return c == CellClass::kObstacle ? 3 : (c == CellClass::kSteep ? 2 : (c == CellClass::kTraversable ? 1 : 0));
+  return c == CellClass::kDropOff
+             ? 4
+             : (c == CellClass::kObstacle ? 3 : (c == CellClass::kSteep ? 2 : (c == CellClass::kTraversable ? 1 : 0)));
 }
 
 /// Aggregates the pieces of a footprint walk into a FootprintResult (see the header comment).

@@ -9,7 +9,7 @@
 // The body (a length x width rectangle, its length along the direction of travel) is placed at
 // poses every step_m along the path, from its start (distance 0) to its end (the end is always
 // a pose), and each pose is a footprint query (planner/footprint.hpp). Answer: the distance along
-// the path of the first pose whose footprint is obstacle or steep (footprint_class), and of the
+// the path of the first pose whose footprint is a drop-off, obstacle or steep (footprint_class), and of the
 // first whose unknown share exceeds max_unknown_share (a hazardous footprint may be both), with
 // the poses there and their footprint results. The walk stops once both are found. Between poses
 // the body is not checked: choose step_m below the size of the smallest hazard that matters
@@ -65,7 +65,7 @@ struct PathSweep {
 
 struct PathResult {
   Status status;                 ///< kOk or the refusal (then nothing else is set)
-  bool hazard_found;             ///< a pose's footprint is obstacle or steep
+  bool hazard_found;             ///< a pose's footprint is a drop-off, obstacle or steep
   float first_hazard_m;          ///< its distance along the path (m); 0 if none
   PathPose hazard_pose;
   FootprintResult hazard;        ///< its footprint
@@ -149,7 +149,7 @@ template <typename Config>
     result.cells_visited += f.cells_visited;
     result.checked_m = t;
     const CellClass verdict = footprint_class(f, sweep.max_unknown_share);
-    if (!result.hazard_found && (verdict == CellClass::kObstacle || verdict == CellClass::kSteep)) {
+    if (!result.hazard_found && is_lethal(verdict)) {
       result.hazard_found = true;
       result.first_hazard_m = t;
       result.hazard_pose = pose;

@@ -49,12 +49,14 @@ std::string bits(float v) {
 void print_counters(const FrameCounters& c) {
   std::printf(" received=%u used=%u rejected_non_finite=%u rejected_out_of_range=%u rejected_weight=%u"
               " outside_map=%u too_noisy=%u gated_finer=%u gated_occluded=%u gated_held=%u gated_pool_full=%u gated_admitted=%u gated_dropped=%u reseeded_cells=%u"
-              " merged_cells=%u skipped_budget=%u corrupted_cells=%u corrupted_slots=%u\n",
+              " merged_cells=%u skipped_budget=%u corrupted_cells=%u corrupted_slots=%u free_rays=%u"
+              " free_rays_refused=%u cleared_cells=%u drop_cells=%u\n",
               c.received, c.used, c.rejected_non_finite, c.rejected_out_of_range, c.rejected_weight, c.outside_map,
               c.too_noisy, c.gated_finer, c.gated_occluded, c.gated_held, c.gated_pool_full, c.gated_admitted, c.gated_dropped, c.reseeded_cells,
-              c.merged_cells, c.skipped_budget, c.corrupted_cells, c.corrupted_slots);
+              c.merged_cells, c.skipped_budget, c.corrupted_cells, c.corrupted_slots, c.free_rays, c.free_rays_refused,
+              c.cleared_cells, c.drop_cells);
 }
-static_assert(sizeof(FrameCounters) == 18 * sizeof(std::uint32_t), "print every FrameCounters member");
+static_assert(sizeof(FrameCounters) == 22 * sizeof(std::uint32_t), "print every FrameCounters member");
 
 /// Ground of the scenarios (map frame, m): a tilted plane, a 15 cm box, a 31 deg ramp.
 double terrain(double x, double y) {

@@ -15,8 +15,15 @@
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/query/pooling.hpp"
 #include "ccmap/map/types.hpp"
+#include "ccmap/map/visibility/free_space_cell.hpp"
 
 namespace ccmap::detail {
+
+/// The free-space records a query reads for drop-offs (map/visibility/free_space.hpp): one record
+/// grid per layer, or nullptr (a stack without free space: no drop-offs).
+struct DropRecords {
+  const RingGrid<FreeSpaceCell>* layer[kMaxLayers]{};
+};
 
 [[nodiscard]] inline QueryResult empty_result(Status status, int layer) noexcept {
   return QueryResult{status, layer, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, CellClass::kUnknown};
@@ -28,10 +35,13 @@ class QueryView {
   using Layers = LayerSet<Config>;
   using FineCell = typename Layers::FineCell;
 
-  QueryView(const Layers& layers, const StackParams& params, const float* thresholds) noexcept
-      : layers_(layers), params_(params), thresholds_(thresholds) {}
+  QueryView(const Layers& layers, const StackParams& params, const float* thresholds,
+            const DropRecords* drops = nullptr) noexcept
+      : layers_(layers), params_(params), thresholds_(thresholds), drops_(drops) {}
 
-  /// Answer from the finest layer that knows (x, y); see Stack::query for the contract.
+  /// Answer from the finest layer that knows (x, y), a drop-off counting as known at its layer (an
+  /// unobserved cell, no finer point below it, that lines of sight proved a drop-off: finer
+  /// knowledge than a coarser cell that holds the ground beside it); see Stack::query.
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
     QueryResult result = empty_result(Status::kOutsideMap, -1);
     for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
@@ -46,12 +56,34 @@ class QueryView {
       if (answer.status != Status::kOk) {
         continue;
       }
-      if (!Layers::is_ccm(layer) && Layers::kCcmLayerCount > 0) {
+      if (!Layers::is_ccm(layer) && Layers::kCcmLayerCount > 0 && answer.cell_class != CellClass::kDropOff) {
         refine_with_ccm(x, y, answer);
       }
       return answer;
     }
     return result;
+  }
+
+  /// True if the cell of `layer` at `index` (inside the window) holds no point of its own and
+  /// its free-space record makes it a drop-off.
+  [[nodiscard]] bool unobserved_drop(int layer, CellIndex index) const noexcept {
+    if (drops_ == nullptr || drops_->layer[layer] == nullptr) {
+      return false;
+    }
+    const float weight = Layers::is_ccm(layer) ? layers_.ccm_grid(layer).cell_unchecked(index).weight
+                                               : fine_weight(index);
+    return !(weight > 0.0F) && is_drop(drops_->layer[layer]->cell_unchecked(index));
+  }
+
+  /// The answer of an unobserved drop-off cell: kOk, class kDropOff, weight 0, height the upper
+  /// bound the rays proved (the terrain lies at or below it), every other number 0.
+  [[nodiscard]] QueryResult drop_answer(int layer, CellIndex index) const noexcept {
+    QueryResult out = empty_result(Status::kOk, layer);
+    out.cell_width_m = layers_.widths[layer];
+    const FreeSpaceCell& rec = drops_->layer[layer]->cell_unchecked(index);
+    out.height_m = has_bound(rec) ? bound_m(rec) : 0.0F;
+    out.cell_class = CellClass::kDropOff;
+    return out;
   }
 
   /// The answer of `layer` at `index` for the point (x, y) inside that cell. With
@@ -65,6 +97,9 @@ class QueryView {
     out.cell_width_m = width;
     if (Layers::is_ccm(layer)) {
       const typename Layers::CcmCellType cell = pooled(layers_, params_.weight_limit, layer, index);
+      if (!(cell.weight > 0.0F) && unobserved_drop(layer, index)) {
+        return drop_answer(layer, index);  // nothing observed here or below, the rays proved a drop
+      }
       const CcmSurface surface = ccm_surface(cell);
       // Known: covered (ccm_is_covered), or an obstacle already (classify_ccm: obstacle evidence wins).
       const CellClass cell_class = classify_ccm(cell, surface, width, params_, thresholds_[layer]);
@@ -84,8 +119,14 @@ class QueryView {
       return out;
     }
     if constexpr (Layers::kHasFine) {
-      // Integrity: a cell an upset changed answers as never observed (map/detail/integrity.hpp).
-      const FineCell cell = intact_or_empty(layers_, layers_.fine.cell_unchecked(index));
+      // Integrity: a cell an upset changed answers as never observed (map/detail/integrity.hpp),
+      // and never as a drop-off either (unknown: what its records say cannot be trusted beside it).
+      const FineCell& raw = layers_.fine.cell_unchecked(index);
+      const bool intact = cell_intact(layers_, raw);
+      const FineCell cell = intact ? raw : FineCell{};
+      if (intact && !(cell.weight > 0.0F) && unobserved_drop(layer, index)) {
+        return drop_answer(layer, index);
+      }
       const bool known = cell.weight >= params_.min_weight && cell.weight > 0.0F;
       if (require_known && !known) {
         return empty_result(Status::kUnknown, layer);
@@ -178,9 +219,19 @@ class QueryView {
     answer.cell_class = ccm.cell_class;
   }
 
+  [[nodiscard]] float fine_weight(CellIndex index) const noexcept {
+    if constexpr (Layers::kHasFine) {
+      return layers_.fine.cell_unchecked(index).weight;
+    } else {
+      (void)index;
+      return 0.0F;
+    }
+  }
+
   const Layers& layers_;
   const StackParams& params_;
   const float* thresholds_;
+  const DropRecords* drops_;
 };
 
 }  // namespace ccmap::detail

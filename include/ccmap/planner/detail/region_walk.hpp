@@ -216,8 +216,9 @@ class RegionWalk {
     return false;
   }
 
-  /// The answer of the leaf at layer k: the first known cell on its path up; else the unknown
-  /// answer of the finest layer holding it (layer -1: none does).
+  /// The answer of the leaf at layer k: the first cell on its path up that is known or, as
+  /// Stack::query, an unobserved drop-off (map/visibility/free_space.hpp); else the unknown answer
+  /// of the finest layer holding it (layer -1: none does).
   [[nodiscard]] const RegionAnswer& resolve(int k) noexcept {
     const RegionAnswer* unknown = nullptr;
     for (int j = k; j < kLayers; ++j) {
@@ -228,6 +229,18 @@ class RegionWalk {
       if (a.known) {
         return a;
       }
+      if (view_.unobserved_drop(j, path_[j]) && drop_below_is_empty(j)) {
+        reads_.add(1U);
+        drop_ = unknown_answer(j);
+        const QueryResult q = view_.drop_answer(j, path_[j]);
+        drop_.known = true;
+        drop_.cell_class = CellClass::kDropOff;
+        drop_.index = path_[j];
+        drop_.centre_x = grid::cell_centre(path_[j].x, layers_.widths[j]);
+        drop_.centre_y = grid::cell_centre(path_[j].y, layers_.widths[j]);
+        drop_.mean_z = q.height_m;  // the upper bound: the terrain lies at or below it
+        return drop_;
+      }
       unknown = unknown == nullptr ? &a : unknown;
     }
     if (unknown == nullptr) {
@@ -235,6 +248,15 @@ class RegionWalk {
       unknown = &outside_;
     }
     return *unknown;
+  }
+
+  /// True if no finer layer holds a point below path_[j] (the leaf's own layer: nothing finer;
+  /// a coarser CCM cell: its pooled weight is 0), as Stack::query requires of a drop-off answer.
+  [[nodiscard]] bool drop_below_is_empty(int j) noexcept {
+    if (j == 0 || !Layers::is_ccm(j) || !layers_.contains(j - 1, CellIndex{2 * path_[j].x, 2 * path_[j].y})) {
+      return true;  // nothing finer holds this cell's children
+    }
+    return !(pooled(layers_, view_.params().weight_limit, j, path_[j], reads_).weight > 0.0F);
   }
 
   [[nodiscard]] static RegionAnswer unknown_answer(int layer) noexcept {
@@ -314,6 +336,7 @@ class RegionWalk {
   bool answered_[Layers::kLayerSlots]{};
   RegionAnswer answers_[Layers::kLayerSlots]{};
   RegionAnswer outside_{};  ///< the answer of a piece no layer holds
+  RegionAnswer drop_{};     ///< the answer of a piece no layer knows but a drop-off holds
   Polygon polygon_{};
   ReadCount reads_{};
   std::uint32_t nodes_ = 0U;

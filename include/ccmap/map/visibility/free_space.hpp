@@ -1,0 +1,584 @@
+// Free space from lines of sight (docs/design.md, "Free space from lines of sight"): after the
+// points of a frame are folded in, a bounded subsample of lines of sight, from the sensor to the
+// frame's points, is walked over every layer (map/visibility/ray_walk.hpp). A line of sight says
+// the terrain along it lies below it:
+//  - a cell whose surface the rays pass clearly below, in kContradictionsPerFrame rays of a
+//    frame, in free_space_clear_frames frames with no ray ending on the surface in between, is
+//    emptied (a rover that drove on, a ghost of a bad pose) and counted (cleared_cells);
+//  - an unobserved cell gets an upper bound on its terrain (FreeSpaceCell), and is a drop-off when
+//    kDropRays rays proved one in it: a ray passed over it, or over a later cell of the same run
+//    of unobserved cells (the same layer, no known cell in between), more than its layer's
+//    obstacle height below the ground it crossed last (a crater, a ditch, the far side of a
+//    ledge); the ground follows the known cells along the ray and climbs at most
+//    max_inclination: a rock is not ground, so its shadow is not a drop (drop_cells;
+//    CellClass::kDropOff in queries).
+// Owned by Stack<Config> beside the layers; one record per cell of every layer, moved with the
+// windows (a cell that leaves a window loses its record exactly as the cell is cleared). A
+// Config with kFreeSpace = false gets FreeSpace<Config, false>: no storage, no work.
+//
+// Refused rays change nothing: points the front refuses (non-finite, out of range, too noisy),
+// points with a bad weight, sensor-frame points behind the sensor (StackParams::sensor_view_axis),
+// every ray of a frame whose sensor no window holds (counted: free_rays_refused). A refused frame
+// (a non-finite origin, ...) never reaches this stage.
+//
+// Margins (derived at init, per layer; the design section gives the argument):
+//  - the walk ends kRangeSigmas sigma_m(r) short of the point along the ray (sigma_m the noise
+//    model's range error at the point's range r): before that the ray is the line of sight to the
+//    true point, which clears the terrain by definition, unless the range error exceeds 3 sigma;
+//    no cell holding the point itself is judged by its ray;
+//  - a surface is contradicted only where its top (a CCM cell: mean + sqrt(3) sigma_zz; a
+//    constant cell: its height) stands above the ray by more than clear_margin =
+//    max(obstacle_fraction w, kRangeSigmas sigma_k, for a constant cell kRangeSigmas sqrt(V_k)),
+//    sigma_k the largest range error the layer receives and V_k the outlier gate's floor variance
+//    (range error and the steepest traversable plane across the cell): the layer's obstacle
+//    height, more than the steepest traversable plane rises across a cell (0.36 w), and three
+//    range errors;
+//  - a point confirms the surface of its cell (and cancels the evidence against it) when it lies
+//    no more than kRangeSigmas sigma_k below the cell's mean.
+//
+// The coupling to the front is one adapter, ray_end_of(): the fields of a FrontChunk entry this
+// stage reads (routing code, Q18 position, squared range).
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/cell/constant_cell.hpp"
+#include "ccmap/cell/outlier_gate.hpp"
+#include "ccmap/grid/ring_grid.hpp"
+#include "ccmap/map/config.hpp"
+#include "ccmap/map/detail/layers.hpp"
+#include "ccmap/map/types.hpp"
+#include "ccmap/map/update/front.hpp"
+#include "ccmap/map/update/gate.hpp"
+#include "ccmap/map/visibility/free_space_cell.hpp"
+#include "ccmap/map/visibility/ray_walk.hpp"
+#include "ccmap/sensor/noise_model.hpp"
+
+namespace ccmap::detail {
+
+/// Standard deviations of the range noise by which a ray is shortened before its point, and of
+/// the margins (the outlier gate's default k).
+inline constexpr float kRangeSigmas = 3.0F;
+/// Cells whose first contradiction of a frame is remembered for the frame's end (beyond it, the
+/// frame's further contradicted cells wait for a later frame).
+inline constexpr std::size_t kMaxContradictedCells = 1024U;
+/// Unobserved cells of one run along a ray that a drop-off proved further along the run can mark
+/// (the nearest ones first; a longer run's later cells are marked only by their own bound).
+inline constexpr std::size_t kMaxRunCells = 64U;
+
+/// The end of a sampled point's line of sight, as the front computed it.
+struct RayEnd {
+  std::int32_t code;  ///< routed layer, or kFrontNonFinite / kFrontOutOfRange / kFrontTooNoisy
+  std::int64_t u[2];  ///< horizontal position in U units (ray_walk.hpp), valid when routed
+  float z;            ///< map-frame height (m), valid when routed
+  float range_sq;     ///< squared range from the sensor (m^2)
+};
+
+/// The adapter to the front's chunk representation: the only place this stage reads a FrontChunk.
+[[nodiscard]] inline RayEnd ray_end_of(const FrontChunk& chunk, std::size_t i) noexcept {
+  return RayEnd{chunk.code[i],
+                {ray_u(chunk.ix0[i], chunk.fx[i]), ray_u(chunk.iy0[i], chunk.fy[i])},
+                chunk.z[i],
+                chunk.range_sq[i]};
+}
+
+/// The finest window the front is given here: none (this stage reads no Kalman slot).
+inline constexpr FineWindow kNoFineWindow{CellIndex{0, 0}, 0, 0};
+
+/// The sensor's horizontal position in U units (the pose's anchor cell and fraction).
+inline void ray_origin_of(const FramePose& pose, std::int64_t* u) noexcept {
+  u[0] = ray_u(pose.anchor.x, pose.anchor_fraction[0]);
+  u[1] = ray_u(pose.anchor.y, pose.anchor_fraction[1]);
+}
+
+/// Per-frame constants of a layer (derived at init).
+struct FreeSpaceLayerConstants {
+  float clear_margin_m;  ///< a surface above the ray by more than this contradicts it
+  float step_m;          ///< obstacle_fraction * w: the drop a drop-off must have
+  float rise_margin_m;   ///< ground tracking: noise allowance of a known cell's height (sigma_k)
+};
+
+template <typename Config, bool kEnabled = kConfigFreeSpace<Config>>
+class FreeSpace;
+
+/// A Config without free space: no storage, no work, no drop-offs.
+template <typename Config>
+class FreeSpace<Config, false> {
+ public:
+  using Layers = LayerSet<Config>;
+  static constexpr bool kEnabled = false;
+  [[nodiscard]] Status init(const StackParams&, const float*, const Layers&) noexcept { return Status::kOk; }
+  void follow(int, CellIndex) noexcept {}
+  void run_map(Layers&, const StackParams&, const FrontConfig&, const PointXYZ*, const float*, std::size_t,
+               const FramePose&, FrameCounters&) noexcept {}
+  void run_sensor(Layers&, const StackParams&, const FrontConfig&, const PointXYZ*, std::size_t, const FramePose&,
+                  FrameCounters&) noexcept {}
+  [[nodiscard]] const RingGrid<FreeSpaceCell>* records(int) const noexcept { return nullptr; }
+  [[nodiscard]] RingGrid<FreeSpaceCell>* records(int) noexcept { return nullptr; }
+  [[nodiscard]] std::uint32_t frames() const noexcept { return 0U; }
+  void set_frames(std::uint32_t) noexcept {}
+};
+
+template <typename Config>
+class FreeSpace<Config, true> {
+ public:
+  using Layers = LayerSet<Config>;
+  static constexpr bool kEnabled = true;
+  static constexpr int kLayerCount = Layers::kLayerCount;
+  static constexpr std::size_t kFineRecords = Layers::kHasFine ? Layers::kFineCellCount : 0U;
+  static constexpr std::size_t kCcmRecords = Layers::kCcmLayerCount > 0 ? Layers::kCcmCellCount : 0U;
+  static constexpr std::size_t kRecordCount = kFineRecords + kCcmRecords;
+
+  /// Binds one record grid per layer (centred on the origin, every record empty, as init leaves
+  /// the layers) and derives the margins. max_range_sq_m2: the routing table's squared ranges.
+  [[nodiscard]] Status init(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
+    std::size_t offset = 0U;
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      const std::int32_t side = Layers::side(layer);
+      if (grids_[layer].init(records_ + offset, side, layers.widths[layer], layers.centre(layer)) != Status::kOk) {
+        return Status::kInvalidArgument;
+      }
+      offset_[layer] = offset;
+      offset += static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
+      const float width = layers.widths[layer];
+      const float sigma = layer_max_sigma(params, max_range_sq_m2[layer], width, Layers::is_ccm(layer));
+      const float step = params.obstacle_fraction * width;
+      float margin = kRangeSigmas * sigma;
+      if (!Layers::is_ccm(layer)) {
+        // A constant cell has no spread of its own: the gate's floor (range error and the
+        // steepest traversable plane across the cell) stands for it.
+        margin = kRangeSigmas * std::sqrt(gate_floor_variance(sigma, width, params.max_inclination));
+      }
+      consts_[layer] = FreeSpaceLayerConstants{margin > step ? margin : step, step, sigma};
+    }
+    max_inclination_ = params.max_inclination;
+    rays_ = static_cast<std::uint32_t>(params.free_space_rays);
+    clear_frames_ = static_cast<std::uint32_t>(params.free_space_clear_frames);
+    view_axis_[0] = params.sensor_view_axis[0];
+    view_axis_[1] = params.sensor_view_axis[1];
+    view_axis_[2] = params.sensor_view_axis[2];
+    view_axis_set_ = !(view_axis_[0] >= 0.0F && view_axis_[0] <= 0.0F && view_axis_[1] >= 0.0F &&
+                       view_axis_[1] <= 0.0F && view_axis_[2] >= 0.0F && view_axis_[2] <= 0.0F);
+    frames_ = 0U;
+    contradicted_count_ = 0U;
+    return Status::kOk;
+  }
+
+  /// The record grid of `layer` follows the layer's window to `centre` (Stack::move_to calls it
+  /// after each layer's move): records that leave are cleared, as the cells are.
+  void follow(int layer, CellIndex centre) noexcept {
+    if (layer >= 0 && layer < kLayerCount) {
+      (void)grids_[layer].move_to(centre);  // cannot fail: the layer accepted the same centre
+    }
+  }
+
+  /// The stage of a map-frame frame (after its points were folded in). weights: as update_frame.
+  void run_map(Layers& layers, const StackParams& params, const FrontConfig& front, const PointXYZ* points,
+               const float* weights, std::size_t n, const FramePose& pose, FrameCounters& frame) noexcept {
+    run(layers, params, front, points, weights, n, pose, false, frame);
+  }
+  /// The stage of a sensor-frame frame: points in the sensor frame, pose made with a rotation.
+  void run_sensor(Layers& layers, const StackParams& params, const FrontConfig& front, const PointXYZ* points,
+                  std::size_t n, const FramePose& pose, FrameCounters& frame) noexcept {
+    run(layers, params, front, points, nullptr, n, pose, true, frame);
+  }
+
+  /// The record grid of a layer (queries, snapshots); nullptr for a bad layer.
+  [[nodiscard]] const RingGrid<FreeSpaceCell>* records(int layer) const noexcept {
+    return (layer >= 0 && layer < kLayerCount) ? &grids_[layer] : nullptr;
+  }
+  [[nodiscard]] RingGrid<FreeSpaceCell>* records(int layer) noexcept {
+    return (layer >= 0 && layer < kLayerCount) ? &grids_[layer] : nullptr;
+  }
+  /// Frames this stage has seen since init (wraps at 2^32): its sampling phase and the records'
+  /// frame stamps follow it. Map state (snapshots store it).
+  [[nodiscard]] std::uint32_t frames() const noexcept { return frames_; }
+  void set_frames(std::uint32_t frames) noexcept { frames_ = frames; }
+
+ private:
+  using CcmCellType = typename Layers::CcmCellType;
+  using FineCell = typename Layers::FineCell;
+
+  /// What one ray carries along its walk.
+  struct RayState {
+    float z0;            ///< sensor height (m)
+    float dz;            ///< height change over the walked segment (m)
+    float length_m;      ///< horizontal length of the walked segment (m)
+    CellIndex end[kMaxLayers];  ///< the point's cell in every layer (never judged by its own ray)
+    float ground_m;      ///< the last ground the ray crossed (m)
+    float prev_h_m;      ///< height of the last known cell the walk layer crossed (m)
+    float prev_s_m;      ///< where (horizontal distance from the sensor, m)
+    bool has_ground;
+    bool on_obstacle;    ///< the known cells rose faster than a traversable slope since the ground
+    bool dirty;          ///< the ray passed below a known surface: it proves no bound beyond
+    std::uint32_t run;   ///< unobserved cells since the last known stretch (entries of run_)
+  };
+
+  /// An unobserved cell of the current run (see mark_run).
+  struct RunCell {
+    FreeSpaceCell* record;
+    std::int32_t layer;
+    bool marked;  ///< this ray counted a drop-off in it already
+  };
+
+  /// Weight, height (m) and height co-moment of a cell: a CCM cell's mean height and S_zz, a
+  /// constant cell's height (and 0: a 4 cm cell is one surface).
+  struct CellView {
+    float weight;
+    float height;
+    float s_zz;
+  };
+
+  [[nodiscard]] CellView view_of(const Layers& layers, int layer, CellIndex index) const noexcept {
+    if (Layers::is_ccm(layer)) {
+      const CcmCellType& c = layers.ccm_grid(layer).cell_unchecked(index);
+      return CellView{c.weight, c.mean_z, c.s_zz};
+    }
+    if constexpr (Layers::kHasFine) {
+      const FineCell& c = layers.fine.cell_unchecked(index);
+      return CellView{c.weight, c.height, 0.0F};
+    } else {
+      return CellView{0.0F, 0.0F, 0.0F};
+    }
+  }
+
+  /// True if the top of the cell's surface stands above height z (m) by more than the layer's
+  /// clear margin. The top of a CCM cell is mean + sqrt(3) sigma_zz (sigma_zz^2 = S_zz / W): the
+  /// highest point of heights spread evenly about the mean, so a vertical face whose cell also
+  /// holds the ground in front of it (a rover seen from the side, mean half its height) counts
+  /// with its top; a flat cell's top is its mean plus its noise, a plane's its uphill edge.
+  /// Compared squared: no square root.
+  [[nodiscard]] bool top_above(const CellView& cell, int layer, float z) const noexcept {
+    const float gap = z + consts_[layer].clear_margin_m - cell.height;  // the top must exceed mean + gap
+    return gap < 0.0F || gap * gap * cell.weight < 3.0F * cell.s_zz;
+  }
+
+  void run(Layers& layers, const StackParams& params, const FrontConfig& front, const PointXYZ* points,
+           const float* weights, std::size_t n, const FramePose& pose, bool sensor_frame,
+           FrameCounters& frame) noexcept {
+    ++frames_;
+    // A frame the budget cut short (StackParams::frame_point_budget, frame_time_budget_us) casts
+    // no line of sight: its time is spent.
+    if (rays_ == 0U || n == 0U || frame.skipped_budget > 0U) {
+      return;
+    }
+    stamp_ = static_cast<std::uint8_t>(frames_ & kStampMask);
+    contradicted_count_ = 0U;
+    // An evenly spread subsample: every stride-th point from a phase that moves every frame.
+    const std::size_t stride = (n + rays_ - 1U) / rays_;
+    // The phase: a 32-bit multiplicative hash of the frame count (wraps alike on every target).
+    const std::uint32_t hashed = frames_ * 2654435761U;
+    const std::size_t phase = stride > 1U ? static_cast<std::size_t>(hashed) % stride : 0U;
+    const std::size_t sampled = (n - phase + stride - 1U) / stride;
+    windows_.layers = kLayerCount;
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      windows_.min[layer] = layers.window_min(layer);
+      windows_.side[layer] = Layers::side(layer);
+    }
+    ray_origin_of(pose, origin_u_);
+    origin_z_ = pose.origin[2];
+    cell_width_ = front.width;
+    bool held = false;
+    for (int layer = 0; layer < kLayerCount && !held; ++layer) {
+      const int shift = kRayFracBits + layer;
+      held = windows_.contains(layer, CellIndex{static_cast<std::int32_t>(origin_u_[0] >> shift),
+                                                static_cast<std::int32_t>(origin_u_[1] >> shift)});
+    }
+    if (!held) {
+      frame.free_rays_refused += static_cast<std::uint32_t>(sampled);
+      return;
+    }
+    std::size_t count = 0U;
+    for (std::size_t idx = phase; idx < n; idx += stride) {
+      batch_index_[count] = static_cast<std::uint32_t>(idx);
+      batch_points_[count] = points[idx];
+      if (++count == kFrontChunkPoints) {
+        run_batch(layers, params, front, weights, count, pose, sensor_frame, frame);
+        count = 0U;
+      }
+    }
+    if (count > 0U) {
+      run_batch(layers, params, front, weights, count, pose, sensor_frame, frame);
+    }
+    settle(layers, frame);
+  }
+
+  void run_batch(Layers& layers, const StackParams& params, const FrontConfig& front, const float* weights,
+                 std::size_t count, const FramePose& pose, bool sensor_frame, FrameCounters& frame) noexcept {
+    if (sensor_frame) {
+      front_sensor_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk_);
+    } else {
+      front_map_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk_);
+    }
+    for (std::size_t i = 0; i < count; ++i) {
+      const RayEnd end = ray_end_of(chunk_, i);
+      bool refused = end.code >= std::int32_t{kFrontNonFinite} || end.code < 0;
+      if (!refused && weights != nullptr) {
+        refused = ccm_check_weight(weights[batch_index_[i]]) != Status::kOk;
+      }
+      if (!refused && sensor_frame && view_axis_set_) {
+        const PointXYZ& s = batch_points_[i];
+        refused = !(s.x * view_axis_[0] + s.y * view_axis_[1] + s.z * view_axis_[2] > 0.0F);
+      }
+      if (refused) {
+        ++frame.free_rays_refused;
+        continue;
+      }
+      ++frame.free_rays;
+      cast(layers, params, end, frame);
+    }
+  }
+
+  /// One line of sight: its point confirms the surface it lies on, then the walk.
+  void cast(Layers& layers, const StackParams& params, const RayEnd& end, FrameCounters& frame) noexcept {
+    RayState ray{};
+    const std::int64_t* end_u = end.u;
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      const int shift = kRayFracBits + layer;
+      ray.end[layer] = CellIndex{static_cast<std::int32_t>(end_u[0] >> shift), static_cast<std::int32_t>(end_u[1] >> shift)};
+    }
+    const float end_z = end.z;
+    confirm_end(layers, end.code, ray, end_z);
+    // Shorten the ray by kRangeSigmas range errors: f = 1 - m / r of the segment is walked.
+    const float range_sq = end.range_sq;
+    const float range = std::sqrt(range_sq);
+    const float margin = kRangeSigmas * params.noise.sigma_at_range_sq(range_sq);
+    if (!(margin < range)) {
+      return;  // the whole ray lies within the noise: it says nothing
+    }
+    float f = 1.0F - margin / range;
+    const std::int64_t du[2] = {end_u[0] - origin_u_[0], end_u[1] - origin_u_[1]};
+    // A ray longer than the walk takes is shortened to kMaxRayDeltaU (its far part lies beyond
+    // every window of the presets).
+    const std::int64_t longest = (du[0] < 0 ? -du[0] : du[0]) > (du[1] < 0 ? -du[1] : du[1])
+                                     ? (du[0] < 0 ? -du[0] : du[0])
+                                     : (du[1] < 0 ? -du[1] : du[1]);
+    const float longest_f = static_cast<float>(longest);
+    if (longest_f * f > static_cast<float>(kMaxRayDeltaU)) {
+      f = static_cast<float>(kMaxRayDeltaU) / longest_f;
+    }
+    // |du * f| <= 2^27: int32 holds it; the conversion truncates towards the sensor.
+    const RayU walk{{origin_u_[0], origin_u_[1]},
+                    {static_cast<std::int32_t>(static_cast<float>(du[0]) * f),
+                     static_cast<std::int32_t>(static_cast<float>(du[1]) * f)}};
+    ray.z0 = origin_z_;
+    const float full_dz = end_z - origin_z_;
+    // U units to metres: w_0 / 256 (exact scale); |du| <= 2^39 is exact to float's 24 bits.
+    const float metres_per_u = cell_width_ * 0.00390625F;
+    const float full_dx = static_cast<float>(du[0]) * metres_per_u;
+    const float full_dy = static_cast<float>(du[1]) * metres_per_u;
+    // The walked fraction of the full ray, from the integer delta actually walked.
+    const float walked = fraction_walked(end_u, walk);
+    ray.dz = full_dz * walked;
+    ray.length_m = std::sqrt(full_dx * full_dx + full_dy * full_dy) * walked;
+    walk_ray(windows_, walk, [&](const RayVisit& v) { visit(layers, v, ray, frame); });
+  }
+
+  /// The share of the full ray (origin to point) the walk covers: |walked delta| / |full delta|
+  /// on the longer axis (the walk's own rounding included, so heights follow the cells it names).
+  [[nodiscard]] float fraction_walked(const std::int64_t* end_u, const RayU& walk) const noexcept {
+    const std::int64_t fx = end_u[0] - origin_u_[0];
+    const std::int64_t fy = end_u[1] - origin_u_[1];
+    const bool use_x = (fx < 0 ? -fx : fx) >= (fy < 0 ? -fy : fy);
+    const std::int64_t full = use_x ? fx : fy;
+    const std::int64_t part = use_x ? walk.delta[0] : walk.delta[1];
+    if (full == 0) {
+      return 0.0F;
+    }
+    return static_cast<float>(part) / static_cast<float>(full);
+  }
+
+  /// The point confirms the surface of the cell it was folded into (the first layer from its
+  /// routed one whose window holds it) when it lies on or above it: above the cell's mean less
+  /// kRangeSigmas range errors of the layer.
+  void confirm_end(const Layers& layers, std::int32_t code, const RayState& ray, float z) noexcept {
+    for (int layer = code; layer < kLayerCount; ++layer) {
+      if (!windows_.contains(layer, ray.end[layer])) {
+        continue;
+      }
+      const CellView cell = view_of(layers, layer, ray.end[layer]);
+      if (cell.weight > 0.0F) {
+        // On its surface: not below the cell's mean by more than the range noise (a point on the
+        // ground beneath a vanished rover lies below it and confirms nothing).
+        if (z > cell.height - consts_[layer].rise_margin_m * kRangeSigmas) {
+          FreeSpaceCell& rec = grids_[layer].cell_unchecked(ray.end[layer]);
+          (void)touch(rec, stamp_);
+          confirm(rec);
+        }
+      }
+      return;
+    }
+  }
+
+  /// One cell a ray crosses: contradiction of a surface (a cell of any layer holding points);
+  /// bound and drop-off of an unobserved cell and ground tracking on the walk layer only (a
+  /// coarser layer's empty cell under a finer window is skipped: the finer record speaks for the
+  /// stretch, and rays from farther away bound the coarse cell once the finer window has moved on).
+  void visit(Layers& layers, const RayVisit& v, RayState& ray, FrameCounters& frame) noexcept {
+    const int layer = v.layer;
+    if (v.index.x == ray.end[layer].x && v.index.y == ray.end[layer].y) {
+      return;  // the ray ends in this cell: it says nothing about it
+    }
+    const CellView cell = view_of(layers, layer, v.index);
+    if (!v.walk_layer && !(cell.weight > 0.0F)) {
+      return;  // a coarser layer's empty cell under a finer window: the walk layer's record speaks
+    }
+    const float z_in = ray.z0 + v.t_in * ray.dz;
+    const float z_out = ray.z0 + v.t_out * ray.dz;
+    const float z_hi = z_in > z_out ? z_in : z_out;
+    FreeSpaceCell& rec = grids_[layer].cell_unchecked(v.index);
+    if (cell.weight > 0.0F) {
+      if (top_above(cell, layer, z_hi)) {
+        (void)touch(rec, stamp_);
+        if (frame_contradictions(rec) == 0U) {
+          remember(layer, v.index);  // listed once per frame: at its first contradiction
+        }
+        add_contradiction(rec);
+        ray.dirty = true;
+      }
+      if (v.walk_layer) {
+        track_ground(layer, cell.height, v.t_out, ray);
+        ray.run = 0U;  // observed here: a new run starts after it
+      }
+      return;
+    }
+    if (v.walk_layer) {
+      // The stack's view here: the first coarser layer holding data at this stretch.
+      for (int j = layer + 1; j < kLayerCount; ++j) {
+        const CellIndex c{v.index.x >> (j - layer), v.index.y >> (j - layer)};
+        if (!windows_.contains(j, c)) {
+          continue;
+        }
+        const CellView coarse = view_of(layers, j, c);
+        if (coarse.weight > 0.0F) {
+          track_ground(j, coarse.height, v.t_out, ray);
+          // Observed here, at the coarser layer's resolution, where the ray passes at or above
+          // that surface: a new run starts after it. A ray that dips below it inside the coarse
+          // cell (just past a rim the coarse cell holds the ground before) keeps the run going.
+          if (z_hi >= coarse.height) {
+            ray.run = 0U;
+          }
+          break;
+        }
+      }
+    }
+    if (ray.dirty) {
+      return;
+    }
+    lower_bound(rec, z_hi);
+    const bool proves_drop = ray.has_ground && z_hi < ray.ground_m - consts_[layer].step_m;
+    if (ray.run < kMaxRunCells) {
+      run_[ray.run++] = RunCell{&rec, layer, proves_drop};
+    }
+    if (proves_drop) {
+      frame.drop_cells += add_drop_ray(rec) ? 1U : 0U;
+      mark_run(layer, ray, frame);
+    }
+  }
+
+  /// A drop-off proved in a cell of `layer` marks the unobserved cells of the same layer before
+  /// it on the same run (the same stretch the ray crossed without meeting anything since the last
+  /// ground): they lie behind the same rim, inside the same drop. The near edge of a ditch, whose
+  /// bound is still within a step of the rim, is then a drop-off too, not an unknown gap.
+  void mark_run(int layer, RayState& ray, FrameCounters& frame) noexcept {
+    for (std::uint32_t k = 0; k < ray.run; ++k) {
+      RunCell& c = run_[k];
+      if (c.layer == layer && !c.marked) {
+        c.marked = true;
+        frame.drop_cells += add_drop_ray(*c.record) ? 1U : 0U;
+      }
+    }
+  }
+
+  /// The ground along the ray: the first known cell's height, then each known cell's unless the
+  /// known cells rose faster than the steepest traversable slope from the one before (a rock, a
+  /// rover): from there the ray is on an obstacle and the ground stays the level before it, until
+  /// a known cell comes back within the noise of that level. So the shadow of a rock on flat
+  /// ground, whose bound lies above the ground in front of the rock, is never a drop-off.
+  void track_ground(int layer, float h, float t, RayState& ray) const noexcept {
+    const float s = t * ray.length_m;
+    const float noise = consts_[layer].rise_margin_m;
+    if (!ray.has_ground) {
+      ray.ground_m = h;
+      ray.has_ground = true;
+    } else if (!ray.on_obstacle) {
+      if (h > ray.prev_h_m + max_inclination_ * (s - ray.prev_s_m) + noise) {
+        ray.on_obstacle = true;
+      } else {
+        ray.ground_m = h;
+      }
+    } else if (h <= ray.ground_m + noise) {
+      ray.on_obstacle = false;
+      ray.ground_m = h;
+    }
+    ray.prev_h_m = h;
+    ray.prev_s_m = s;
+  }
+
+  void remember(int layer, CellIndex index) noexcept {
+    if (contradicted_count_ < kMaxContradictedCells) {
+      contradicted_[contradicted_count_++] =
+          static_cast<std::uint32_t>(offset_[layer] + grid::buffer_offset(index, Layers::side(layer)));
+    }
+  }
+
+  /// The end of the frame: every cell contradicted this frame settles its evidence; those with
+  /// free_space_clear_frames frames of it are emptied.
+  void settle(Layers& layers, FrameCounters& frame) noexcept {
+    for (std::uint32_t k = 0; k < contradicted_count_; ++k) {
+      const std::uint32_t record = contradicted_[k];
+      FreeSpaceCell& rec = records_[record];
+      if (settle_frame(rec) >= clear_frames_) {
+        clear_cell(layers, record);
+        ++frame.cleared_cells;
+      }
+    }
+    contradicted_count_ = 0U;
+  }
+
+  void clear_cell(Layers& layers, std::uint32_t record) noexcept {
+    int layer = kLayerCount - 1;
+    while (layer > 0 && record < offset_[layer]) {
+      --layer;
+    }
+    const std::size_t slot = record - offset_[layer];
+    if (Layers::is_ccm(layer)) {
+      layers.ccm_grid(layer).storage()[slot] = CcmCellType{};
+    } else {
+      if constexpr (Layers::kHasFine) {
+        layers.fine.storage()[slot] = FineCell{};
+      }
+    }
+    records_[record] = FreeSpaceCell{};
+  }
+
+  // ---- state (zero-initialised: a static stack lives in .bss) ----
+  FreeSpaceCell records_[kRecordCount]{};
+  RingGrid<FreeSpaceCell> grids_[Layers::kLayerSlots]{};
+  std::size_t offset_[Layers::kLayerSlots]{};
+  // ---- derived at init, scratch of a frame (not map state) ----
+  FreeSpaceLayerConstants consts_[Layers::kLayerSlots]{};
+  float max_inclination_ = 0.0F;
+  float view_axis_[3]{};
+  bool view_axis_set_ = false;
+  std::uint32_t rays_ = 0U;
+  std::uint32_t clear_frames_ = 0U;
+  std::uint32_t frames_ = 0U;
+  std::uint8_t stamp_ = 0U;
+  RayWindows windows_{};
+  std::int64_t origin_u_[2]{};
+  float origin_z_ = 0.0F;
+  float cell_width_ = 0.0F;  ///< w_0 (m)
+  std::uint32_t contradicted_[kMaxContradictedCells]{};
+  RunCell run_[kMaxRunCells]{};
+  std::uint32_t contradicted_count_ = 0U;
+  std::uint32_t batch_index_[kFrontChunkPoints]{};
+  PointXYZ batch_points_[kFrontChunkPoints]{};
+  FrontChunk chunk_{};
+};
+
+}  // namespace ccmap::detail

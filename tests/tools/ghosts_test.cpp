@@ -1,0 +1,63 @@
+// CI check of the free-space experiment (tools/traverse/ghosts.cpp) at its --quick size,
+// in-process. At the library's default ray count (128 lines of sight per frame, what the flight
+// cycle's instruction budget allows): nothing real is lost to clearing, no rock shadow and no open
+// ground becomes a drop-off, and a ditch and a crater show drop-offs in the rover's swath before
+// it is within its stopping distance, where the map without free space shows only their far side.
+// At 512 lines of sight (the model's capability, 4x the default's cost): rover 1's ghosts of its
+// team mates shrink, and the first hazard of the path query lies at each rim in time
+// (docs/evaluation.md, "Ghosts and drop-offs", gives both runs).
+#include <gtest/gtest.h>
+
+#include "traverse/ghosts.hpp"
+
+namespace tr = ccmap::traverse;
+
+namespace {
+
+constexpr double kStoppingDistanceM = 0.6;  // a frame's drive (0.3 m) and the body ahead of the camera (0.3 m)
+
+void expect_nothing_real_lost_and_no_false_drop(const tr::GhostResult& r) {
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(r.team.before[k].cleared_cells, 0U) << "the map without free space cleared cells";
+    EXPECT_EQ(r.team.after[k].lost_ground, 0U) << "rover " << k + 1 << " lost real ground to clearing";
+    EXPECT_EQ(r.team.after[k].lost_rock, 0U) << "rover " << k + 1 << " lost a rock to clearing";
+    EXPECT_EQ(r.team.after[k].cleared_ghost, r.team.after[k].cleared_cells)
+        << "rover " << k + 1 << " cleared a cell outside every rover's past footprint";
+  }
+  EXPECT_EQ(r.shadows.drop_near_rocks_m2[1], 0.0) << "a rock's shadow became a drop-off";
+  EXPECT_EQ(r.shadows.drop_open_m2[1], 0.0) << "open ground became a drop-off";
+}
+
+}  // namespace
+
+TEST(GhostsExperiment, AtTheDefaultDropOffsShowBeforeTheStoppingDistanceAndNothingRealIsLost) {
+  const tr::GhostResult r = tr::run_ghosts(tr::GhostConfig::quick());
+  ASSERT_TRUE(r.ok()) << r.error;
+  expect_nothing_real_lost_and_no_false_drop(r);
+  EXPECT_LE(r.team.after[0].area_frames_m2, r.team.before[0].area_frames_m2)
+      << "free space made rover 1's ghosts of its team mates last longer";
+  ASSERT_EQ(r.drops.size(), 3U);
+  for (const tr::DropCase& d : r.drops) {
+    EXPECT_LT(d.first_drop_range_m[0], 0.0) << d.name << ": a drop-off without free space";
+    EXPECT_LT(d.rim_hazard_range_m[0], 0.0) << d.name << ": a hazard at the rim without free space";
+    EXPECT_GT(d.first_drop_range_m[1], kStoppingDistanceM)
+        << d.name << ": no drop-off in the swath before the rover was within its stopping distance";
+  }
+}
+
+TEST(GhostsExperiment, At512RaysGhostsShrinkAndTheFirstHazardIsAtTheRim) {
+  tr::GhostConfig cfg = tr::GhostConfig::quick();
+  cfg.free_space_rays = 512;
+  const tr::GhostResult r = tr::run_ghosts(cfg);
+  ASSERT_TRUE(r.ok()) << r.error;
+  expect_nothing_real_lost_and_no_false_drop(r);
+  EXPECT_LT(r.team.after[0].end_area_m2, 0.6 * r.team.before[0].end_area_m2)
+      << "rover 1's ghosts of its team mates did not shrink";
+  EXPECT_LT(r.team.after[0].area_frames_m2, r.team.before[0].area_frames_m2);
+  ASSERT_EQ(r.drops.size(), 3U);
+  for (const tr::DropCase& d : r.drops) {
+    EXPECT_GT(d.first_drop_range_m[1], 0.0) << d.name << ": no drop-off with free space";
+    EXPECT_GT(d.rim_hazard_range_m[1], 0.5) << d.name << ": the hazard at the rim came too late (or never)";
+    EXPECT_EQ(d.rim_hazard_class[1], "drop") << d.name;
+  }
+}

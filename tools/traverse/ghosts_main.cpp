@@ -1,0 +1,43 @@
+// ccmap_ghosts: free space from lines of sight, before and after (issue 21; docs/evaluation.md,
+// "Ghosts and drop-offs"): a team of three rovers seeing each other drive off, negative obstacles
+// approached, rock shadows on open ground.
+//   ccmap_ghosts [--seed N] [--quick] [--out DIR] [--gate K] [--change-points M] [--change-share S]
+//                [--rays N]   (AFTER's free_space_rays; default: the library's, StackParams)
+// (the experiments' options, experiments/common.hpp; --data and --paper-cell are accepted and unused).
+#include <cstdio>
+
+#include "ccmap/map/config.hpp"
+
+#include "experiments/common.hpp"
+#include "parse_args.hpp"
+#include "traverse/ghosts.hpp"
+
+int main(int argc, char** argv) {
+  using namespace ccmap;
+  experiments::ExperimentArgs args;
+  args.out_dir = "out/ghosts";
+  const auto app = experiments::make_experiment_app(
+      "ccmap_ghosts",
+      "Free space from lines of sight, without and with it: ghosts of rovers that drove on, drop-offs\n"
+      "approached, rock shadows (--data and --paper-cell are accepted and unused)",
+      &args);
+  int rays = 0;
+  app->add_option("--rays", rays, "AFTER's lines of sight per frame (1..65535; default: the library's)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 65535));
+  if (const int rc = experiments::parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
+  traverse::GhostConfig cfg = args.quick ? traverse::GhostConfig::quick() : traverse::GhostConfig{};
+  cfg.seed = args.seed;
+  cfg.gate = args.gate;
+  cfg.free_space_rays = rays;
+  cfg.out_dir = args.out_dir;
+  cfg.log = stderr;
+  const traverse::GhostResult r = traverse::run_ghosts(cfg);
+  if (!r.ok()) {
+    std::fprintf(stderr, "ccmap_ghosts: %s\n", r.error.c_str());
+    return 1;
+  }
+  std::printf("gate: %s\n\n%s", cfg.gate.describe(default_stack_params(0.04F)).c_str(),
+              traverse::ghost_report(r, cfg).c_str());
+  return 0;
+}
