@@ -84,7 +84,7 @@ typedef enum ccmap_preset {
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
 #define CCMAP_CADRE_STORAGE_SIZE 835584u          /* 816 KiB */
 #define CCMAP_SINGLE_CCM_STORAGE_SIZE 3211264u    /* 3136 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3375104u /* 3296 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3506176u /* 3424 KiB */
 #define CCMAP_SINGLE_OMG_STORAGE_SIZE 1376256u    /* 1344 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 

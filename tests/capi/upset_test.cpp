@@ -12,6 +12,11 @@
 //    map with that cell emptied by the test, before and after the update, wherever the scrub
 //    had not yet reset it), and the cell is reset and counted within the scrub's frames unless
 //    a move cleared it first;
+//  - a flip in a free-space record (4 B per cell, not checked: docs/integration.md section 12):
+//    every class answered is the reference's, or unknown, or a drop-off, or the reference's was a
+//    drop-off (a record can add or remove a drop-off, move its bound, or hasten the clearing of
+//    a cell that rays contradict; never make a cell traversable, steep or an obstacle that the
+//    map without the flip did not answer so, except where the flip removed a drop-off);
 //  - any other flip: the answers are those of the map without the flip, or the flip was detected
 //    (CCMAP_CORRUPT, a held-point slot dropped); a silent change is a failure.
 // The share of each outcome is printed. The test finds the cells in the storage through the C++
@@ -51,6 +56,7 @@ bool valid_status(std::int32_t s) { return s >= CCMAP_OK && s <= CCMAP_MISALIGNE
 /// Outputs of a trial, flattened (statuses, classes and numbers), and what they said.
 struct Outputs {
   std::vector<double> values;
+  std::vector<int> classes;  ///< every class answered, in call order
   bool corrupt = false;      ///< some call answered CCMAP_CORRUPT
   bool content_after_corrupt = false;
   bool invalid = false;      ///< an invalid status or a non-finite number
@@ -81,6 +87,7 @@ void query(ccmap_map* map, float x, float y, Outputs& out) {
   ccmap_query_result r{};
   out.status(ccmap_query(map, x, y, &r), "ccmap_query");
   for (const double v : {static_cast<double>(r.layer), static_cast<double>(r.cell_class)}) out.number(v, "ccmap_query");
+  out.classes.push_back(static_cast<int>(r.cell_class));
   for (const float v : {r.cell_width_m, r.height_m, r.slope_x, r.slope_y, r.inclination, r.normal_variance,
                         r.elevation_variance, r.weight}) {
     out.number(v, "ccmap_query");
@@ -89,6 +96,7 @@ void query(ccmap_map* map, float x, float y, Outputs& out) {
     ccmap_query_result q{};
     out.status(ccmap_query_layer(map, layer, x, y, &q), "ccmap_query_layer");
     out.number(static_cast<double>(q.cell_class), "ccmap_query_layer");
+    out.classes.push_back(static_cast<int>(q.cell_class));
     for (const float v : {q.height_m, q.slope_x, q.slope_y, q.normal_variance, q.elevation_variance, q.weight}) {
       out.number(v, "ccmap_query_layer");
     }
@@ -100,6 +108,7 @@ void footprint(ccmap_map* map, float x, float y, Outputs& out) {
   ccmap_footprint_result r{};
   out.status(ccmap_query_footprint(map, &f, &r), "ccmap_query_footprint");
   out.number(static_cast<double>(r.worst_class), "footprint");
+  out.classes.push_back(static_cast<int>(r.worst_class));
   for (const float v : {r.unknown_share, r.max_step_m, r.max_inclination, r.min_height_m, r.max_height_m}) {
     out.number(v, "footprint");
   }
@@ -144,7 +153,7 @@ void frame_counters(const ccmap_frame_counters& c, Outputs& out) {
 
 /// Where a flipped byte lies.
 struct Location {
-  enum Kind { kHeader, kCell, kCheck, kOther } kind = kOther;
+  enum Kind { kHeader, kCell, kCheck, kRecord, kOther } kind = kOther;
   bool fine = false;      ///< the finest layer's (else a CCM layer's)
   std::size_t cell = 0U;  ///< index in fine_storage / ccm_storage
 };
@@ -181,6 +190,14 @@ Location locate(std::size_t byte) {
     l = Location{Location::kCheck, true, index(layers.checks.fine, sizeof(detail::CellCheck))};
   } else if (inside(layers.checks.ccm, sizeof layers.checks.ccm)) {
     l = Location{Location::kCheck, false, index(layers.checks.ccm, sizeof(detail::CellCheck))};
+  } else {
+    // The free-space records: one per cell of every layer, contiguous from the finest layer's.
+    const detail::DropRecords* drops = detail::PlannerAccess<CadreConfig>::view(stack_in(g_storage)).drops();
+    const std::size_t records = Layers::kFineCellCount + Layers::kCcmCellCount;
+    if (drops != nullptr && drops->layer[0] != nullptr &&
+        inside(drops->layer[0]->storage(), records * sizeof(detail::FreeSpaceCell))) {
+      l = Location{Location::kRecord, true, index(drops->layer[0]->storage(), sizeof(detail::FreeSpaceCell))};
+    }
   }
   return l;
 }
@@ -250,8 +267,8 @@ struct Campaign {
   Outputs reference_before;
   Outputs reference_after;
   // Outcome counts: [location kind][outcome]
-  enum Outcome { kMasked, kRefused, kResetCell, kDroppedSlot, kClearedByMove, kOutcomes };
-  std::size_t counts[4][kOutcomes] = {};
+  enum Outcome { kMasked, kRefused, kResetCell, kDroppedSlot, kClearedByMove, kDropOnly, kOutcomes };
+  std::size_t counts[5][kOutcomes] = {};
   std::size_t trials = 0U;
 };
 
@@ -317,7 +334,7 @@ void prepare(Campaign& c) {
   ASSERT_EQ(ccmap_default_params(CCMAP_PRESET_CADRE, &params), CCMAP_OK);
   ASSERT_EQ(ccmap_init(map, &params), CCMAP_OK);
   // Map the ground ahead, as a rover does, then keep the next frame for the trials.
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < 5; ++k) {
     test::CadreFrameSpec spec = test::cadre_sequence_spec(k % 2, 160, 120);
     spec.invalid_share = 0.02F;
     const test::CadreFrame frame = test::make_cadre_frame(spec);
@@ -381,6 +398,24 @@ std::string trial(Campaign& c, std::size_t byte, unsigned bit) {
     }
   } else if (slots > 0U || cells > 0U) {
     outcome = cells > 0U ? Campaign::kResetCell : Campaign::kDroppedSlot;
+  } else if (l.kind == Location::kRecord) {
+    if (before.values != c.reference_before.values || after.values != c.reference_after.values) {
+      outcome = Campaign::kDropOnly;
+      const auto safe = [](const std::vector<int>& got, const std::vector<int>& want) {
+        if (got.size() != want.size()) return false;
+        for (std::size_t i = 0; i < got.size(); ++i) {
+          if (got[i] != want[i] && got[i] != CCMAP_CLASS_UNKNOWN && got[i] != CCMAP_CLASS_DROP &&
+              want[i] != CCMAP_CLASS_DROP) {
+            return false;
+          }
+        }
+        return true;
+      };
+      if (!(safe(before.classes, c.reference_before.classes) && safe(after.classes, c.reference_after.classes)) &&
+          failure.empty()) {
+        failure = "a flipped free-space record made a cell answer a class other than unknown or drop-off";
+      }
+    }
   } else if ((before.values != c.reference_before.values || after.values != c.reference_after.values) &&
              failure.empty()) {
     failure = "a silent change: answers differ from the map without the flip, and nothing was detected";
@@ -396,10 +431,10 @@ std::string trial(Campaign& c, std::size_t byte, unsigned bit) {
 }
 
 void report(const Campaign& c, const char* what, std::size_t failures) {
-  const char* kinds[] = {"header", "cells", "checks", "other (bookkeeping, pools, scratch, counters)"};
+  const char* kinds[] = {"header", "cells", "checks", "free-space records", "other (bookkeeping, pools, scratch, counters)"};
   std::printf("[ upsets ] %zu trials: %s\n", c.trials, what);
-  std::printf("[ upsets ] %-46s %7s %8s %8s %8s %8s %8s\n", "location", "trials", "masked", "refused", "reset",
-              "slot", "cleared");
+  std::printf("[ upsets ] %-46s %7s %8s %8s %8s %8s %8s %8s\n", "location", "trials", "masked", "refused", "reset",
+              "slot", "cleared", "drop/unk");
   std::size_t total[Campaign::kOutcomes] = {};
   for (int k = 0; k < 4; ++k) {
     std::size_t n = 0U;
@@ -407,9 +442,9 @@ void report(const Campaign& c, const char* what, std::size_t failures) {
       n += c.counts[k][o];
       total[o] += c.counts[k][o];
     }
-    std::printf("[ upsets ] %-46s %7zu %8zu %8zu %8zu %8zu %8zu\n", kinds[k], n, c.counts[k][Campaign::kMasked],
+    std::printf("[ upsets ] %-46s %7zu %8zu %8zu %8zu %8zu %8zu %8zu\n", kinds[k], n, c.counts[k][Campaign::kMasked],
                 c.counts[k][Campaign::kRefused], c.counts[k][Campaign::kResetCell], c.counts[k][Campaign::kDroppedSlot],
-                c.counts[k][Campaign::kClearedByMove]);
+                c.counts[k][Campaign::kClearedByMove], c.counts[k][Campaign::kDropOnly]);
   }
   const double n = c.trials > 0U ? static_cast<double>(c.trials) : 1.0;
   std::printf("[ upsets ] shares: masked %.1f %%, refused (CCMAP_CORRUPT) %.1f %%, cell reset %.1f %%, slot dropped "

@@ -551,6 +551,8 @@ class Stack {
     h.add(thresholds_);
     h.add(generation_);
     detail::hash_layer_bindings(h, layers_);
+    free_space_.hash_bindings(h);
+    h.add(drops_);
     return h.seal();
   }
   /// The constants only the update path uses (its front, widths in Q40, gates): the queries need

@@ -164,6 +164,8 @@ class QueryView {
   }
 
   [[nodiscard]] const Layers& layers() const noexcept { return layers_; }
+  /// The free-space records the view reads (nullptr without free space).
+  [[nodiscard]] const DropRecords* drops() const noexcept { return drops_; }
   [[nodiscard]] const StackParams& params() const noexcept { return params_; }
   /// Normal-variance threshold of a layer (m^2). Precondition: 0 <= layer < kLayerCount; a
   /// violation is reported to the assert hook and answered 0 (every rough cell an obstacle).

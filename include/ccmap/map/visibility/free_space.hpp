@@ -50,6 +50,7 @@
 #include "ccmap/cell/outlier_gate.hpp"
 #include "ccmap/grid/ring_grid.hpp"
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/detail/layers.hpp"
 #include "ccmap/map/types.hpp"
 #include "ccmap/map/update/front.hpp"
@@ -121,6 +122,7 @@ class FreeSpace<Config, false> {
   [[nodiscard]] RingGrid<FreeSpaceCell>* records(int) noexcept { return nullptr; }
   [[nodiscard]] std::uint32_t frames() const noexcept { return 0U; }
   void set_frames(std::uint32_t) noexcept {}
+  void hash_bindings(StateHasher&) const noexcept {}
 };
 
 template <typename Config>
@@ -199,6 +201,23 @@ class FreeSpace<Config, true> {
   [[nodiscard]] std::uint32_t frames() const noexcept { return frames_; }
   void set_frames(std::uint32_t frames) noexcept { frames_ = frames; }
 
+  /// Integrity (map/detail/integrity.hpp): what the stack's seal covers of this stage, every value
+  /// that indexes memory or sets how much work a frame does (the record grids' bindings and
+  /// windows, the layer offsets and margins, the parameters). Not the records (a flipped record
+  /// can at worst mark, unmark or bound one cell of its own: docs/integration.md section 12), not
+  /// the frame counter (the sampling phase) nor the per-frame scratch (rewritten each frame,
+  /// its indices checked where they are read).
+  void hash_bindings(StateHasher& h) const noexcept {
+    h.add_bytes<sizeof grids_>(reinterpret_cast<const unsigned char*>(grids_));
+    h.add(offset_);
+    h.add(consts_);
+    h.add(max_inclination_);
+    h.add(view_axis_);
+    h.add(view_axis_set_);
+    h.add(rays_);
+    h.add(clear_frames_);
+  }
+
  private:
   using CcmCellType = typename Layers::CcmCellType;
   using FineCell = typename Layers::FineCell;
@@ -234,12 +253,13 @@ class FreeSpace<Config, true> {
   };
 
   [[nodiscard]] CellView view_of(const Layers& layers, int layer, CellIndex index) const noexcept {
+    // Integrity: a cell an upset changed reads as never observed (map/detail/integrity.hpp).
     if (Layers::is_ccm(layer)) {
-      const CcmCellType& c = layers.ccm_grid(layer).cell_unchecked(index);
+      const CcmCellType c = intact_or_empty(layers, layers.ccm_grid(layer).cell_unchecked(index));
       return CellView{c.weight, c.mean_z, c.s_zz};
     }
     if constexpr (Layers::kHasFine) {
-      const FineCell& c = layers.fine.cell_unchecked(index);
+      const FineCell c = intact_or_empty(layers, layers.fine.cell_unchecked(index));
       return CellView{c.weight, c.height, 0.0F};
     } else {
       return CellView{0.0F, 0.0F, 0.0F};
@@ -529,8 +549,13 @@ class FreeSpace<Config, true> {
   /// The end of the frame: every cell contradicted this frame settles its evidence; those with
   /// free_space_clear_frames frames of it are emptied.
   void settle(Layers& layers, FrameCounters& frame) noexcept {
-    for (std::uint32_t k = 0; k < contradicted_count_; ++k) {
+    const auto limit = static_cast<std::uint32_t>(kMaxContradictedCells);
+    const std::uint32_t listed = contradicted_count_ < limit ? contradicted_count_ : limit;
+    for (std::uint32_t k = 0; k < listed; ++k) {
       const std::uint32_t record = contradicted_[k];
+      if (record >= kRecordCount) {
+        continue;  // integrity: only an upset of this frame's scratch gives such an index
+      }
       FreeSpaceCell& rec = records_[record];
       if (settle_frame(rec) >= clear_frames_) {
         clear_cell(layers, record);
@@ -546,11 +571,18 @@ class FreeSpace<Config, true> {
       --layer;
     }
     const std::size_t slot = record - offset_[layer];
+    // Integrity: the check takes the change (an upset seen before stays seen: the scrub counts it).
     if (Layers::is_ccm(layer)) {
-      layers.ccm_grid(layer).storage()[slot] = CcmCellType{};
+      CcmCellType& cell = layers.ccm_grid(layer).storage()[slot];
+      const WideSignature before = cell_signature_wide(cell);
+      cell = CcmCellType{};
+      rewrite_check(layers, cell, before);
     } else {
       if constexpr (Layers::kHasFine) {
-        layers.fine.storage()[slot] = FineCell{};
+        FineCell& cell = layers.fine.storage()[slot];
+        const WideSignature before = cell_signature_wide(cell);
+        cell = FineCell{};
+        rewrite_check(layers, cell, before);
       }
     }
     records_[record] = FreeSpaceCell{};
