@@ -198,6 +198,7 @@ typedef struct ccmap_frame_counters {
   uint32_t reseeded_cells;   /* cells replaced by their held points */
   uint32_t merged_cells;     /* cells that took their held points in beside their own */
   uint32_t skipped_budget;   /* not processed: the frame budget was spent */
+  /* ---- free space from lines of sight (rays and cells, not points) ---- */
   uint32_t free_rays;        /* lines of sight walked (free space; not points) */
   uint32_t free_rays_refused; /* sampled points whose line of sight was refused (bad point, behind
                                  the sensor, sensor outside the map): they change nothing */

@@ -111,6 +111,7 @@ struct FrameCounters {
   std::uint32_t reseeded_cells;         ///< cells replaced by their held points
   std::uint32_t merged_cells;           ///< cells that took their held points in beside their own
   std::uint32_t skipped_budget;         ///< not processed: the frame budget was spent (StackParams)
+  // ---- free space from lines of sight (issue 21): four counters of rays and cells, last ----
   std::uint32_t free_rays;              ///< lines of sight walked from the sensor to a sampled point
   /// Sampled points whose line of sight was refused: refused points (non-finite, out of range,
   /// too noisy, a bad weight), points behind the sensor, or all of them when no window holds the
