@@ -206,6 +206,7 @@ typedef struct ccmap_frame_counters {
   uint32_t skipped_budget;   /* not processed: the frame budget was spent */
   uint32_t corrupted_cells;  /* single-event upsets: cells whose bits disagreed with their check, reset */
   uint32_t corrupted_slots;  /* held-point slots whose bits disagreed with their seal, dropped */
+  /* ---- free space from lines of sight (rays and cells, not points) ---- */
   uint32_t free_rays;        /* lines of sight walked (free space; not points) */
   uint32_t free_rays_refused; /* sampled points whose line of sight was refused (bad point, behind
                                  the sensor, sensor outside the map): they change nothing */

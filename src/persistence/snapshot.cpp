@@ -441,8 +441,10 @@ void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uin
                                   t.gated_held,      t.gated_pool_full, t.gated_admitted,
                                   t.gated_dropped,   t.reseeded_cells, t.merged_cells,
                                   t.skipped_budget,  t.corrupted_cells, t.corrupted_slots,
+                                  // free space from lines of sight (format 5), a block of its own
                                   t.free_rays,       t.free_rays_refused, t.cleared_cells,
-                                  t.drop_cells,      rejected_moves,    rejected_frames};
+                                  t.drop_cells,
+                                  rejected_moves,    rejected_frames};
   for (const std::uint32_t v : values) {
     w.u32(v);
   }
@@ -469,6 +471,7 @@ void snapshot_read_counters(SnapshotReader& r, FrameCounters* t, std::uint32_t* 
   t->skipped_budget = r.u32();
   t->corrupted_cells = r.u32();
   t->corrupted_slots = r.u32();
+  // free space from lines of sight (format 5), a block of its own
   t->free_rays = r.u32();
   t->free_rays_refused = r.u32();
   t->cleared_cells = r.u32();

@@ -56,6 +56,10 @@ void count(DetectionAreas& a, bool truth_hazard, CellClass map_class, double are
     a.unknown += area;
     return;
   }
+  if (map_class == CellClass::kDropOff) {
+    (truth_hazard ? a.drop_truth_hazard : a.drop_truth_free) += area;
+    return;
+  }
   const bool map_hazard = is_hazard(map_class);
   (truth_hazard ? a.truth_hazard_known : a.truth_free_known) += area;
   if (map_hazard == truth_hazard) a.correct += area;

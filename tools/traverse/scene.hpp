@@ -38,7 +38,8 @@ Pose camera_pose(const sim::StereoCamera& camera, const sim::Point3& position, d
 
 [[nodiscard]] inline bool is_hazard(CellClass c) { return c == CellClass::kObstacle || c == CellClass::kSteep; }
 
-/// Adds `area` (m^2) to the category of a cell of truth `truth_hazard` that the map calls `map_class`.
+/// Adds `area` (m^2) to the category of a cell of truth `truth_hazard` that the map calls `map_class`
+/// (a drop-off, unobserved, to the drop-off areas: not judged as a known cell).
 void count(DetectionAreas& a, bool truth_hazard, CellClass map_class, double area);
 
 /// The ground truth of one layer's window: a hazard grid of the layer's cells (minimum

@@ -721,13 +721,14 @@ std::string traverse_report(const TraverseResult& r) {
   }
   auto pct = [](double part, double whole) { return whole > 0.0 ? format("%.1f %%", 100.0 * part / whole) : std::string("-"); };
   Table t({"layer", "cell", "kind", "min obstacle", "correct", "missed obstacle", "false obstacle", "unknown",
-           "hazard hit", "false share of free", "exported", "non-finite"});
+           "drop-off (truth hazard / free)", "hazard hit", "false share of free", "exported", "non-finite"});
   auto row = [&](const std::string& name, const std::string& cell, const std::string& kind, const std::string& min_obs,
                  const DetectionAreas& a, const std::string& exported, const std::string& nf) {
-    const double total = a.known() + a.unknown;
+    const double total = a.known() + a.unknown + a.drop_truth_hazard + a.drop_truth_free;
     t.add_row({name, cell, kind, min_obs, format("%.2f m2 (%s)", a.correct, pct(a.correct, total).c_str()),
                format("%.2f m2", a.missed), format("%.2f m2", a.false_obstacle),
                format("%.1f m2 (%s)", a.unknown, pct(a.unknown, total).c_str()),
+               format("%.2f / %.2f m2", a.drop_truth_hazard, a.drop_truth_free),
                a.truth_hazard_known > 0.0 ? format("%.1f %%", 100.0 * a.hit_share()) : "-",
                format("%.2f %%", 100.0 * a.false_share()), exported, nf});
   };

@@ -107,6 +107,9 @@ struct FrameRecord {
 /// Areas in m^2 (see the header comment for the categories).
 struct DetectionAreas {
   double correct = 0.0, missed = 0.0, false_obstacle = 0.0, unknown = 0.0;
+  /// Drop-off area (CellClass::kDropOff: unobserved, lines of sight passed far below the ground
+  /// before it): neither known nor unknown, by its truth (hazard or free) in the cell itself.
+  double drop_truth_hazard = 0.0, drop_truth_free = 0.0;
   double truth_hazard_known = 0.0;  ///< known area whose truth is a hazard
   double truth_free_known = 0.0;    ///< known area whose truth is free ("flat ground")
   double known() const { return correct + missed + false_obstacle; }

@@ -114,6 +114,7 @@ struct FrameCounters {
   /// Single-event upsets (docs/integration.md, "Radiation: single-event upsets"); not points:
   std::uint32_t corrupted_cells;        ///< cells whose bits disagreed with their check: reset to never observed
   std::uint32_t corrupted_slots;        ///< held-point slots whose bits disagreed with their seal: dropped
+  // ---- free space from lines of sight (issue 21): four counters of rays and cells, last ----
   std::uint32_t free_rays;              ///< lines of sight walked from the sensor to a sampled point
   /// Sampled points whose line of sight was refused: refused points (non-finite, out of range,
   /// too noisy, a bad weight), points behind the sensor, or all of them when no window holds the

@@ -124,10 +124,12 @@ void walk_ray(const RayWindows& windows, const RayU& ray, Sink&& sink) noexcept 
   const std::int64_t ady = dy < 0 ? -dy : dy;
   const float inv_x = adx > 0 ? 1.0F / static_cast<float>(adx) : 0.0F;
   const float inv_y = ady > 0 ? 1.0F / static_cast<float>(ady) : 0.0F;
-  // Distance (U) from the origin to the next boundary of cell c of `layer` along an axis.
+  // Distance (U) from the origin to the next boundary of cell c of `layer` along an axis. The
+  // boundary c 2^shift is a product, not a left shift: c is negative left of the origin cell, and
+  // a left shift of a negative value is undefined behaviour (|c| < 2^31, shift <= 15: no overflow).
   auto ahead = [](int layer, std::int32_t c, std::int64_t u, std::int32_t s) -> std::int64_t {
-    const int shift = kRayFracBits + layer;
-    return s > 0 ? ((std::int64_t{c} + 1) << shift) - u : u - (std::int64_t{c} << shift);
+    const std::int64_t cell_u = std::int64_t{1} << (kRayFracBits + layer);
+    return s > 0 ? (std::int64_t{c} + 1) * cell_u - u : u - std::int64_t{c} * cell_u;
   };
   std::int64_t ax = ahead(walk, cur[walk].x, ux, sx);
   std::int64_t ay = ahead(walk, cur[walk].y, uy, sy);
