@@ -254,12 +254,20 @@ class FreeSpace<Config, true> {
 
   [[nodiscard]] CellView view_of(const Layers& layers, int layer, CellIndex index) const noexcept {
     // Integrity: a cell an upset changed reads as never observed (map/detail/integrity.hpp).
+    // Callers use nothing of a cell whose weight is not positive, so only such a cell pays for
+    // its check (an empty cell, corrupted or not, reads as the empty cell does).
     if (Layers::is_ccm(layer)) {
-      const CcmCellType c = intact_or_empty(layers, layers.ccm_grid(layer).cell_unchecked(index));
+      const CcmCellType& c = layers.ccm_grid(layer).cell_unchecked(index);
+      if (!(c.weight > 0.0F) || !cell_intact(layers, c)) {
+        return CellView{0.0F, 0.0F, 0.0F};
+      }
       return CellView{c.weight, c.mean_z, c.s_zz};
     }
     if constexpr (Layers::kHasFine) {
-      const FineCell c = intact_or_empty(layers, layers.fine.cell_unchecked(index));
+      const FineCell& c = layers.fine.cell_unchecked(index);
+      if (!(c.weight > 0.0F) || !cell_intact(layers, c)) {
+        return CellView{0.0F, 0.0F, 0.0F};
+      }
       return CellView{c.weight, c.height, 0.0F};
     } else {
       return CellView{0.0F, 0.0F, 0.0F};
