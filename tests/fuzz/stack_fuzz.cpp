@@ -68,7 +68,7 @@ bool finite_result(const ccmap::QueryResult& q) {
   return std::isfinite(q.cell_width_m) && std::isfinite(q.height_m) && std::isfinite(q.slope_x) &&
          std::isfinite(q.slope_y) && std::isfinite(q.inclination) && std::isfinite(q.normal_variance) &&
          std::isfinite(q.elevation_variance) && std::isfinite(q.weight) &&
-         static_cast<int>(q.cell_class) <= static_cast<int>(ccmap::CellClass::kSteep);
+         static_cast<int>(q.cell_class) <= static_cast<int>(ccmap::CellClass::kDropOff);
 }
 
 void check_query(const ccmap::QueryResult& q, int op) {
@@ -110,7 +110,15 @@ void add(ccmap::FrameCounters& t, const ccmap::FrameCounters& f) {
   t.gated_dropped += f.gated_dropped;
   t.reseeded_cells += f.reseeded_cells;
   t.merged_cells += f.merged_cells;
+  t.skipped_budget += f.skipped_budget;
+  t.corrupted_cells += f.corrupted_cells;
+  t.corrupted_slots += f.corrupted_slots;
+  t.free_rays += f.free_rays;
+  t.free_rays_refused += f.free_rays_refused;
+  t.cleared_cells += f.cleared_cells;
+  t.drop_cells += f.drop_cells;
 }
+static_assert(sizeof(ccmap::FrameCounters) == 22U * sizeof(std::uint32_t), "add() sums every FrameCounters member");
 
 S g_stack;                                      // ~0.5 MB: static storage, as in flight
 ccmap::CellRecord g_records[64 * 64];           // largest layer
@@ -226,7 +234,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (s != ccmap::Status::kOk && written != 0U) fail("a refused export wrote records", op);
         for (std::size_t i = 0; i < written; ++i) {
           const ccmap::CellRecord& r = g_records[i];
-          if (!(r.weight > 0.0F) || !std::isfinite(r.weight) || !std::isfinite(r.height_m) || !std::isfinite(r.slope_x) ||
+          // An observed cell (weight > 0), or an unobserved drop-off (weight 0, its bound as height).
+          const bool drop = r.cell_class == ccmap::CellClass::kDropOff && !(r.weight > 0.0F) && !(r.weight < 0.0F);
+          if (!(r.weight > 0.0F || drop) || !std::isfinite(r.weight) || !std::isfinite(r.height_m) || !std::isfinite(r.slope_x) ||
               !std::isfinite(r.slope_y) || !std::isfinite(r.normal_variance) || !std::isfinite(r.elevation_variance) ||
               !std::isfinite(r.centre_x) || !std::isfinite(r.centre_y)) {
             fail("non-finite or empty exported record", op);

@@ -512,7 +512,7 @@ class FreeSpace<Config, true> {
   /// it on the same run (the same stretch the ray crossed without meeting anything since the last
   /// ground): they lie behind the same rim, inside the same drop. The near edge of a ditch, whose
   /// bound is still within a step of the rim, is then a drop-off too, not an unknown gap.
-  void mark_run(int layer, RayState& ray, FrameCounters& frame) noexcept {
+  void mark_run(int layer, const RayState& ray, FrameCounters& frame) noexcept {
     for (std::uint32_t k = 0; k < ray.run; ++k) {
       RunCell& c = run_[k];
       if (c.layer == layer && !c.marked) {
@@ -559,6 +559,7 @@ class FreeSpace<Config, true> {
   void settle(Layers& layers, FrameCounters& frame) noexcept {
     const auto limit = static_cast<std::uint32_t>(kMaxContradictedCells);
     const std::uint32_t listed = contradicted_count_ < limit ? contradicted_count_ : limit;
+    // cppcheck-suppress knownConditionTrueFalse ; remember() raises the count between run()'s reset and here
     for (std::uint32_t k = 0; k < listed; ++k) {
       const std::uint32_t record = contradicted_[k];
       if (record >= kRecordCount) {

@@ -129,7 +129,7 @@ void walk_ray(const RayWindows& windows, const RayU& ray, Sink&& sink) noexcept 
   // a left shift of a negative value is undefined behaviour (|c| < 2^31, shift <= 15: no overflow).
   auto ahead = [](int layer, std::int32_t c, std::int64_t u, std::int32_t s) -> std::int64_t {
     const std::int64_t cell_u = std::int64_t{1} << (kRayFracBits + layer);
-    return s > 0 ? (std::int64_t{c} + 1) * cell_u - u : u - std::int64_t{c} * cell_u;
+    return s > 0 ? ((std::int64_t{c} + 1) * cell_u - u) : (u - std::int64_t{c} * cell_u);
   };
   std::int64_t ax = ahead(walk, cur[walk].x, ux, sx);
   std::int64_t ay = ahead(walk, cur[walk].y, uy, sy);
