@@ -296,19 +296,26 @@ void HeightRaster::build_blocks(int block_size) {
   bmax_.assign(static_cast<std::size_t>(bx_) * static_cast<std::size_t>(by_), -std::numeric_limits<float>::infinity());
   for (int b = 0; b < by_; ++b) {
     for (int a = 0; a < bx_; ++a) {
-      float m = -std::numeric_limits<float>::infinity();
-      const int i1 = std::min(nx_ - 1, (a + 1) * block_), j1 = std::min(ny_ - 1, (b + 1) * block_);
-      for (int j = b * block_; j <= j1; ++j) {
-        for (int i = a * block_; i <= i1; ++i) {
-          const float v = at(i, j);
-          m = std::isfinite(v) ? std::max(m, v) : std::numeric_limits<float>::infinity();
-        }
-      }
+      const float m = scan_block(a, b);
       bmax_[static_cast<std::size_t>(b) * static_cast<std::size_t>(bx_) + static_cast<std::size_t>(a)] = m;
     }
   }
   blocks_max_ = -std::numeric_limits<float>::infinity();
   for (float m : bmax_) blocks_max_ = std::max(blocks_max_, m);
+}
+
+float HeightRaster::scan_block(int a, int b) const {
+  // The block's vertices and the next block's first row and column (a cell's four corners);
+  // +inf if any is not finite (nothing below it may be trusted).
+  float m = -std::numeric_limits<float>::infinity();
+  const int i1 = std::min(nx_ - 1, (a + 1) * block_), j1 = std::min(ny_ - 1, (b + 1) * block_);
+  for (int j = b * block_; j <= j1; ++j) {
+    for (int i = a * block_; i <= i1; ++i) {
+      const float v = at(i, j);
+      m = std::isfinite(v) ? std::max(m, v) : std::numeric_limits<float>::infinity();
+    }
+  }
+  return m;
 }
 
 void HeightRaster::rebuild_blocks(const Rect& area) {
@@ -322,14 +329,7 @@ void HeightRaster::rebuild_blocks(const Rect& area) {
   const int b0 = std::max(0, block_of(area.y0, oy_, by_) - 1), b1 = std::min(by_ - 1, block_of(area.y1, oy_, by_) + 1);
   for (int b = b0; b <= b1; ++b) {
     for (int a = a0; a <= a1; ++a) {
-      float m = -std::numeric_limits<float>::infinity();
-      const int i1 = std::min(nx_ - 1, (a + 1) * block_), j1 = std::min(ny_ - 1, (b + 1) * block_);
-      for (int j = b * block_; j <= j1; ++j) {
-        for (int i = a * block_; i <= i1; ++i) {
-          const float v = at(i, j);
-          m = std::isfinite(v) ? std::max(m, v) : std::numeric_limits<float>::infinity();
-        }
-      }
+      const float m = scan_block(a, b);
       bmax_[static_cast<std::size_t>(b) * static_cast<std::size_t>(bx_) + static_cast<std::size_t>(a)] = m;
       blocks_max_ = std::max(blocks_max_, m);
     }

@@ -253,6 +253,7 @@ class HeightRaster : public Terrain {
   int nx_ = 0, ny_ = 0;
   std::vector<float> h_;
   int block_ = 16, bx_ = 0, by_ = 0;
+  float scan_block(int a, int b) const;  ///< the maximum over block (a, b) (build_blocks, rebuild_blocks)
   std::vector<float> bmax_;
   float blocks_max_ = 0.0F;
 };
