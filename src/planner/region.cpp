@@ -47,8 +47,19 @@ namespace {
 /// side. At most Polygon::kMaxVertices are written (a convex input of n vertices gives <= n + 1).
 int clip_half_plane(const float* xi, const float* yi, int n, float nx, float ny, float d, float* xo, float* yo) noexcept {
   float f[Polygon::kMaxVertices];
+  bool all_in = true;
   for (int i = 0; i < n; ++i) {
     f[i] = d - (nx * xi[i] + ny * yi[i]);
+    all_in = all_in && f[i] >= 0.0F;
+  }
+  if (all_in) {
+    // The side does not cut the polygon (most sides of a boundary cell): the loop below would
+    // copy every vertex and add none.
+    for (int i = 0; i < n; ++i) {
+      xo[i] = xi[i];
+      yo[i] = yi[i];
+    }
+    return n;
   }
   int m = 0;
   for (int i = 0; i < n && m < Polygon::kMaxVertices; ++i) {

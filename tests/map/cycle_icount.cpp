@@ -5,6 +5,9 @@
 //   region 1: every cycle (move_to + update_frame_sensor + corridor footprint + 2 m path)
 //   region 2: the update_frame_sensor calls alone (for the per-point figures)
 //   region 3: the update_frame calls of the same points in the map frame (the 1.25x ratio)
+//   region 4: the cycle's corridor footprint query, on the sensor-frame stack after its update
+//   region 5: the cycle's 2 m path query, likewise (regions 4 and 5 are the queries of region 1:
+//             the sensor-frame stack holds the same map as the cycle's)
 // On other targets the markers are empty and the program only checks the cycles.
 //
 //   ccmap_cycle_icount [cycles [full|paper]]   default 3 (full 850 x 650 frames), full CCM cells;
@@ -63,6 +66,14 @@ int run(int cycles) {
     const ccmap::Status map_status = counted<3>([&] {
       return map_only->update_frame(frame.map_points.data(), frame.map_points.size(), frame.sensor_origin, nullptr);
     });
+    const ccmap::FootprintResult corridor =
+        counted<4>([&] { return ccmap::query_footprint(*sensor_only, ccmap::test::corridor_footprint(pose)); });
+    const ccmap::PathResult path = counted<5>([&] { return ccmap::test::cycle_path(*sensor_only, pose); });
+    if (corridor.status != outcome.corridor.status || corridor.unknown_share != outcome.corridor.unknown_share ||
+        path.samples != outcome.path.samples || path.first_hazard_m != outcome.path.first_hazard_m) {
+      std::fprintf(stderr, "ccmap_cycle_icount: the queries' stack differs from the cycle's in cycle %d\n", k);
+      return 1;
+    }
     if (sensor_status != ccmap::Status::kOk || map_status != ccmap::Status::kOk) {
       std::fprintf(stderr, "ccmap_cycle_icount: update refused in cycle %d\n", k);
       return 1;

@@ -5,10 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <memory>
+#include <random>
 #include <vector>
 
 #include "ccmap/planner/path_query.hpp"
+#include "support/flight_cycle.hpp"
 #include "support/planner_maps.hpp"
 
 namespace ccmap {
@@ -147,6 +150,133 @@ TEST(PathQuery, VerdictsAreThoseOfTheFootprintsAlongThePath) {
     EXPECT_EQ(r.samples, e.samples);
     EXPECT_GT(r.cells_visited, 0U);
   }
+}
+
+/// The per-pose sweep: every pose's footprint in order, as the path query's contract states it
+/// (header comment of planner/path_query.hpp), at the poses of the same sampler; stops once both
+/// a hazard and an unknown footprint are found. The reference for the grouped sweep.
+PathResult per_pose_sweep(const Cadre& map, const detail::PathSampler& path, const PathSweep& sweep) {
+  PathResult r{};
+  std::uint32_t count = 0U;
+  EXPECT_EQ(detail::path_sample_count(path.length(), sweep, &count), Status::kOk);  // the caller checked
+  for (std::uint32_t i = 0; i < count && !(r.hazard_found && r.unknown_found); ++i) {
+    const float t = detail::path_sample_distance(i, count, sweep.step_m, path.length());
+    const PathPose p = path.pose(t);
+    const FootprintResult f =
+        query_footprint(map, Footprint{p.x, p.y, p.heading_x, p.heading_y, sweep.length_m, sweep.width_m});
+    ++r.samples;
+    r.checked_m = t;
+    if (!r.hazard_found && is_lethal(footprint_class(f, sweep.max_unknown_share))) {
+      r.hazard_found = true;
+      r.first_hazard_m = t;
+      r.hazard_pose = p;
+      r.hazard = f;
+    }
+    if (!r.unknown_found && (f.worst_class == CellClass::kUnknown || f.unknown_share > sweep.max_unknown_share)) {
+      r.unknown_found = true;
+      r.first_unknown_m = t;
+      r.unknown_pose = p;
+      r.unknown = f;
+    }
+  }
+  return r;
+}
+
+void expect_same_footprint(const FootprintResult& a, const FootprintResult& b) {
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.worst_class, b.worst_class);
+  EXPECT_EQ(a.unknown_share, b.unknown_share);
+  EXPECT_EQ(a.max_step_m, b.max_step_m);
+  EXPECT_EQ(a.worst_layer, b.worst_layer);
+  EXPECT_EQ(a.worst_index.x, b.worst_index.x);
+  EXPECT_EQ(a.worst_index.y, b.worst_index.y);
+}
+
+/// The grouped sweep (one walk over the area a straight run of poses sweeps, then only the poses
+/// it flags) answers exactly what the per-pose sweep answers: the same first hazard and first
+/// unknown pose, their footprints, the same poses counted, on random straight paths, polylines
+/// and arcs over two maps (the test terrain with its box, hole and ramp; the flight cycle's
+/// stereo map with its unseen patches), with every unknown-share threshold from 0 to 1 and steps
+/// that make groups of 1 to 64 poses and swept areas beyond the footprint limit.
+void check_grouped_sweep(const Cadre& map, float lo, float hi, std::uint32_t seed, int paths) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> coord(lo, hi);
+  std::uniform_real_distribution<float> angle(-3.14159F, 3.14159F);
+  const float steps[] = {0.02F, 0.05F, 0.13F, 0.6F};
+  const float shares[] = {0.0F, 0.02F, 0.1F, 0.5F, 1.0F};
+  const float lengths[] = {0.0F, 0.3F, 1.0F, 2.5F, 5.0F};
+  int hazards = 0;
+  int unknowns = 0;
+  int refused = 0;
+  for (int k = 0; k < paths; ++k) {
+    const float yaw = angle(rng);
+    const PathSweep sweep{k % 3 == 0 ? 0.3F : 0.6F, k % 3 == 0 ? 0.2F : 0.4F, steps[k % 4], shares[(k / 4) % 5]};
+    const PathPose start{coord(rng), coord(rng), std::cos(yaw), std::sin(yaw)};
+    const float length = lengths[(k / 3) % 5];
+    detail::PathSampler sampler;
+    PathResult grouped{};
+    std::vector<PathPoint> pts;
+    if (k % 5 == 4) {  // a polyline of three segments (the body turns at each vertex)
+      pts = {{start.x, start.y}, {start.x + 1.5F * start.heading_x, start.y + 1.5F * start.heading_y},
+             {start.x + 1.5F * start.heading_x - 0.8F * start.heading_y, start.y + 1.5F * start.heading_y + 0.8F * start.heading_x},
+             {coord(rng), coord(rng)}};
+      ASSERT_EQ(sampler.make_polyline(pts.data(), pts.size()), Status::kOk);
+      grouped = query_path(map, pts.data(), pts.size(), sweep);
+    } else {
+      const float curvature = k % 7 == 6 ? 0.8F : 0.0F;  // a turning arc: poses judged one by one
+      ASSERT_EQ(sampler.make_arc(start, curvature, length), Status::kOk);
+      grouped = query_arc(map, start, curvature, length, sweep);
+    }
+    std::uint32_t count = 0U;
+    const Status counted = detail::path_sample_count(sampler.length(), sweep, &count);
+    if (counted != Status::kOk) {  // more poses than kMaxPathSamples: refused as a whole
+      EXPECT_EQ(grouped.status, counted);
+      ++refused;
+      continue;
+    }
+    ASSERT_EQ(grouped.status, Status::kOk);
+    const PathResult reference = per_pose_sweep(map, sampler, sweep);
+    SCOPED_TRACE(testing::Message() << "path " << k << " from (" << start.x << ", " << start.y << "), step "
+                                    << sweep.step_m << ", share " << sweep.max_unknown_share);
+    EXPECT_EQ(grouped.samples, reference.samples);
+    EXPECT_EQ(grouped.checked_m, reference.checked_m);
+    ASSERT_EQ(grouped.hazard_found, reference.hazard_found);
+    ASSERT_EQ(grouped.unknown_found, reference.unknown_found);
+    if (reference.hazard_found) {
+      ++hazards;
+      EXPECT_EQ(grouped.first_hazard_m, reference.first_hazard_m);
+      EXPECT_EQ(std::memcmp(&grouped.hazard_pose, &reference.hazard_pose, sizeof(PathPose)), 0);
+      expect_same_footprint(grouped.hazard, reference.hazard);
+    }
+    if (reference.unknown_found) {
+      ++unknowns;
+      EXPECT_EQ(grouped.first_unknown_m, reference.first_unknown_m);
+      expect_same_footprint(grouped.unknown, reference.unknown);
+    }
+  }
+  // The paths reach both verdicts often, and clear ground too: the comparison is not vacuous.
+  EXPECT_LT(refused, paths / 10);
+  EXPECT_GT(hazards, paths / 10);
+  EXPECT_GT(unknowns, paths / 10);
+  EXPECT_LT(hazards, paths);
+}
+
+TEST(PathQuery, GroupedSweepAnswersAsEveryPoseOnTheTestTerrain) {
+  check_grouped_sweep(terrain_map(), -3.0F, 4.5F, 7U, 150);
+}
+
+TEST(PathQuery, GroupedSweepAnswersAsEveryPoseOnTheFlightCycleMap) {
+  // The flight cycle's map after two quarter-size frames: stereo holes, rocks, unseen ground.
+  const auto map = std::make_unique<Cadre>();
+  ASSERT_EQ(map->init(default_stack_params(0.04F)), Status::kOk);
+  for (int k = 0; k < 2; ++k) {
+    const test::CyclePose pose = test::cycle_pose(k);
+    const test::CadreFrame frame = test::cycle_frame(k, 425, 325);
+    ASSERT_EQ(map->move_to(pose.x, pose.y), Status::kOk);
+    ASSERT_EQ(map->update_frame_sensor(frame.sensor_points.data(), frame.sensor_points.size(), frame.pose, nullptr),
+              Status::kOk);
+  }
+  check_grouped_sweep(*map, -0.5F, 3.0F, 11U, 150);
 }
 
 TEST(PathQuery, FindsTheBoxWhereTheBodyReachesItAndTheUnknownWhereItEnters) {

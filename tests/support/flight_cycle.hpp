@@ -88,6 +88,14 @@ inline Footprint corridor_footprint(const CyclePose& pose) noexcept {
                    pose.heading_sin, 2.0F, 1.0F};
 }
 
+/// The path question: the next 2 m straight ahead from 0.3 m in front, the 0.6 m x 0.4 m body every 5 cm.
+template <typename Config>
+PathResult cycle_path(const Stack<Config>& stack, const CyclePose& pose) noexcept {
+  const PathPose start{pose.x + 0.3F * pose.heading_cos, pose.y + 0.3F * pose.heading_sin, pose.heading_cos,
+                       pose.heading_sin};
+  return query_arc(stack, start, 0.0F, 2.0F, PathSweep{0.6F, 0.4F, 0.05F, kDefaultMaxUnknownShare});
+}
+
 /// The per-cell form of the corridor question: one point query per 4 cm cell (25 x 50);
 /// returns the unknown count and adds the hazardous count to *hazards.
 template <typename Config>
@@ -116,9 +124,7 @@ CycleOutcome run_cycle(Stack<Config>& stack, const CyclePose& pose, const CadreF
   out.update_status =
       stack.update_frame_sensor(frame.sensor_points.data(), frame.sensor_points.size(), frame.pose, &out.counters);
   out.corridor = query_footprint(stack, corridor_footprint(pose));
-  const PathPose start{pose.x + 0.3F * pose.heading_cos, pose.y + 0.3F * pose.heading_sin, pose.heading_cos,
-                       pose.heading_sin};
-  out.path = query_arc(stack, start, 0.0F, 2.0F, PathSweep{0.6F, 0.4F, 0.05F, kDefaultMaxUnknownShare});
+  out.path = cycle_path(stack, pose);
   return out;
 }
 

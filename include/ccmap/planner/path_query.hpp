@@ -24,12 +24,20 @@
 //    (|curvature| * length_m <= 2 pi). Poses follow the arc exactly (sin/cos by a deterministic
 //    polynomial, error < 2e-7: bitwise the same on every target).
 //
+// Cost: the answer is that of every pose's footprint query, but poses of one heading (a straight
+// path, a polyline's segment) are judged in groups: one walk over the rectangle a group sweeps
+// finds the poses that a lethal or unknown part may touch, and only those are walked as
+// footprints (detail::sweep_path). A clear straight path costs about one walk of the area it
+// sweeps; a turning arc, one footprint per pose.
+//
 // Bounded: at most kMaxPathSamples poses (refused with kOutOfRange beyond), each a footprint
-// within kMaxFootprintCells. No heap; stack use < 4 KiB.
+// within kMaxFootprintCells (a group whose swept rectangle exceeds it is judged pose by pose).
+// No heap; stack use < 4 KiB.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "ccmap/core/sin_cos.hpp"
 #include "ccmap/planner/footprint.hpp"
@@ -75,8 +83,8 @@ struct PathResult {
   FootprintResult unknown;       ///< its footprint
   float path_length_m;           ///< length of the whole path (m)
   float checked_m;               ///< distance of the last pose evaluated (m)
-  std::uint32_t samples;         ///< poses evaluated
-  std::uint32_t cells_visited;   ///< map cells read over all of them
+  std::uint32_t samples;         ///< poses judged (in order, up to the walk's end)
+  std::uint32_t cells_visited;   ///< map cells read: the groups' walks and the poses walked one by one
 };
 
 namespace detail {
@@ -124,6 +132,171 @@ class PathSampler {
   return r;
 }
 
+/// True if two poses have bit for bit the same heading (poses of one straight run).
+[[nodiscard]] inline bool same_heading(const PathPose& a, const PathPose& b) noexcept {
+  std::uint32_t bits[4];
+  std::memcpy(&bits[0], &a.heading_x, 4U);
+  std::memcpy(&bits[1], &a.heading_y, 4U);
+  std::memcpy(&bits[2], &b.heading_x, 4U);
+  std::memcpy(&bits[3], &b.heading_y, 4U);
+  return bits[0] == bits[2] && bits[1] == bits[3];
+}
+
+/// Largest number of consecutive poses judged together by one walk of their swept rectangle.
+inline constexpr std::uint32_t kMaxHullPoses = 32U;
+/// The first group of a straight run has this many poses (one: judged alone); each next one
+/// kHullGrowth times as many, up to kMaxHullPoses.
+inline constexpr std::uint32_t kFirstHullPoses = 1U;
+inline constexpr std::uint32_t kHullGrowth = 8U;
+
+/// The poses of one group: which of them may hold a hazard or too much unknown area.
+struct HullFlags {
+  float unknown_bound[kMaxHullPoses];  ///< unknown area (m^2) of the pieces the pose may overlap
+  bool maybe_hazard[kMaxHullPoses];    ///< a lethal piece may overlap the pose
+};
+
+/// Sink of the walk over a group's swept rectangle: for every unknown or lethal piece, the poses
+/// whose rectangle it may touch. A pose's footprint is inside the swept rectangle and has the
+/// same heading, and a map cell answers every piece of it alike (region_walk.hpp), so a pose
+/// that no lethal piece may touch has no lethal part, and its unknown area is at most the sum of
+/// the unknown pieces that may touch it. Pieces and poses are compared along the heading only:
+/// across it the swept rectangle is the body's width (plus the margin).
+class HullSink {
+ public:
+  /// along: each pose's centre along the heading from the rectangle's centre (m); half_length:
+  /// the body's half length plus the margin (m).
+  HullSink(const OrientedRect& rect, const float* along, std::uint32_t count, float half_length, HullFlags* flags) noexcept
+      : rect_(rect), along_(along), count_(count), half_length_(half_length), flags_(flags) {}
+
+  void operator()(const RegionPiece& piece, const RegionAnswer& a) noexcept {
+    const bool lethal = a.known && is_lethal(a.cell_class);
+    if (a.known && !lethal) {
+      return;
+    }
+    // The piece's extent along the heading (relative to the rectangle's centre).
+    float lo = 0.0F;
+    float hi = 0.0F;
+    if (piece.polygon != nullptr) {
+      lo = piece.polygon->x[0] * rect_.ux + piece.polygon->y[0] * rect_.uy;
+      hi = lo;
+      for (int i = 1; i < piece.polygon->count; ++i) {
+        const float s = piece.polygon->x[i] * rect_.ux + piece.polygon->y[i] * rect_.uy;
+        lo = s < lo ? s : lo;
+        hi = s > hi ? s : hi;
+      }
+    } else {
+      const float centre = piece.dx * rect_.ux + piece.dy * rect_.uy;
+      const float reach = piece.half * rect_.corner_reach;
+      lo = centre - reach;
+      hi = centre + reach;
+    }
+    for (std::uint32_t i = 0; i < count_; ++i) {
+      if (along_[i] - half_length_ > hi || along_[i] + half_length_ < lo) {
+        continue;
+      }
+      if (lethal) {
+        flags_->maybe_hazard[i] = true;
+      } else {
+        flags_->unknown_bound[i] += piece.area;
+      }
+    }
+  }
+
+ private:
+  const OrientedRect& rect_;
+  const float* along_;
+  std::uint32_t count_;
+  float half_length_;
+  HullFlags* flags_;
+};
+
+/// The body's footprint at `pose`, validated (kOk) or refused: a body larger than the
+/// footprint limit, or a pose off range.
+[[nodiscard]] inline Status pose_rect(const PathPose& pose, const PathSweep& sweep, float finest,
+                                      OrientedRect* rect) noexcept {
+  const Footprint body{pose.x, pose.y, pose.heading_x, pose.heading_y, sweep.length_m, sweep.width_m};
+  return make_footprint_rect(body, finest, kMaxFootprintCells, rect);
+}
+
+/// The footprint at `pose` (validated: pose_rect) into *result (the first hazard, the first
+/// unknown footprint), as the per-pose sweep judges it.
+template <typename Config>
+[[gnu::noinline]] void judge_pose(const QueryView<Config>& view, float finest, const PathPose& pose, float t, const PathSweep& sweep,
+                PathResult* result) noexcept {
+  OrientedRect rect{};
+  (void)pose_rect(pose, sweep, finest, &rect);  // validated when the pose was made
+  const FootprintResult f = footprint_over(view, rect);
+  result->cells_visited += f.cells_visited;
+  const CellClass verdict = footprint_class(f, sweep.max_unknown_share);
+  if (!result->hazard_found && is_lethal(verdict)) {
+    result->hazard_found = true;
+    result->first_hazard_m = t;
+    result->hazard_pose = pose;
+    result->hazard = f;
+  }
+  if (!result->unknown_found && (f.worst_class == CellClass::kUnknown || f.unknown_share > sweep.max_unknown_share)) {
+    result->unknown_found = true;
+    result->first_unknown_m = t;
+    result->unknown_pose = pose;
+    result->unknown = f;
+  }
+}
+
+/// The walk over the rectangle that the poses at distances ts[0 .. n) sweep (2 <= n <=
+/// kMaxHullPoses, one heading) into *flags (HullSink); adds the cells it read to *reads. False
+/// (nothing flagged) if that rectangle is refused (larger than the footprint limit). Not inlined:
+/// its walk's frame is gone before a flagged pose's footprint walk starts.
+template <typename Config>
+[[gnu::noinline]] bool flag_group(const QueryView<Config>& view, const PathSampler& path, const float* ts,
+                                  std::uint32_t n, const PathSweep& sweep, float finest, HullFlags* flags,
+                                  std::uint32_t* reads) noexcept {
+  const PathPose first = path.pose(ts[0]);
+  const PathPose last = path.pose(ts[n - 1U]);
+  OrientedRect unit{};
+  (void)pose_rect(first, sweep, finest, &unit);  // validated when the group was made: its unit heading
+  const float ux = unit.ux;
+  const float uy = unit.uy;
+  const float cx = 0.5F * (first.x + last.x);
+  const float cy = 0.5F * (first.y + last.y);
+  // Margin (m) for the rounding of the two walks' geometry: 1 mm, and ~7 float steps of the
+  // coordinates' size (positions far from the origin round more coarsely).
+  const float margin = 1.0e-3F + 4.0e-7F * (std::fabs(cx) + std::fabs(cy));
+  float along[kMaxHullPoses];
+  float reach_along = 0.0F;
+  float reach_across = 0.0F;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const PathPose p = path.pose(ts[i]);
+    const float dx = p.x - cx;
+    const float dy = p.y - cy;
+    along[i] = dx * ux + dy * uy;
+    const float across = std::fabs(dy * ux - dx * uy);
+    reach_along = std::fabs(along[i]) > reach_along ? std::fabs(along[i]) : reach_along;
+    reach_across = across > reach_across ? across : reach_across;
+  }
+  const float half_length = 0.5F * sweep.length_m + margin;
+  const Footprint swept{cx, cy, ux, uy, 2.0F * (reach_along + half_length),
+                        2.0F * (reach_across + 0.5F * sweep.width_m + margin)};
+  OrientedRect hull{};
+  if (make_footprint_rect(swept, finest, kMaxFootprintCells, &hull) != Status::kOk) {
+    return false;
+  }
+  RegionWalk<Config> walk(view);
+  HullSink sink(hull, along, n, half_length, flags);
+  walk.run(hull, sink);
+  *reads += walk.cells_read();
+  return true;
+}
+
+/// The sweep (see the header comment). Consecutive poses of one heading (a straight path, a
+/// polyline's segment) are judged in groups: one walk over the rectangle they sweep flags the
+/// poses a lethal or unknown piece may touch (flag_group, HullSink), and only those are walked
+/// one by one, in order, for what is still sought. The answer is the per-pose sweep's: a pose
+/// left out has no lethal part and at most half the allowed unknown area (the margin covers the
+/// float rounding of the two walks). A straight run's first pose is judged alone, then groups of
+/// 8, then of 32: a hazard at the start costs one footprint, a clear 2 m path about one walk
+/// of the area it sweeps instead of one per pose. Poses of a turning arc, and groups whose swept
+/// rectangle exceeds the footprint limit, are judged one by one. Every pose's footprint is
+/// validated, judged or not (a refused pose refuses the query, as per pose).
 template <typename Config>
 [[nodiscard]] PathResult sweep_path(const Stack<Config>& stack, const PathSampler& path, const PathSweep& sweep) noexcept {
   std::uint32_t count = 0U;
@@ -135,32 +308,44 @@ template <typename Config>
   result.path_length_m = path.length();
   const QueryView<Config> view = PlannerAccess<Config>::view(stack);
   const float finest = stack.layer_cell_width(0);
-  for (std::uint32_t i = 0; i < count && !(result.hazard_found && result.unknown_found); ++i) {
-    const float t = path_sample_distance(i, count, sweep.step_m, path.length());
-    const PathPose pose = path.pose(t);
-    const Footprint body{pose.x, pose.y, pose.heading_x, pose.heading_y, sweep.length_m, sweep.width_m};
-    OrientedRect rect{};
-    const Status status = make_footprint_rect(body, finest, kMaxFootprintCells, &rect);
-    if (status != Status::kOk) {
-      return refused_path(status);  // a body larger than the footprint limit, or a pose off range
+  const float unknown_allowed = 0.5F * sweep.max_unknown_share * (sweep.length_m * sweep.width_m);
+  float ts[kMaxHullPoses];
+  std::uint32_t group = kFirstHullPoses;
+  std::uint32_t i = 0U;
+  while (i < count && !(result.hazard_found && result.unknown_found)) {
+    // The next poses of one heading, up to `group` of them, each validated.
+    std::uint32_t n = 0U;
+    PathPose head{};
+    while (n < group && i + n < count) {
+      const float t = path_sample_distance(i + n, count, sweep.step_m, path.length());
+      const PathPose pose = path.pose(t);
+      if (n > 0U && !same_heading(pose, head)) {
+        break;
+      }
+      OrientedRect rect{};
+      const Status status = pose_rect(pose, sweep, finest, &rect);
+      if (status != Status::kOk) {
+        return refused_path(status);  // a body larger than the footprint limit, or a pose off range
+      }
+      head = n == 0U ? pose : head;
+      ts[n] = t;
+      ++n;
     }
-    const FootprintResult f = footprint_over(view, rect);
-    ++result.samples;
-    result.cells_visited += f.cells_visited;
-    result.checked_m = t;
-    const CellClass verdict = footprint_class(f, sweep.max_unknown_share);
-    if (!result.hazard_found && is_lethal(verdict)) {
-      result.hazard_found = true;
-      result.first_hazard_m = t;
-      result.hazard_pose = pose;
-      result.hazard = f;
+    HullFlags flags{};
+    const bool grouped = n >= 2U && flag_group(view, path, ts, n, sweep, finest, &flags, &result.cells_visited);
+    for (std::uint32_t j = 0; j < n && !(result.hazard_found && result.unknown_found); ++j) {
+      ++result.samples;
+      result.checked_m = ts[j];
+      const bool hazard = !result.hazard_found && flags.maybe_hazard[j];
+      const bool unknown = !result.unknown_found && !(flags.unknown_bound[j] <= unknown_allowed);
+      if (!grouped || hazard || unknown) {
+        judge_pose(view, finest, path.pose(ts[j]), ts[j], sweep, &result);
+      }
     }
-    if (!result.unknown_found && (f.worst_class == CellClass::kUnknown || f.unknown_share > sweep.max_unknown_share)) {
-      result.unknown_found = true;
-      result.first_unknown_m = t;
-      result.unknown_pose = pose;
-      result.unknown = f;
-    }
+    i += n;
+    // A full group: the next one kHullGrowth times as long; a group cut by a turn or the path's
+    // end: the next straight run starts with one pose again.
+    group = n == group ? (group < kMaxHullPoses / kHullGrowth ? kHullGrowth * group : kMaxHullPoses) : kFirstHullPoses;
   }
   return result;
 }
