@@ -159,7 +159,7 @@ typedef struct ccmap_params {
   float change_min_points;    /* change rule: held points (and those inside the gate) are a surface */
   float change_share;         /* of their own with this many points and this share of the cell's */
   uint32_t frame_point_budget;   /* frame budget: at most this many points per frame (0: all) */
-  uint32_t frame_time_budget_us; /* and no new 128-point chunk after this many us (0: no limit);
+  uint32_t frame_time_budget_us; /* and no new 256-point chunk after this many us (0: no limit);
                                     docs/integration.md, "The frame budget" */
   float free_space_rays;      /* lines of sight walked per frame (whole number, 0..65535); 0 = no
                                  free space: no ghost cleared, no drop-off (docs/design.md) */

@@ -61,17 +61,22 @@ TEST(FrameBudget, ReverseBitsIsAPermutationOfItsRange) {
   EXPECT_EQ(detail::reverse_bits(6U, 4U), 6U);
 }
 
+// The chunk of the frame budget (StackParams: "no chunk of kFrontChunkPoints points"), 256 points.
+constexpr std::uint32_t kChunk = 256U;
+static_assert(detail::kFrontChunkPoints == kChunk, "the budget tests model 256-point chunks");
+
 TEST(FrameBudget, APointBudgetTakesWholeChunksInBitReversedOrderAndCountsTheRest) {
-  const test::CadreFrame frame = test::cycle_frame(0, 400, 250);  // 100,000 points: 782 chunks
+  const test::CadreFrame frame = test::cycle_frame(0, 400, 250);  // 100,000 points: 391 chunks
   const auto n = static_cast<std::uint32_t>(frame.sensor_points.size());
-  const std::uint32_t chunks = (n + 127U) / 128U;
-  for (const std::uint32_t budget : {1U, 127U, 128U, 129U, 5000U, n / 2U, n - 1U, n, n + 1000U}) {
-    // Reference: chunks in bit-reversed order of [0, 1024) while the next still fits.
+  const std::uint32_t chunks = (n + kChunk - 1U) / kChunk;
+  for (const std::uint32_t budget :
+       {1U, kChunk - 1U, kChunk, kChunk + 1U, 5000U, n / 2U, n - 1U, n, n + 1000U}) {
+    // Reference: chunks in bit-reversed order of [0, 512) while the next still fits.
     std::uint32_t taken = 0U;
-    for (std::uint32_t j = 0U; j < 1024U; ++j) {
-      const std::uint32_t c = detail::reverse_bits(j, 10U);
+    for (std::uint32_t j = 0U; j < 512U; ++j) {
+      const std::uint32_t c = detail::reverse_bits(j, 9U);
       if (c >= chunks) continue;
-      const std::uint32_t count = c + 1U == chunks ? n - c * 128U : 128U;
+      const std::uint32_t count = c + 1U == chunks ? n - c * kChunk : kChunk;
       if (taken + count > budget) break;
       taken += count;
     }
@@ -100,7 +105,7 @@ TEST(FrameBudget, HalfTheBudgetStillCoversTheFieldOfView) {
   std::printf("[ budget   ] CADRE frame of %u points: known cells %d full, %d with half the budget (interleaved), "
               "%d with its first half\n",
               n, known_full, known_half, known_first);
-  EXPECT_GE(ch.skipped_budget, n / 2U - 128U);
+  EXPECT_GE(ch.skipped_budget, n / 2U - kChunk);
   EXPECT_GE(known_half, known_full * 85 / 100) << "an interleaved half frame must still see most of what a full one sees";
   EXPECT_GT(known_half, known_first) << "interleaving must cover more than the first half of the rows";
 }
@@ -113,7 +118,7 @@ TEST(FrameBudget, ATimeBudgetStopsAtAChunkBoundaryAfterTheFirstChunk) {
   auto s = make(0U, 1U);
   FrameCounters c{};
   ASSERT_EQ(s->update_frame_sensor(frame.sensor_points.data(), n, frame.pose, &c), Status::kOk);
-  EXPECT_EQ(c.skipped_budget, n - 128U) << "exactly the first chunk (chunk 0 of the interleaved order)";
+  EXPECT_EQ(c.skipped_budget, n - kChunk) << "exactly the first chunk (chunk 0 of the interleaved order)";
   EXPECT_EQ(partition(c), c.received);
   // A generous budget skips nothing.
   auto relaxed = make(0U, 60U * 1000U * 1000U);

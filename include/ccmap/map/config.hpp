@@ -202,7 +202,7 @@ struct StackParams {
   float change_min_points = 0.0F;
   float change_share = 0.0F;
   /// Frame budget (docs/integration.md, "The frame budget"): a frame update processes at most
-  /// frame_point_budget points (0: no limit) and starts no chunk of kFrontChunkPoints (128)
+  /// frame_point_budget points (0: no limit) and starts no chunk of kFrontChunkPoints (256)
   /// points once frame_time_budget_us microseconds of the platform's monotonic clock have passed
   /// since it began (0: no limit; the overrun is at most one chunk). With either limit set the
   /// points are taken chunk by chunk in an interleaved (bit-reversed) order, so that a frame cut

@@ -279,7 +279,7 @@ class Stack {
     }
     update_.run_map(layers_, params_, points, weights, n, pose, frame);
     // [free-space hook 3/4] lines of sight over the updated layers.
-    free_space_.run_map(layers_, params_, update_.front(), points, weights, n, pose, frame);
+    free_space_.run_map(layers_, params_, update_.front(), update_.scratch(), points, weights, n, pose, frame);
     finish_frame(frame, start, counters);
     return Status::kOk;
   }
@@ -302,7 +302,7 @@ class Stack {
     }
     update_.run_sensor(layers_, params_, points, n, pose, frame);
     // [free-space hook 4/4] lines of sight over the updated layers.
-    free_space_.run_sensor(layers_, params_, update_.front(), points, n, pose, frame);
+    free_space_.run_sensor(layers_, params_, update_.front(), update_.scratch(), points, n, pose, frame);
     finish_frame(frame, start, counters);
     return Status::kOk;
   }

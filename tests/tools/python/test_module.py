@@ -71,8 +71,9 @@ class Construction(unittest.TestCase):
         self.assertEqual(m.params["frame_point_budget"], 1000)
         pts = np.array([[0.5 + 0.001 * i, 0.0, 0.0] for i in range(3000)], dtype=np.float32)
         counts = m.update(pts, SENSOR)
-        # Whole chunks of 128 points while the next one fits: 7 chunks of 128 = 896 points.
-        self.assertEqual(counts["skipped_budget"], 3000 - 896)
+        # Whole chunks of 256 points, in bit-reversed order of 16, while the next one fits: chunks
+        # 0, 8 and 4 (768 points); the fourth (chunk 2) would exceed 1000.
+        self.assertEqual(counts["skipped_budget"], 3000 - 768)
         self.assertEqual(counts["received"], 3000)
         with self.assertRaises(TypeError):
             ccmap.Map("cadre", frame_point_budget=1.5)

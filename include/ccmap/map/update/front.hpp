@@ -101,8 +101,9 @@ struct FineWindow {
   std::int32_t log2_side;
 };
 
-/// Points per front chunk: the chunk below is 5 KB (in L1 beside the cells it updates).
-inline constexpr std::size_t kFrontChunkPoints = 128U;
+/// Points per front chunk: the chunk below is 10 KB (in L1 beside the cells it updates). Each
+/// chunk pays the front's and the back half's set-up and the counters once.
+inline constexpr std::size_t kFrontChunkPoints = 256U;
 
 /// The front's answer for a chunk of points, structure of arrays (vectorisable), owned by the
 /// stack's update path. Entry i is valid for i < the count passed to the chunk function;

@@ -86,6 +86,10 @@ class UpdatePath {
   }
 
   [[nodiscard]] const FrontConfig& front() const noexcept { return front_; }
+  /// The front's chunk, scratch that no frame reads after its end (finish_frame): lent to the
+  /// free-space stage, which runs after the frame (map/visibility/free_space.hpp), so that the
+  /// stack carries one chunk, not two.
+  [[nodiscard]] FrontChunk& scratch() noexcept { return chunk_; }
 
   /// Integrity hook (map/detail/integrity.hpp): adds every constant init() derives to the
   /// stack's seal of the update path (Stack::update_seal), verified by every mutating call. A

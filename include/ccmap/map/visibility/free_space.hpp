@@ -114,10 +114,10 @@ class FreeSpace<Config, false> {
   static constexpr bool kEnabled = false;
   [[nodiscard]] Status init(const StackParams&, const float*, const Layers&) noexcept { return Status::kOk; }
   void follow(int, CellIndex) noexcept {}
-  void run_map(Layers&, const StackParams&, const FrontConfig&, const PointXYZ*, const float*, std::size_t,
-               const FramePose&, FrameCounters&) noexcept {}
-  void run_sensor(Layers&, const StackParams&, const FrontConfig&, const PointXYZ*, std::size_t, const FramePose&,
-                  FrameCounters&) noexcept {}
+  void run_map(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, const float*,
+               std::size_t, const FramePose&, FrameCounters&) noexcept {}
+  void run_sensor(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, std::size_t,
+                  const FramePose&, FrameCounters&) noexcept {}
   [[nodiscard]] const RingGrid<FreeSpaceCell>* records(int) const noexcept { return nullptr; }
   [[nodiscard]] RingGrid<FreeSpaceCell>* records(int) noexcept { return nullptr; }
   [[nodiscard]] std::uint32_t frames() const noexcept { return 0U; }
@@ -179,14 +179,17 @@ class FreeSpace<Config, true> {
   }
 
   /// The stage of a map-frame frame (after its points were folded in). weights: as update_frame.
-  void run_map(Layers& layers, const StackParams& params, const FrontConfig& front, const PointXYZ* points,
-               const float* weights, std::size_t n, const FramePose& pose, FrameCounters& frame) noexcept {
-    run(layers, params, front, points, weights, n, pose, false, frame);
+  /// chunk: the front's scratch for the rays' ends, lent by the update path, whose frame is over
+  /// (its content on entry is not read).
+  void run_map(Layers& layers, const StackParams& params, const FrontConfig& front, FrontChunk& chunk,
+               const PointXYZ* points, const float* weights, std::size_t n, const FramePose& pose,
+               FrameCounters& frame) noexcept {
+    run(layers, params, front, chunk, points, weights, n, pose, false, frame);
   }
   /// The stage of a sensor-frame frame: points in the sensor frame, pose made with a rotation.
-  void run_sensor(Layers& layers, const StackParams& params, const FrontConfig& front, const PointXYZ* points,
-                  std::size_t n, const FramePose& pose, FrameCounters& frame) noexcept {
-    run(layers, params, front, points, nullptr, n, pose, true, frame);
+  void run_sensor(Layers& layers, const StackParams& params, const FrontConfig& front, FrontChunk& chunk,
+                  const PointXYZ* points, std::size_t n, const FramePose& pose, FrameCounters& frame) noexcept {
+    run(layers, params, front, chunk, points, nullptr, n, pose, true, frame);
   }
 
   /// The record grid of a layer (queries, snapshots); nullptr for a bad layer.
@@ -285,8 +288,8 @@ class FreeSpace<Config, true> {
     return gap < 0.0F || gap * gap * cell.weight < 3.0F * cell.s_zz;
   }
 
-  void run(Layers& layers, const StackParams& params, const FrontConfig& front, const PointXYZ* points,
-           const float* weights, std::size_t n, const FramePose& pose, bool sensor_frame,
+  void run(Layers& layers, const StackParams& params, const FrontConfig& front, FrontChunk& chunk,
+           const PointXYZ* points, const float* weights, std::size_t n, const FramePose& pose, bool sensor_frame,
            FrameCounters& frame) noexcept {
     ++frames_;
     // A frame the budget cut short (StackParams::frame_point_budget, frame_time_budget_us) casts
@@ -325,25 +328,26 @@ class FreeSpace<Config, true> {
       batch_index_[count] = static_cast<std::uint32_t>(idx);
       batch_points_[count] = points[idx];
       if (++count == kFrontChunkPoints) {
-        run_batch(layers, params, front, weights, count, pose, sensor_frame, frame);
+        run_batch(layers, params, front, chunk, weights, count, pose, sensor_frame, frame);
         count = 0U;
       }
     }
     if (count > 0U) {
-      run_batch(layers, params, front, weights, count, pose, sensor_frame, frame);
+      run_batch(layers, params, front, chunk, weights, count, pose, sensor_frame, frame);
     }
     settle(layers, frame);
   }
 
-  void run_batch(Layers& layers, const StackParams& params, const FrontConfig& front, const float* weights,
-                 std::size_t count, const FramePose& pose, bool sensor_frame, FrameCounters& frame) noexcept {
+  void run_batch(Layers& layers, const StackParams& params, const FrontConfig& front, FrontChunk& chunk,
+                 const float* weights, std::size_t count, const FramePose& pose, bool sensor_frame,
+                 FrameCounters& frame) noexcept {
     if (sensor_frame) {
-      front_sensor_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk_);
+      front_sensor_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk);
     } else {
-      front_map_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk_);
+      front_map_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk);
     }
     for (std::size_t i = 0; i < count; ++i) {
-      const RayEnd end = ray_end_of(chunk_, i);
+      const RayEnd end = ray_end_of(chunk, i);
       bool refused = end.code >= std::int32_t{kFrontNonFinite} || end.code < 0;
       if (!refused && weights != nullptr) {
         refused = ccm_check_weight(weights[batch_index_[i]]) != Status::kOk;
@@ -619,7 +623,6 @@ class FreeSpace<Config, true> {
   std::uint32_t contradicted_count_ = 0U;
   std::uint32_t batch_index_[kFrontChunkPoints]{};
   PointXYZ batch_points_[kFrontChunkPoints]{};
-  FrontChunk chunk_{};
 };
 
 }  // namespace ccmap::detail
