@@ -197,7 +197,7 @@ void expect_same_footprint(const FootprintResult& a, const FootprintResult& b) {
 /// unknown pose, their footprints, the same poses counted, on random straight paths, polylines
 /// and arcs over two maps (the test terrain with its box, hole and ramp; the flight cycle's
 /// stereo map with its unseen patches), with every unknown-share threshold from 0 to 1 and steps
-/// that make groups of 1 to 64 poses and swept areas beyond the footprint limit.
+/// that make groups of 1 to 32 poses and swept areas beyond the footprint limit.
 void check_grouped_sweep(const Cadre& map, float lo, float hi, std::uint32_t seed, int paths) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> coord(lo, hi);

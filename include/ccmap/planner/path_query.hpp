@@ -37,9 +37,9 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 
 #include "ccmap/core/sin_cos.hpp"
+#include "ccmap/grid/ring_index.hpp"
 #include "ccmap/planner/footprint.hpp"
 #include "ccmap/map/stack.hpp"
 
@@ -134,12 +134,8 @@ class PathSampler {
 
 /// True if two poses have bit for bit the same heading (poses of one straight run).
 [[nodiscard]] inline bool same_heading(const PathPose& a, const PathPose& b) noexcept {
-  std::uint32_t bits[4];
-  std::memcpy(&bits[0], &a.heading_x, 4U);
-  std::memcpy(&bits[1], &a.heading_y, 4U);
-  std::memcpy(&bits[2], &b.heading_x, 4U);
-  std::memcpy(&bits[3], &b.heading_y, 4U);
-  return bits[0] == bits[2] && bits[1] == bits[3];
+  return grid::detail::float_bits(a.heading_x) == grid::detail::float_bits(b.heading_x) &&
+         grid::detail::float_bits(a.heading_y) == grid::detail::float_bits(b.heading_y);
 }
 
 /// Largest number of consecutive poses judged together by one walk of their swept rectangle.
