@@ -445,7 +445,12 @@ static void test_single_layer_presets(void) {
     CHECK_STATUS(ccmap_place(&g_single, sizeof g_single, presets[k], &map), CCMAP_OK);
     CHECK(ccmap_layer_count(map) == 1);
     CHECK(ccmap_layer_capacity(map, 0) == 256u * 256u);
+    CHECK(ccmap_layer_capacity(map, 1) == 0u);
+    CHECK(ccmap_layer_cell_width(map, 0) == 0.0f); /* before init: no width yet */
     CHECK_STATUS(ccmap_init(map, &p), CCMAP_OK);
+    CHECK_NEAR(ccmap_layer_cell_width(map, 0), 0.08, 1e-7);
+    CHECK(ccmap_layer_cell_width(map, 1) == 0.0f); /* a layer the preset does not have */
+    CHECK(ccmap_layer_cell_width(map, -1) == 0.0f);
     CHECK_STATUS(ccmap_update_frame(map, g_xyz, NULL, n, sensor, &c), CCMAP_OK);
     CHECK(c.used == n);
     CHECK_STATUS(ccmap_query(map, 0.3f, -0.2f, &r), CCMAP_OK);
@@ -923,6 +928,15 @@ static void test_every_preset_entry(void) {
       CHECK_STATUS(ccmap_exchange_init(ex, map, &ep), CCMAP_OK);
       CHECK_STATUS(ccmap_exchange_export(ex, delta, sizeof delta, 0.0f, 0, &written, NULL), CCMAP_OK);
       CHECK(written == ccmap_delta_min_size(CCMAP_PRESET_SINGLE_OMG)); /* an empty map: no cell */
+      /* Bound to no map, or to a map of another preset: refused, the exchange unchanged. */
+      CHECK_STATUS(ccmap_exchange_init(ex, NULL, &ep), CCMAP_INVALID_ARGUMENT);
+      {
+        ccmap_map* cadre = NULL;
+        CHECK_STATUS(ccmap_place(&g_storage_copy, sizeof g_storage_copy, CCMAP_PRESET_CADRE, &cadre), CCMAP_OK);
+        CHECK_STATUS(ccmap_exchange_init(ex, cadre, &ep), CCMAP_INVALID_ARGUMENT);
+      }
+      CHECK_STATUS(ccmap_exchange_export(ex, delta, sizeof delta, 0.0f, 0, &written, NULL), CCMAP_OK);
+      CHECK(written == ccmap_delta_min_size(CCMAP_PRESET_SINGLE_OMG));
     }
   }
 

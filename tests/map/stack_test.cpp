@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -484,7 +485,82 @@ TEST(StackInit, BadParametersAreRefusedAndTheStackStaysUnusable) {
   refuse([](StackParams& p) { p.max_inclination = -1.0F; });
   refuse([](StackParams& p) { p.normal_variance_threshold[2] = std::numeric_limits<float>::infinity(); });
   refuse([](StackParams& p) { p.noise = sensor::NoiseModel::stereo(sensor::StereoParams{0.0F, 0.05F, 0.1F}); });
+  // Each bound of init's contract (types.hpp, StackParams), on both sides where it has two.
+  refuse([](StackParams& p) { p.coverage_tau = 0.0F; });
+  refuse([](StackParams& p) { p.min_weight = -1.0F; });
+  refuse([](StackParams& p) { p.obstacle_fraction = 0.0F; });
+  refuse([](StackParams& p) { p.obstacle_fraction = 4.5F; });
+  refuse([](StackParams& p) { p.max_inclination = std::numeric_limits<float>::quiet_NaN(); });
+  refuse([](StackParams& p) { p.kalman_min_variance = 0.0F; });
+  refuse([](StackParams& p) { p.outlier_gate_sigma = 0.5F; });
+  refuse([](StackParams& p) { p.outlier_gate_sigma = 101.0F; });
+  refuse([](StackParams& p) { p.outlier_gate_sigma = -3.0F; });
+  refuse([](StackParams& p) { p.change_min_points = 0.0F; });
+  refuse([](StackParams& p) { p.change_min_points = 70000.0F; });
+  refuse([](StackParams& p) { p.change_share = 0.0F; });
+  refuse([](StackParams& p) { p.change_share = 0.6F; });
+  refuse([](StackParams& p) { p.free_space_rays = -1.0F; });
+  refuse([](StackParams& p) { p.free_space_rays = 70000.0F; });
+  refuse([](StackParams& p) { p.free_space_rays = 1.5F; });
+  refuse([](StackParams& p) { p.free_space_clear_frames = 0.0F; });
+  refuse([](StackParams& p) { p.free_space_clear_frames = 256.0F; });
+  refuse([](StackParams& p) { p.free_space_clear_frames = 2.5F; });
+  // The bounds themselves are valid.
+  const auto accept = [&](auto mutate) {
+    StackParams params = default_stack_params(0.04F);
+    mutate(params);
+    EXPECT_EQ(stack->init(params), Status::kOk);
+  };
+  accept([](StackParams& p) { p.outlier_gate_sigma = 0.0F; });
+  accept([](StackParams& p) { p.outlier_gate_sigma = 100.0F; });
+  accept([](StackParams& p) { p.change_share = 0.5F; });
+  accept([](StackParams& p) { p.coverage_tau = 1.0F; });
+  accept([](StackParams& p) { p.free_space_clear_frames = 255.0F; });
   EXPECT_EQ(stack->init(default_stack_params(0.04F)), Status::kOk);
+}
+
+// The running totals (Stack::totals) add each frame's counters and stop at 2^32 - 1 rather
+// than wrap: every field, against a 64-bit sum clamped by hand. FrameCounters is all uint32
+// fields, read here as an array, so a field that accumulate() forgot would fail too.
+TEST(StackTotals, EveryCounterAddsAndSaturatesInsteadOfWrapping) {
+  constexpr std::size_t kFields = sizeof(FrameCounters) / sizeof(std::uint32_t);
+  static_assert(sizeof(FrameCounters) == kFields * sizeof(std::uint32_t), "FrameCounters: uint32 fields only");
+  const auto as_fields = [](const FrameCounters& c) {
+    std::array<std::uint32_t, kFields> f{};
+    std::memcpy(f.data(), &c, sizeof c);
+    return f;
+  };
+  const auto from_fields = [](const std::array<std::uint32_t, kFields>& f) {
+    FrameCounters c{};
+    std::memcpy(&c, f.data(), sizeof c);
+    return c;
+  };
+  std::array<std::uint32_t, kFields> start{};
+  std::array<std::uint32_t, kFields> add{};
+  for (std::size_t i = 0; i < kFields; ++i) {
+    // Alternate: fields that stay below the limit, fields that cross it, one that lands on it.
+    start[i] = (i % 2U == 0U) ? static_cast<std::uint32_t>(1000U + i) : 0xFFFFFFF0U;
+    add[i] = static_cast<std::uint32_t>(7U + 3U * i);
+  }
+  start[1] = 0xFFFFFFFFU - add[1];  // exactly the limit: no saturation needed
+  FrameCounters total = from_fields(start);
+  detail::accumulate(total, from_fields(add));
+  const auto got = as_fields(total);
+  for (std::size_t i = 0; i < kFields; ++i) {
+    const std::uint64_t sum = std::uint64_t{start[i]} + std::uint64_t{add[i]};
+    const std::uint64_t expected = sum > 0xFFFFFFFFULL ? 0xFFFFFFFFULL : sum;
+    EXPECT_EQ(got[i], expected) << "counter field " << i;
+  }
+}
+
+TEST(StackNames, EveryCellClassHasItsOwnName) {
+  const CellClass classes[] = {CellClass::kUnknown, CellClass::kTraversable, CellClass::kObstacle, CellClass::kSteep,
+                               CellClass::kDropOff};
+  const char* const names[] = {"unknown", "traversable", "obstacle", "steep", "drop"};
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_STREQ(to_string(classes[i]), names[i]);
+  }
+  EXPECT_STREQ(to_string(static_cast<CellClass>(99)), "unknown") << "a value outside the enum";
 }
 
 TEST(StackContract, BadLayerIndexFiresTheAssertHookAndReturnsAnEmptyGrid) {
