@@ -295,3 +295,80 @@ TEST(UpdatePath, LidarCadreMatchesTheModel) {
 
 }  // namespace
 }  // namespace ccmap
+
+namespace ccmap {
+namespace {
+
+// KalmanBatch::add_while_inside (map/update/kalman_batch.hpp) takes a run's entries four at a
+// time where all four are of the run and inside the gate, and one by one otherwise. Against a
+// brute-force model of the run's rule (entry i always, then every next entry while it is of the
+// run's cell and, with the gate, inside [low, low + span]): the entry it stops at and the
+// run's count and sums, on random chunks of runs 1 to 13 long with points outside the gate,
+// foreign slots and chunk ends at every offset. The model is written here, one point at a time.
+template <bool kGate>
+void check_runs_against_the_model(std::uint32_t seed) {
+  using Batch = detail::KalmanBatch<64U>;
+  auto batch = std::make_unique<Batch>();
+  batch->clear();
+  std::uint32_t state = seed;
+  const auto next = [&state]() {
+    state = state * 1664525U + 1013904223U;
+    return state >> 8U;
+  };
+  constexpr std::size_t kCount = 256U;
+  std::vector<std::int32_t> slots(kCount), heights(kCount), keys(kCount);
+  for (int trial = 0; trial < 200; ++trial) {
+    // Runs of one cell (slots 0..63, an upset's out-of-range value now and then).
+    for (std::size_t i = 0; i < kCount;) {
+      const std::uint32_t r = next();
+      const std::int32_t slot = (r % 50U == 0U) ? static_cast<std::int32_t>(64U + r % 7U) : static_cast<std::int32_t>(r % 64U);
+      const std::size_t length = 1U + next() % 13U;
+      for (std::size_t k = 0; k < length && i < kCount; ++k, ++i) {
+        slots[i] = slot;
+      }
+    }
+    // Heights around 10,000 Q14 units; the interval [9,000, 11,000]; 1 in 12 outside.
+    for (std::size_t i = 0; i < kCount; ++i) {
+      const std::uint32_t r = next();
+      heights[i] = (r % 12U == 0U) ? static_cast<std::int32_t>(r % 2U == 0U ? 8000U + r % 999U : 11001U + r % 5000U)
+                                   : static_cast<std::int32_t>(9000U + r % 2001U);
+      keys[i] = static_cast<std::int32_t>(next() % 100000U) - 20000;
+    }
+    const std::int32_t low = 9000;
+    const std::uint32_t span = 2000U;
+    const std::size_t count = kCount - next() % 9U;  // chunk ends at every offset mod 4
+    for (std::size_t i = 0; i < count; ++i) {
+      Batch::Run run{};
+      run.slot = slots[i] & 63;
+      run.low = low;
+      run.span = span;
+      const std::size_t got = batch->add_while_inside<kGate>(run, slots.data(), heights.data(), keys.data(), i, count);
+      // The model.
+      std::size_t j = i;
+      std::int64_t sum_h = 0;
+      std::int64_t sum_k = 0;
+      do {
+        if (kGate && (heights[j] < low || heights[j] > low + static_cast<std::int32_t>(span))) {
+          break;
+        }
+        sum_h += heights[j];
+        sum_k += keys[j];
+        ++j;
+      } while (j < count && slots[j] == run.slot);
+      ASSERT_EQ(got, j) << "seed " << seed << " trial " << trial << " entry " << i;
+      ASSERT_EQ(run.count, static_cast<std::uint32_t>(j - i));
+      ASSERT_EQ(run.sum_height_q14, sum_h);
+      ASSERT_EQ(run.sum_range_key, sum_k);
+    }
+  }
+}
+
+TEST(KalmanBatchRuns, FourPointBlocksTakeWhatThePointByPointRuleTakes) {
+  for (const std::uint32_t seed : {1U, 2U, 3U}) {
+    check_runs_against_the_model<true>(seed);
+    check_runs_against_the_model<false>(seed);
+  }
+}
+
+}  // namespace
+}  // namespace ccmap
