@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -471,10 +472,14 @@ TEST(StackInit, BadParametersAreRefusedAndTheStackStaysUnusable) {
   EXPECT_EQ(stack->move_to(0, 0), Status::kNotInitialised);
   const PointXYZ origin{0, 0, 0};
   EXPECT_EQ(stack->update_frame(&origin, 1, origin, nullptr), Status::kNotInitialised);
-  const auto refuse = [&](auto mutate) {
+  // init with the defaults but for what `mutate` changes.
+  const auto init_with = [&](auto mutate) {
     StackParams params = default_stack_params(0.04F);
     mutate(params);
-    EXPECT_NE(stack->init(params), Status::kOk);
+    return stack->init(params);
+  };
+  const auto refuse = [&](auto mutate) {
+    EXPECT_NE(init_with(mutate), Status::kOk);
     EXPECT_FALSE(stack->initialised());
   };
   refuse([](StackParams& p) { p.finest_cell_width_m = 0.0F; });
@@ -506,11 +511,7 @@ TEST(StackInit, BadParametersAreRefusedAndTheStackStaysUnusable) {
   refuse([](StackParams& p) { p.free_space_clear_frames = 256.0F; });
   refuse([](StackParams& p) { p.free_space_clear_frames = 2.5F; });
   // The bounds themselves are valid.
-  const auto accept = [&](auto mutate) {
-    StackParams params = default_stack_params(0.04F);
-    mutate(params);
-    EXPECT_EQ(stack->init(params), Status::kOk);
-  };
+  const auto accept = [&](auto mutate) { EXPECT_EQ(init_with(mutate), Status::kOk); };
   accept([](StackParams& p) { p.outlier_gate_sigma = 0.0F; });
   accept([](StackParams& p) { p.outlier_gate_sigma = 100.0F; });
   accept([](StackParams& p) { p.change_share = 0.5F; });
@@ -557,7 +558,8 @@ TEST(StackNames, EveryCellClassHasItsOwnName) {
   const CellClass classes[] = {CellClass::kUnknown, CellClass::kTraversable, CellClass::kObstacle, CellClass::kSteep,
                                CellClass::kDropOff};
   const char* const names[] = {"unknown", "traversable", "obstacle", "steep", "drop"};
-  for (std::size_t i = 0; i < 5; ++i) {
+  static_assert(std::size(classes) == std::size(names), "a name for each class");
+  for (std::size_t i = 0; i < std::size(classes); ++i) {
     EXPECT_STREQ(to_string(classes[i]), names[i]);
   }
   EXPECT_STREQ(to_string(static_cast<CellClass>(99)), "unknown") << "a value outside the enum";

@@ -293,12 +293,6 @@ TEST(UpdatePath, LidarCadreMatchesTheModel) {
   sensor_frame_matches_the_model<CadreConfig>(lidar_params(0.04F));
 }
 
-}  // namespace
-}  // namespace ccmap
-
-namespace ccmap {
-namespace {
-
 // KalmanBatch::add_while_inside (map/update/kalman_batch.hpp) takes a run's entries four at a
 // time where all four are of the run and inside the gate, and one by one otherwise. Against a
 // brute-force model of the run's rule (entry i always, then every next entry while it is of the
