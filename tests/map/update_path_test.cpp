@@ -364,5 +364,125 @@ TEST(KalmanBatchRuns, FourPointBlocksTakeWhatThePointByPointRuleTakes) {
   }
 }
 
+// The gate's count of in-gate CCM points (map/update/held_pool.hpp): the update path counts a
+// run of points folded into one cell in a register (AcceptRun) and hands the run to the pool
+// when a run of another cell starts and at the chunk's end; slots are taken on a cell's first
+// held point in between. Against a model written here, per cell: the in-gate points before its
+// first held point (the tag: saturating at 32,767, never reached here) become the slot's count,
+// those after add to it; slots in the order of first held points, none beyond kSlots (that
+// cell's held points are refused). Random frames of runs of 1-9 points over 40 cells, 1 in 15
+// points held, chunks of 1-256 points; every slot's cell, in-gate and held counts at the end.
+TEST(AcceptRuns, HandTheSlotsWhatPointByPointCountingGives) {
+  constexpr std::size_t kCells = 40U;
+  constexpr std::size_t kSlots = 8U;
+  struct Held {
+    float sum;
+  };
+  using Pool = detail::HeldPool<Held, kCells, kSlots>;
+  struct Model {
+    std::uint32_t before = 0U;  // in-gate points before the slot
+    std::uint32_t after = 0U;   // in-gate points since
+    std::uint32_t held = 0U;
+    int slot = -1;
+  };
+  std::uint32_t state = 7U;
+  const auto next = [&state]() {
+    state = state * 1664525U + 1013904223U;
+    return state >> 8U;
+  };
+  auto pool = std::make_unique<Pool>();
+  for (int frame = 0; frame < 300; ++frame) {
+    pool->clear();
+    std::vector<Model> model(kCells);
+    int slots_taken = 0;
+    std::size_t in_chunk = 0U;
+    std::size_t chunk = 1U + next() % 256U;
+    detail::AcceptRun<Pool> accepts{};
+    std::uint32_t run_cell = 0xFFFFFFFFU;  // the cell of the last point folded in this chunk
+    std::uint32_t expect_handed = 0U;
+    for (int point = 0; point < 600;) {
+      const std::uint32_t cell = next() % kCells;
+      const std::uint32_t length = 1U + next() % 9U;
+      for (std::uint32_t k = 0; k < length; ++k, ++point) {
+        if (next() % 15U == 0U) {
+          Model& m = model[cell];
+          if (m.slot < 0 && slots_taken < static_cast<int>(kSlots)) {
+            m.slot = slots_taken++;
+          }
+          auto* slot = pool->hold(cell, CellIndex{static_cast<std::int32_t>(cell), 0}, 1);
+          ASSERT_EQ(slot != nullptr, m.slot >= 0) << "frame " << frame << " point " << point;
+          if (slot != nullptr) {
+            ++m.held;
+          }
+        } else {
+          const bool new_run = cell != run_cell;  // CheckRun::touch's answer
+          if (new_run) {
+            accepts.start(*pool, cell);
+            run_cell = cell;
+          }
+          accepts.add();
+          ++expect_handed;
+          Model& m = model[cell];
+          ++(m.slot >= 0 ? m.after : m.before);
+        }
+        if (++in_chunk == chunk) {  // the chunk's end: the last run handed over
+          accepts.flush(*pool);
+          ASSERT_EQ(accepts.handed(), expect_handed);
+          accepts = detail::AcceptRun<Pool>{};
+          expect_handed = 0U;
+          run_cell = 0xFFFFFFFFU;
+          in_chunk = 0U;
+          chunk = 1U + next() % 256U;
+        }
+      }
+    }
+    accepts.flush(*pool);
+    std::vector<bool> seen(kCells, false);
+    (void)pool->end_frame([&](const Pool::Slot& slot) {
+      EXPECT_LT(slot.cell, kCells);
+      if (slot.cell >= kCells) {
+        return false;
+      }
+      const Model& m = model[slot.cell];
+      seen[slot.cell] = true;
+      EXPECT_GE(m.slot, 0) << "frame " << frame << " cell " << slot.cell;
+      EXPECT_EQ(slot.accepted, m.before + m.after) << "frame " << frame << " cell " << slot.cell;
+      EXPECT_EQ(slot.count, m.held) << "frame " << frame << " cell " << slot.cell;
+      return false;
+    });
+    for (std::size_t cell = 0; cell < kCells; ++cell) {
+      EXPECT_EQ(seen[cell], model[cell].slot >= 0) << "frame " << frame << " cell " << cell;
+    }
+  }
+}
+
+// The tag saturates at 32,767 in-gate points; a slot taken after that starts from 32,767 and
+// counts on without bound; runs handed over in one step saturate as one by one would.
+TEST(AcceptRuns, TheTagSaturatesAndTheSlotCountsOn) {
+  struct Held {
+    float sum;
+  };
+  using Pool = detail::HeldPool<Held, 4U, 2U>;
+  auto pool = std::make_unique<Pool>();
+  pool->clear();
+  for (int run = 0; run < 200; ++run) {  // 200 runs of 250: 50,000 points
+    pool->accept(2U, 250U);
+  }
+  pool->accept(3U, 32766U);
+  pool->accept(3U, 1U);
+  pool->accept(3U, 1U);  // saturated: stays 32,767
+  ASSERT_NE(pool->hold(2U, CellIndex{2, 0}, 1), nullptr);
+  ASSERT_NE(pool->hold(3U, CellIndex{3, 0}, 1), nullptr);
+  pool->accept(2U, 40000U);  // a slot's count does not saturate at 15 bits
+  pool->accept(3U, 1U);
+  std::uint32_t accepted[4] = {0U, 0U, 0U, 0U};
+  (void)pool->end_frame([&](const Pool::Slot& slot) {
+    accepted[slot.cell & 3U] = slot.accepted;
+    return false;
+  });
+  EXPECT_EQ(accepted[2], 32767U + 40000U);
+  EXPECT_EQ(accepted[3], 32768U);
+}
+
 }  // namespace
 }  // namespace ccmap

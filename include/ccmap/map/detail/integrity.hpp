@@ -188,19 +188,24 @@ inline void rewrite_check(Layers& layers, const Cell& cell, WideSignature before
 /// the run's, the run before it is closed (its check takes the change) and a new one opens with
 /// the cell's signature as it is now; close() after the last write of the chunk. Consecutive
 /// points of a frame mostly fall into the same cell, so this costs a compare per point and two
-/// signatures per run. The run lives in registers or on the call stack, never in the map's
-/// storage: a run is open for at most one chunk of the update (kFrontChunkPoints points), and an
-/// upset in the open cell during that time is taken into its check (docs/integration.md).
+/// signatures per run; touch() says whether a run started (the gate counts its in-gate points
+/// by these runs, map/update/held_pool.hpp AcceptRun). The run lives in registers or on the
+/// call stack, never in the map's storage: a run is open for at most one chunk of the update
+/// (kFrontChunkPoints points), and an upset in the open cell during that time is taken into its
+/// check (docs/integration.md).
 template <typename Cell>
 class CheckRun {
  public:
+  /// True if `cell` starts a new run.
   template <typename Layers>
-  void touch(Layers& layers, Cell& cell) noexcept {
+  bool touch(Layers& layers, Cell& cell) noexcept {
     if (&cell != cell_) {
       close(layers);
       cell_ = &cell;
       before_ = cell_signature_wide(cell);
+      return true;
     }
+    return false;
   }
   template <typename Layers>
   void close(Layers& layers) noexcept {

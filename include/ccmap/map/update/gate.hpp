@@ -85,6 +85,9 @@ class OutlierGate {
   using FineHeld = std::conditional_t<kKalman, KalmanHeld, OmgCell>;
   using CcmPool = HeldPool<CcmCellType, kCcmPool ? Layers::kCcmCellCount : 1U, kCcmPool ? kCcmSlots : 1U>;
   using FinePool = HeldPool<FineHeld, kFinePool ? Layers::kFineCellCount : 1U, kFinePool ? kFineSlots : 1U>;
+  /// The in-gate points of the current run of one CCM cell (held_pool.hpp), kept by the caller
+  /// for a chunk (count_accepted) and handed to flush_accepts() at its end.
+  using CcmAccepts = AcceptRun<CcmPool>;
 
   /// Gate constants of every layer (k from the params, V from the routing bounds max_range_sq_m2),
   /// empty pools. The gate is on iff params.outlier_gate_sigma > 0.
@@ -126,37 +129,66 @@ class OutlierGate {
     }
   }
 
-  /// Judges a point of a CCM cell (cell number `number` of layer `layer`, global index `index`)
-  /// at height z (m) with position (x, y) relative to the cell's centre and weight w; a held
-  /// point is folded into its slot here. The range-error checks (finer layer, line of sight)
-  /// judge the points that their own cell cannot: those outside its gate, and every point of a
-  /// cell that is not yet known (weight below min_weight: its statistics are no judge yet). A
-  /// point inside the gate of a known cell agrees with ground that was itself judged when it
-  /// was young; it is folded in with the own gate's 6 float operations alone (docs/design.md,
-  /// "Outlier gate and change": what this costs and what it changes).
-  [[nodiscard]] __attribute__((always_inline)) GateOutcome judge_ccm(const Layers& layers, const LayerWalk<Config>& walk, int layer,
-                                      std::uint32_t number, CellIndex index, const FrontChunk& chunk, std::size_t i,
-                                      float x, float y, float w, float weight_limit) noexcept {
-    const float z = chunk.z[i];
-    const auto& cell = layers.ccm_storage[number];
-    const bool outside = ccm_outside_gate(cell, z, constants_[layer]);
-    if (outside || !(cell.weight >= mature_weight_)) {
-      const GateOutcome first = range_error(layers, walk, layer, chunk, i);
-      if (first != GateOutcome::kFold) {
-        return first;
-      }
+  /// What suspect_ccm() reads, copied by the caller once per chunk (ccm_judge()): a copy whose
+  /// address is never taken stays in registers or on the stack, where the CCM cells' float
+  /// stores cannot force it to be read again from the gate for every point.
+  struct CcmJudge {
+    GateConstants constants[Layers::kLayerSlots];
+    float mature_weight;
+  };
+  [[nodiscard]] CcmJudge ccm_judge() const noexcept {
+    CcmJudge judge{};
+    for (std::size_t layer = 0; layer < Layers::kLayerSlots; ++layer) {
+      judge.constants[layer] = constants_[layer];
     }
-    if (outside) {
-      auto* slot = ccm_held_.hold(number, index, layer);
-      if (slot == nullptr) {
-        return GateOutcome::kPoolFull;
-      }
-      ccm_update_unchecked(slot->held, x, y, z, w, weight_limit);
-      return GateOutcome::kHeld;
-    }
-    ccm_held_.accept(number);
-    return GateOutcome::kFold;
+    judge.mature_weight = mature_weight_;
+    return judge;
   }
+
+  /// True if a point at height z (m) of CCM cell `cell` (layer `layer`) is one its cell cannot
+  /// admit alone: outside the cell's gate, or the cell not yet known (weight below min_weight:
+  /// its statistics are no judge yet); judge_suspect_ccm() decides then. False: the point is
+  /// inside the gate of a known cell, which agrees with ground that was itself judged when it
+  /// was young; it is folded in with the own gate's 6 float operations alone (docs/design.md,
+  /// "Outlier gate and change": what this costs and what it changes), and the caller counts it
+  /// (count_accepted) once it has folded it. `judge`: this gate's ccm_judge().
+  [[nodiscard]] __attribute__((always_inline)) static bool suspect_ccm(const CcmJudge& judge, const CcmCellType& cell,
+                                                                       float z, int layer) noexcept {
+    return ccm_outside_gate(cell, z, judge.constants[layer]) || !(cell.weight >= judge.mature_weight);
+  }
+
+  /// Judges point i of the chunk, which suspect_ccm() named, in CCM cell `number` of layer
+  /// `layer`, with position (x, y) (m) relative to the cell's centre and weight w: the
+  /// range-error checks (finer layer, line of sight) first; a point that passes them and lies
+  /// outside its cell's gate is held (folded into its slot here). kFold: the caller folds it in.
+  [[nodiscard]] GateOutcome judge_suspect_ccm(const Layers& layers, const LayerWalk<Config>& walk, int layer,
+                                              std::uint32_t number, const FrontChunk& chunk, std::size_t i, float x,
+                                              float y, float w, float weight_limit) noexcept {
+    const float z = chunk.z[i];
+    const GateOutcome first = range_error(layers, walk, layer, chunk, i);
+    if (first != GateOutcome::kFold || !ccm_outside_gate(layers.ccm_storage[number], z, constants_[layer])) {
+      return first;
+    }
+    auto* slot = ccm_held_.hold(number, CellIndex{chunk.ix0[i] >> layer, chunk.iy0[i] >> layer}, layer);
+    if (slot == nullptr) {
+      return GateOutcome::kPoolFull;
+    }
+    ccm_update_unchecked(slot->held, x, y, z, w, weight_limit);
+    return GateOutcome::kHeld;
+  }
+
+  /// Counts a point folded into CCM cell `number` (suspect_ccm() was false, or
+  /// judge_suspect_ccm() said kFold); `new_run`: the point starts a run of that cell
+  /// (CheckRun::touch). For the change rule's count of in-gate points (held_pool.hpp, AcceptRun).
+  __attribute__((always_inline)) void count_accepted(CcmAccepts& accepts, bool new_run, std::uint32_t number) noexcept {
+    if (new_run) {
+      accepts.start(ccm_held_, number);
+    }
+    accepts.add();
+  }
+
+  /// The end of a chunk: the last run's in-gate points to the pool.
+  void flush_accepts(CcmAccepts& accepts) noexcept { accepts.flush(ccm_held_); }
 
   /// Judges a point of an OMG finest cell (number `number`, global index `index`) with
   /// measurement variance `variance` and weight w.
@@ -249,7 +281,8 @@ class OutlierGate {
   [[nodiscard]] GateOutcome range_error(const Layers& layers, const LayerWalk<Config>& walk, int layer,
                                         const FrontChunk& chunk, std::size_t i) noexcept {
     const float z = chunk.z[i];
-    if (layer > 0 && contradicted_by_finer(layers, walk, layer, chunk.ix0[i], chunk.iy0[i], z)) {
+    if (layer > 0 && layer < Layers::kLayerCount &&
+        contradicted_by_finer(layers, walk, layer, chunk.ix0[i], chunk.iy0[i], z)) {
       return GateOutcome::kFiner;
     }
     if (line_of_sight_ && sight_.occluded(layers, walk, layer, chunk.ix0[i], chunk.iy0[i], chunk.fx[i], chunk.fy[i], z,

@@ -9,7 +9,8 @@
 //
 // Per cell of the layers a pool serves, one 16-bit tag: during a frame, the number of the
 // frame's points the cell took inside its gate (saturating at 32767) while the cell has no slot,
-// or the index of its slot. A slot holds the held points' own statistics (for CCM and OMG cells
+// or the index of its slot. The update path hands CCM cells' in-gate points over by runs
+// (AcceptRun, below), OMG cells' one by one. A slot holds the held points' own statistics (for CCM and OMG cells
 // a cell of the same kind, built by the same update from an empty cell), the cell's number,
 // global index and layer, the points inside and outside its gate since the slot was taken, and
 // the frames it has lived. Slots go to cells in the order of their first held point; when all
@@ -60,6 +61,18 @@ class HeldPool {
       ++slots_[tag & kSlotMask].accepted;  // integrity: masked to the slots (a power of two)
     } else if (tag < kIndexMask) {
       ++tag;
+    }
+  }
+
+  /// Counts `n` points of cell `cell` (< kCells) inside its gate: accept(cell) n times, in
+  /// one step (AcceptRun hands a run's points over so).
+  void accept(std::uint32_t cell, std::uint32_t n) noexcept {
+    std::uint16_t& tag = tags_[cell];
+    if ((tag & kSlotBit) != 0U) {
+      slots_[tag & kSlotMask].accepted += n;  // integrity: masked to the slots (a power of two)
+    } else {
+      const std::uint32_t sum = std::uint32_t{tag} + n;
+      tag = static_cast<std::uint16_t>(sum < kIndexMask ? sum : kIndexMask);
     }
   }
 
@@ -200,6 +213,46 @@ class HeldPool {
   std::uint32_t used_ = 0U;
   std::uint32_t used_copy_ = 0U;  ///< integrity: used_ as sealed between frames
   CellCheck seals_[kSlots]{};     ///< integrity: check of each slot's bytes, sealed between frames
+};
+
+/// The in-gate points of a run of consecutive points folded into one cell, counted in a
+/// register and handed to the pool at once (HeldPool::accept(cell, n)) when a run of another
+/// cell starts and at the end of the chunk. Runs are the update path's check runs
+/// (map/detail/integrity.hpp, CheckRun::touch says when one starts): consecutive points of a
+/// frame mostly fall into the same cell (a CADRE frame's CCM points come in runs of six on
+/// average), so a point costs an add instead of a tag's load, test and store. The change rule
+/// reads the counts only at the frame's end, and a slot starts with its cell's tag and takes
+/// what is handed over after it, so the counts it reads are per-point accept()'s whether a run
+/// is handed over before or after its cell's slot is taken; with one exception: when the tag
+/// had saturated (32,767 points) before the slot, a run open at that moment counts in full
+/// (at most kFrontChunkPoints more). Lives in registers or on the call stack for one chunk,
+/// never in the map.
+template <typename Pool>
+class AcceptRun {
+ public:
+  /// A run of cell `cell` starts: the last run's points go to its cell.
+  void start(Pool& pool, std::uint32_t cell) noexcept {
+    flush(pool);
+    cell_ = cell;
+  }
+  /// One more point of the run inside its cell's gate.
+  void add() noexcept { ++count_; }
+  /// The run's points so far to its cell (the run goes on).
+  void flush(Pool& pool) noexcept {
+    if (count_ != 0U) {
+      pool.accept(cell_, count_);
+      handed_ += count_;
+      count_ = 0U;
+    }
+  }
+  /// Points handed to the pool so far, all runs: after the last flush, every point add()
+  /// counted (the update path's count of CCM points folded in).
+  [[nodiscard]] std::uint32_t handed() const noexcept { return handed_; }
+
+ private:
+  std::uint32_t cell_ = 0U;
+  std::uint32_t count_ = 0U;
+  std::uint32_t handed_ = 0U;
 };
 
 }  // namespace ccmap::detail

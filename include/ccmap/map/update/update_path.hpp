@@ -69,6 +69,10 @@ class UpdatePath {
   static constexpr bool kGateCompiled = kConfigOutlierGate<Config>;
   using Gate = OutlierGate<Config>;
   using Batch = KalmanBatch<kKalman ? Layers::kFineCellCount : 1U>;
+  /// A chunk's run of in-gate CCM points (gate.hpp), if the gate is compiled in.
+  using Accepts = std::conditional_t<kGateCompiled, typename Gate::CcmAccepts, char>;
+  /// The gate's per-chunk copy of what judges a CCM point (gate.hpp, ccm_judge), if compiled in.
+  using Judge = std::conditional_t<kGateCompiled, typename Gate::CcmJudge, char>;
 
   /// Derives the front (index scale, routing bounds), the gate's constants and the budget.
   /// max_range_sq_m2: the routing table's squared ranges (m^2), per layer. Empties the frame
@@ -306,10 +310,17 @@ class UpdatePath {
     // Pass 2: everything else walks the layers. Integrity: entries masked to the chunk; the CCM
     // and OMG writes keep their cells' checks through one run tracker for the chunk.
     CheckRuns<Layers> runs{};
+    Accepts accepts{};
+    const Judge judge = ccm_judge();
     for (std::size_t j = 0; j < others; ++j) {
-      apply<kGate>(layers, params, others_[j] & (kFrontChunkPoints - 1U), weights, unit_weights, c, runs);
+      apply<kGate>(layers, params, others_[j] & (kFrontChunkPoints - 1U), weights, unit_weights, c, runs, accepts,
+                   judge);
     }
     runs.close(layers);
+    if constexpr (kGate) {
+      gate_.flush_accepts(accepts);
+      c.used += accepts.handed();  // the CCM points folded in, counted by their runs
+    }
     frame.used += c.used;
     frame.rejected_non_finite += c.non_finite;
     frame.rejected_out_of_range += c.out_of_range;
@@ -320,6 +331,14 @@ class UpdatePath {
     frame.gated_occluded += c.occluded;
     frame.gated_held += c.held;
     frame.gated_pool_full += c.pool_full;
+  }
+
+  [[nodiscard]] Judge ccm_judge() const noexcept {
+    if constexpr (kGateCompiled) {
+      return gate_.ccm_judge();
+    } else {
+      return Judge{};
+    }
   }
 
   [[nodiscard]] const GateConstants& gate_constants(int layer) const noexcept {
@@ -358,6 +377,27 @@ class UpdatePath {
     }
   }
 
+  /// The gate's verdict on point i of the chunk in CCM cell `number` of `layer`, which
+  /// suspect_ccm() named (gate.hpp, judge_suspect_ccm). Out of line: rare, and a member so that
+  /// the hot loop passes no addresses of the walk, the chunk or the gate.
+  [[nodiscard]] __attribute__((noinline)) GateOutcome judge_suspect_ccm(const Layers& layers, int layer,
+                                                                        std::uint32_t number, std::size_t i, float x,
+                                                                        float y, float w, float weight_limit) noexcept {
+    if constexpr (kGateCompiled) {
+      return gate_.judge_suspect_ccm(layers, walk_, layer, number, chunk_, i, x, y, w, weight_limit);
+    } else {
+      (void)layers;
+      (void)layer;
+      (void)number;
+      (void)i;
+      (void)x;
+      (void)y;
+      (void)w;
+      (void)weight_limit;
+      return GateOutcome::kFold;
+    }
+  }
+
   /// Adds a gate outcome other than kFold to the chunk's counts.
   static void count_outcome(GateOutcome outcome, ChunkCounts& c) noexcept {
     switch (outcome) {
@@ -372,7 +412,7 @@ class UpdatePath {
   /// Every other entry: refusals, weights, the walk, one CCM, Kalman or OMG cell.
   template <bool kGate>
   __attribute__((always_inline)) void apply(Layers& layers, const StackParams& params, std::size_t i, const float* weights, bool unit_weights,
-             ChunkCounts& c, CheckRuns<Layers>& runs) noexcept {
+             ChunkCounts& c, CheckRuns<Layers>& runs, Accepts& accepts, const Judge& judge) noexcept {
     const std::int32_t code = chunk_.code[i];
     // Unsigned (integrity): a negative code, which the front never writes, is refused with them
     // (uncounted) rather than starting the walk below layer 0.
@@ -397,22 +437,29 @@ class UpdatePath {
       ++c.outside;
       return;
     }
-    const CellIndex index{ix0 >> hit.layer, iy0 >> hit.layer};
     if (Layers::is_ccm(hit.layer)) {
       const float x = walk_.relative(hit.layer, ix0, chunk_.fx[i], front_.width);
       const float y = walk_.relative(hit.layer, iy0, chunk_.fy[i], front_.width);
+      auto& cell = layers.ccm_storage[hit.number];
       if constexpr (kGate) {
-        const GateOutcome outcome =
-            gate_.judge_ccm(layers, walk_, hit.layer, hit.number, index, chunk_, i, x, y, weight, params.weight_limit);
-        if (outcome != GateOutcome::kFold) {
-          count_outcome(outcome, c);
-          return;
+        // The common case, a point inside the gate of a known cell, takes one branch; the
+        // rest is out of line (judge_suspect_ccm), so that this loop keeps its registers.
+        if (__builtin_expect(Gate::suspect_ccm(judge, cell, chunk_.z[i], hit.layer), 0)) {
+          const GateOutcome outcome =
+              judge_suspect_ccm(layers, hit.layer, hit.number, i, x, y, weight, params.weight_limit);
+          if (outcome != GateOutcome::kFold) {
+            count_outcome(outcome, c);
+            return;
+          }
         }
       }
-      auto& cell = layers.ccm_storage[hit.number];
-      runs.ccm.touch(layers, cell);  // integrity hook
+      const bool new_run = runs.ccm.touch(layers, cell);  // integrity hook
+      if constexpr (kGate) {
+        gate_.count_accepted(accepts, new_run, hit.number);  // and in c.used at the chunk's end
+      } else {
+        ++c.used;
+      }
       ccm_update_unchecked(cell, x, y, chunk_.z[i], weight, params.weight_limit);
-      ++c.used;
       return;
     }
     if constexpr (kKalman) {
@@ -422,7 +469,8 @@ class UpdatePath {
       const float variance = measurement_variance(params, chunk_.range_sq[i]);
       const float z = chunk_.z[i];
       if constexpr (kGate) {
-        const GateOutcome outcome = gate_.judge_omg(layers, hit.number, index, z, variance, weight, params.weight_limit);
+        const GateOutcome outcome =
+            gate_.judge_omg(layers, hit.number, CellIndex{ix0, iy0}, z, variance, weight, params.weight_limit);
         if (outcome != GateOutcome::kFold) {
           count_outcome(outcome, c);
           return;
