@@ -170,12 +170,19 @@ Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, 
 // at load time (ifunc) on CPUs that have it (the baseline clone calls fmaf). Every clone
 // computes the same floats: single IEEE operations in the same order, the fused multiply-add
 // written out (std::fma rounds once everywhere). tests/map/front_test.cpp and the golden hashes
-// check it.
+// check it. Two traps, both found on 2026-12-06, when the host had run the baseline clone's
+// scalar SSE all along: a clone compiles only what is inlined into it, so the loops below are
+// forced inline (CCMAP_FRONT_LOOP) into the two cloned entry points; and the clone is named by
+// its ISA level (x86-64-v3: AVX2, FMA, BMI2; gcc >= 12), which the loader tests with
+// __builtin_cpu_supports, not by a CPU model: "arch=haswell" is chosen only on a CPU that *is* a
+// Haswell (__builtin_cpu_is), never on a later Intel or an AMD one.
 // ---------------------------------------------------------------------------------------------
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__gnu_linux__)
-#define CCMAP_FRONT_CLONES __attribute__((target_clones("arch=haswell", "default")))
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__gnu_linux__) && __GNUC__ >= 12
+#define CCMAP_FRONT_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define CCMAP_FRONT_LOOP __attribute__((always_inline)) inline
 #else
 #define CCMAP_FRONT_CLONES
+#define CCMAP_FRONT_LOOP
 #endif
 
 namespace ccmap::detail {
@@ -215,7 +222,7 @@ inline FineSlot fine_slot_of(const FineWindow& fine) noexcept {
 /// vectorise the routing's float compares in one loop with the transform): routing, the Kalman
 /// slot, the Q14 height and the range key.
 template <int kLayers>
-void finish_entries(std::size_t first, std::size_t n, const float (&bounds)[kFrontMaxLayers], const FineSlot& fine,
+CCMAP_FRONT_LOOP void finish_entries(std::size_t first, std::size_t n, const float (&bounds)[kFrontMaxLayers], const FineSlot& fine,
                     FrontChunk& __restrict out) noexcept {
   for (std::size_t i = first; i < n; ++i) {
     const std::int32_t valid = out.code[i];
@@ -404,7 +411,7 @@ std::size_t sensor_chunk_neon(const PointXYZ* __restrict points, std::size_t n, 
 // __restrict: the caller's points and the chunk never overlap (the chunk is the update path's
 // own scratch), which lets the loops vectorise without run-time alias checks.
 template <int kLayers>
-void map_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
+CCMAP_FRONT_LOOP void map_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
                const FineWindow& window, FrontChunk& __restrict out) noexcept {
   const std::uint32_t limit_bits = bits_of(kMaxAbsCoordinateM);
   const float inv = config.inv_width;
@@ -450,7 +457,7 @@ void map_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose
 
 
 template <int kLayers>
-void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
+CCMAP_FRONT_LOOP void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
                   const FineWindow& window, FrontChunk& __restrict out) noexcept {
   constexpr std::uint32_t kLimitBits = 0x45000000U;  // bits_of(2048.0F), exclusive
   const float c[6] = {pose.rotation_cells[0], pose.rotation_cells[1], pose.rotation_cells[2],
