@@ -177,7 +177,9 @@ Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, 
 // __builtin_cpu_supports, not by a CPU model: "arch=haswell" is chosen only on a CPU that *is* a
 // Haswell (__builtin_cpu_is), never on a later Intel or an AMD one.
 // ---------------------------------------------------------------------------------------------
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__gnu_linux__) && __GNUC__ >= 12
+// A coverage build defines CCMAP_FRONT_NO_CLONES (src/map/sources.cmake): one baseline copy.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__gnu_linux__) && __GNUC__ >= 12 && \
+    !defined(CCMAP_FRONT_NO_CLONES)
 #define CCMAP_FRONT_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #define CCMAP_FRONT_LOOP __attribute__((always_inline)) inline
 #else
