@@ -1,6 +1,7 @@
 #include "ccmap/map/update/front.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #if defined(__aarch64__) && defined(__ARM_NEON)
@@ -220,12 +221,91 @@ inline FineSlot fine_slot_of(const FineWindow& fine) noexcept {
                   static_cast<std::uint32_t>(fine.min.y)};
 }
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#define CCMAP_FRONT_VECTOR 1
+// finish_entries (below) eight points per step in GCC vector extensions, for x86-64: its loop,
+// inlined into the chunk functions, stays scalar ("control flow in loop", -fopt-info-vec-missed).
+// The AVX2 clone computes each step in 32-byte registers, the baseline one (and a coverage build)
+// in two SSE2 halves. The same IEEE operations on the same values as that loop, lane by lane; a
+// vector compare is all ones (-1) where true, and `m ? a : b` selects lane by lane.
+// tests/map/front_test.cpp checks the chunks bit for bit against one point at a time, and the
+// golden hashes host against aarch64.
+using F8 = float __attribute__((vector_size(32)));
+using I8 = std::int32_t __attribute__((vector_size(32)));
+using U8 = std::uint32_t __attribute__((vector_size(32)));
+
+/// floor of eight floats as int32 (|v| < 2^31): the truncation, less one where it rounded up.
+/// A macro: a function taking or returning a 32-byte vector by value is an ABI warning (-Wpsabi)
+/// in the baseline clone.
+#define CCMAP_FLOOR8(v, out)                                                  \
+  do {                                                                        \
+    const I8 t_ = __builtin_convertvector((v), I8);                           \
+    (out) = t_ + static_cast<I8>(__builtin_convertvector(t_, F8) > (v));      \
+  } while (false)
+
+/// Entries [first, first + 8 k) of finish_entries, for the largest k; returns where it stopped.
+template <int kLayers>
+CCMAP_FRONT_LOOP std::size_t finish_entries_x8(std::size_t first, std::size_t n, const float (&bounds)[kFrontMaxLayers],
+                                               const FineSlot& fine, FrontChunk& __restrict out) noexcept {
+  const std::size_t done = first + (n - first) / 8U * 8U;
+  F8 bound[static_cast<std::size_t>(kLayers)];
+  for (std::size_t k = 0; k < std::size_t{kLayers}; ++k) {
+    bound[k] = F8{} + bounds[k];
+  }
+  const U8 side = U8{} + fine.side;
+  const U8 mask = U8{} + fine.mask;
+  const U8 min_x = U8{} + fine.min_x;
+  const U8 min_y = U8{} + fine.min_y;
+  const F8 key_cap = F8{} + 524287.0F;
+  const I8 too_noisy = I8{} + std::int32_t{kFrontTooNoisy};
+  const I8 none = I8{} - 1;
+  for (std::size_t i = first; i < done; i += 8U) {
+    I8 valid;
+    F8 r2;
+    I8 ix0;
+    I8 iy0;
+    F8 z;
+    std::memcpy(&valid, &out.code[i], sizeof valid);
+    std::memcpy(&r2, &out.range_sq[i], sizeof r2);
+    std::memcpy(&ix0, &out.ix0[i], sizeof ix0);
+    std::memcpy(&iy0, &out.iy0[i], sizeof iy0);
+    std::memcpy(&z, &out.z[i], sizeof z);
+    I8 layer = I8{};
+    for (std::size_t k = 0; k < std::size_t{kLayers}; ++k) {
+      layer -= (r2 > bound[k]);
+    }
+    const I8 noisy = (layer >= kLayers) | ~(r2 > F8{});  // beyond the last bound, or at the sensor
+    const I8 routed = noisy ? too_noisy : layer;
+    const I8 code = (valid != 0) ? valid : routed;
+    const U8 ux = __builtin_convertvector(ix0, U8);
+    const U8 uy = __builtin_convertvector(iy0, U8);
+    const I8 ok = ((ux - min_x) < side) & ((uy - min_y) < side) & (code == 0);
+    const I8 slot = __builtin_convertvector(((uy & mask) << fine.log2_side) | (ux & mask), I8);
+    const I8 fine_slot = ok ? slot : none;
+    const F8 capped = (r2 < key_cap) ? r2 : key_cap;
+    I8 height;
+    I8 key;
+    CCMAP_FLOOR8(z * 16384.0F, height);
+    CCMAP_FLOOR8(capped * 4096.0F, key);
+    std::memcpy(&out.code[i], &code, sizeof code);
+    std::memcpy(&out.fine_slot[i], &fine_slot, sizeof fine_slot);
+    std::memcpy(&out.height_q14[i], &height, sizeof height);
+    std::memcpy(&out.range_key[i], &key, sizeof key);
+  }
+  return done;
+}
+#undef CCMAP_FLOOR8
+#endif
+
 /// The entries derived from code, index, height and range (second loop of a chunk: gcc does not
 /// vectorise the routing's float compares in one loop with the transform): routing, the Kalman
 /// slot, the Q14 height and the range key.
 template <int kLayers>
-CCMAP_FRONT_LOOP void finish_entries(std::size_t first, std::size_t n, const float (&bounds)[kFrontMaxLayers], const FineSlot& fine,
-                    FrontChunk& __restrict out) noexcept {
+CCMAP_FRONT_LOOP void finish_entries(std::size_t first, std::size_t n, const float (&bounds)[kFrontMaxLayers],
+                                      const FineSlot& fine, FrontChunk& __restrict out) noexcept {
+#if defined(CCMAP_FRONT_VECTOR)
+  first = finish_entries_x8<kLayers>(first, n, bounds, fine, out);
+#endif
   for (std::size_t i = first; i < n; ++i) {
     const std::int32_t valid = out.code[i];
     const float r2 = out.range_sq[i];
@@ -413,8 +493,9 @@ std::size_t sensor_chunk_neon(const PointXYZ* __restrict points, std::size_t n, 
 // __restrict: the caller's points and the chunk never overlap (the chunk is the update path's
 // own scratch), which lets the loops vectorise without run-time alias checks.
 template <int kLayers>
-CCMAP_FRONT_LOOP void map_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
-               const FineWindow& window, FrontChunk& __restrict out) noexcept {
+CCMAP_FRONT_LOOP void map_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose,
+                                 const FrontConfig& config, const FineWindow& window,
+                                 FrontChunk& __restrict out) noexcept {
   const std::uint32_t limit_bits = bits_of(kMaxAbsCoordinateM);
   const float inv = config.inv_width;
   const float ox = pose.origin[0];
@@ -459,8 +540,9 @@ CCMAP_FRONT_LOOP void map_chunk(const PointXYZ* __restrict points, std::size_t n
 
 
 template <int kLayers>
-CCMAP_FRONT_LOOP void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose, const FrontConfig& config,
-                  const FineWindow& window, FrontChunk& __restrict out) noexcept {
+CCMAP_FRONT_LOOP void sensor_chunk(const PointXYZ* __restrict points, std::size_t n, const FramePose& pose,
+                                    const FrontConfig& config, const FineWindow& window,
+                                    FrontChunk& __restrict out) noexcept {
   constexpr std::uint32_t kLimitBits = 0x45000000U;  // bits_of(2048.0F), exclusive
   const float c[6] = {pose.rotation_cells[0], pose.rotation_cells[1], pose.rotation_cells[2],
                       pose.rotation_cells[3], pose.rotation_cells[4], pose.rotation_cells[5]};
