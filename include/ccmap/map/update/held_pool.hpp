@@ -10,9 +10,9 @@
 // Per cell of the layers a pool serves, one 16-bit tag: during a frame, the number of the
 // frame's points the cell took inside its gate (saturating at 32767) while the cell has no slot,
 // or the index of its slot. The update path hands CCM cells' in-gate points over by runs
-// (AcceptRun, below), OMG cells' one by one. A slot holds the held points' own statistics (for CCM and OMG cells
-// a cell of the same kind, built by the same update from an empty cell), the cell's number,
-// global index and layer, the points inside and outside its gate since the slot was taken, and
+// (AcceptRun, below), OMG cells' one by one. A slot holds the held points' own statistics (for
+// CCM and OMG cells a cell of the same kind, built by the same update from an empty cell), the
+// cell's number, global index and layer, the points inside and outside its gate since the slot was taken, and
 // the frames it has lived. Slots go to cells in the order of their first held point; when all
 // kSlots are taken, a held point of a cell without a slot is dropped and counted
 // (gated_pool_full), so a change over more cells than that gets in over several frames.

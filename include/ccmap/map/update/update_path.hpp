@@ -311,7 +311,7 @@ class UpdatePath {
     // and OMG writes keep their cells' checks through one run tracker for the chunk.
     CheckRuns<Layers> runs{};
     Accepts accepts{};
-    const Judge judge = ccm_judge();
+    const Judge judge = ccm_judge<kGate>();
     for (std::size_t j = 0; j < others; ++j) {
       apply<kGate>(layers, params, others_[j] & (kFrontChunkPoints - 1U), weights, unit_weights, c, runs, accepts,
                    judge);
@@ -333,8 +333,11 @@ class UpdatePath {
     frame.gated_pool_full += c.pool_full;
   }
 
+  /// The gate's constants for the CCM points of one chunk (kGate: the gate is on, so compiled
+  /// in); nothing without the gate.
+  template <bool kGate>
   [[nodiscard]] Judge ccm_judge() const noexcept {
-    if constexpr (kGateCompiled) {
+    if constexpr (kGate) {
       return gate_.ccm_judge();
     } else {
       return Judge{};
@@ -379,23 +382,13 @@ class UpdatePath {
 
   /// The gate's verdict on point i of the chunk in CCM cell `number` of `layer`, which
   /// suspect_ccm() named (gate.hpp, judge_suspect_ccm). Out of line: rare, and a member so that
-  /// the hot loop passes no addresses of the walk, the chunk or the gate.
+  /// the hot loop passes no addresses of the walk, the chunk or the gate. Called only by
+  /// back_half<true>, which exists only when the gate is compiled in (a member of a class
+  /// template is instantiated only where it is used).
   [[nodiscard]] __attribute__((noinline)) GateOutcome judge_suspect_ccm(const Layers& layers, int layer,
                                                                         std::uint32_t number, std::size_t i, float x,
                                                                         float y, float w, float weight_limit) noexcept {
-    if constexpr (kGateCompiled) {
-      return gate_.judge_suspect_ccm(layers, walk_, layer, number, chunk_, i, x, y, w, weight_limit);
-    } else {
-      (void)layers;
-      (void)layer;
-      (void)number;
-      (void)i;
-      (void)x;
-      (void)y;
-      (void)w;
-      (void)weight_limit;
-      return GateOutcome::kFold;
-    }
+    return gate_.judge_suspect_ccm(layers, walk_, layer, number, chunk_, i, x, y, w, weight_limit);
   }
 
   /// Adds a gate outcome other than kFold to the chunk's counts.
