@@ -2,7 +2,7 @@
  * instructions executed between marker instructions (icount_marker_encoding.h), per region
  * and per instruction class (a64_class.h), and writes them to a file at exit.
  *
- *   qemu-aarch64 -L /usr/aarch64-linux-gnu -plugin libccmap_icount.so,out=FILE prog args
+ *   qemu-aarch64 -L /usr/aarch64-linux-gnu -plugin libccmap_icount.so,out=FILE[,pcs=PCS] prog args
  *   (add -d plugin to see the same lines on QEMU's log)
  *
  * How it counts. At translation time each block is cut at its marker instructions into
@@ -25,7 +25,18 @@
  * allocations). The counters are plain (not atomic) and the marker state is global: a guest
  * with more than one thread (vcpus > 1) gets meaningless counts, which is why vcpus is
  * reported. Only the process that loaded the plugin writes FILE (a forked child's counts are
- * dropped). */
+ * dropped).
+ *
+ * Per-address mode (optional, a profiler on the target's count): pcs=PCS adds one inline add
+ * per executed instruction (QEMU runs about twice as slow) and writes PCS at exit, sorted by
+ * address:
+ *   # ccmap icount per-address counts: guest virtual address, executions
+ *   0x<address> <executions>          (one line per instruction that ran)
+ *   # addresses=N dropped=N
+ * Addresses are the guest's virtual ones (a PIE program sits at QEMU's load address;
+ * tools/icount-annotate maps them to functions). The table holds 2^20 addresses; instructions
+ * at addresses past that are not counted there, and `dropped` counts their translations. The
+ * counts of PCS sum to the total's insns. */
 #define _POSIX_C_SOURCE 200809L /* getpid, pid_t */
 
 #include <errno.h>
@@ -80,6 +91,50 @@ static uint64_t g_vcpus;
 static uint64_t g_alloc_failures;
 static char *g_out_path;
 static pid_t g_owner_pid;
+
+/* Per-address mode: an open-addressing table of instruction addresses and their executions,
+ * allocated only when pcs= is given. Address 0 marks a free entry (no guest code runs there). */
+#define PCS_CAPACITY (1U << 20)
+struct pc_count {
+  uint64_t address;
+  uint64_t executions;
+};
+static struct pc_count *g_pcs;
+static size_t g_pcs_used;
+static uint64_t g_pcs_dropped;
+static char *g_pcs_path;
+
+/* The table's entry of an address, created on first use; NULL when the table is full. */
+static struct pc_count *pc_entry(uint64_t address) {
+  size_t i = (size_t)(((address >> 2) * 0x9E3779B97F4A7C15ULL) >> 44); /* 20 bits */
+  for (size_t probes = 0; probes < PCS_CAPACITY; ++probes, i = (i + 1U) & (PCS_CAPACITY - 1U)) {
+    if (g_pcs[i].address == address) {
+      return &g_pcs[i];
+    }
+    if (g_pcs[i].address == 0U) {
+      if (g_pcs_used + 1U >= PCS_CAPACITY) {
+        return NULL; /* keep one entry free: a lookup always ends */
+      }
+      g_pcs[i].address = address;
+      ++g_pcs_used;
+      return &g_pcs[i];
+    }
+  }
+  return NULL;
+}
+
+/* Adds one execution of insn to its address's count (per-address mode). */
+static void count_address(struct qemu_plugin_insn *insn) {
+  if (g_pcs == NULL) {
+    return;
+  }
+  struct pc_count *entry = pc_entry(qemu_plugin_insn_vaddr(insn));
+  if (entry == NULL) {
+    ++g_pcs_dropped;
+    return;
+  }
+  qemu_plugin_register_vcpu_insn_exec_inline(insn, QEMU_PLUGIN_INLINE_ADD_U64, &entry->executions, 1U);
+}
 
 /* A marker's callback data: the region id and, in bit 16, end (1) or begin (0). */
 #define MARKER_END_FLAG 0x10000U
@@ -142,6 +197,7 @@ static void on_translate(qemu_plugin_id_t id, struct qemu_plugin_tb *tb) {
   struct qemu_plugin_insn *segment_first = NULL;
   for (size_t i = 0; i < n; ++i) {
     struct qemu_plugin_insn *insn = qemu_plugin_tb_get_insn(tb, i);
+    count_address(insn);
     uint32_t word = 0;
     if (qemu_plugin_insn_size(insn) == sizeof word) {
       memcpy(&word, qemu_plugin_insn_data(insn), sizeof word); /* A64: 4 bytes, little-endian */
@@ -185,11 +241,44 @@ static void emit(FILE *out, const char *line) {
   qemu_plugin_outs(line);
 }
 
+static int by_address(const void *a, const void *b) {
+  const uint64_t x = ((const struct pc_count *)a)->address;
+  const uint64_t y = ((const struct pc_count *)b)->address;
+  return (x > y) - (x < y);
+}
+
+/* Writes the per-address counts (pcs=), sorted by address; the table is compacted in place. */
+static void write_pcs(void) {
+  size_t n = 0;
+  for (size_t i = 0; i < PCS_CAPACITY; ++i) {
+    if (g_pcs[i].address != 0U && g_pcs[i].executions != 0U) {
+      g_pcs[n++] = g_pcs[i];
+    }
+  }
+  qsort(g_pcs, n, sizeof *g_pcs, by_address);
+  FILE *out = fopen(g_pcs_path, "w");
+  if (out == NULL) {
+    fprintf(stderr, "ccmap icount: cannot write %s: %s\n", g_pcs_path, strerror(errno));
+    return;
+  }
+  fputs("# ccmap icount per-address counts: guest virtual address, executions\n", out);
+  for (size_t i = 0; i < n; ++i) {
+    fprintf(out, "0x%" PRIx64 " %" PRIu64 "\n", g_pcs[i].address, g_pcs[i].executions);
+  }
+  fprintf(out, "# addresses=%zu dropped=%" PRIu64 "\n", n, g_pcs_dropped);
+  if (fclose(out) != 0) {
+    fprintf(stderr, "ccmap icount: cannot write %s: %s\n", g_pcs_path, strerror(errno));
+  }
+}
+
 static void on_exit_write(qemu_plugin_id_t id, void *userdata) {
   (void)id;
   (void)userdata;
   if (getpid() != g_owner_pid) {
     return; /* a forked child: only the process that loaded the plugin writes the file */
+  }
+  if (g_pcs != NULL) {
+    write_pcs();
   }
   FILE *out = fopen(g_out_path, "w");
   if (out == NULL) {
@@ -237,10 +326,25 @@ CCMAP_QEMU_PLUGIN_EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu
   for (int i = 0; i < argc; ++i) {
     if (strncmp(argv[i], "out=", 4) == 0 && argv[i][4] != '\0') {
       g_out_path = argv[i] + 4; /* argv stays valid for the plugin's lifetime */
+    } else if (strncmp(argv[i], "pcs=", 4) == 0 && argv[i][4] != '\0') {
+      g_pcs_path = argv[i] + 4;
     } else {
-      fprintf(stderr, "ccmap icount: unknown argument '%s' (expected out=FILE)\n", argv[i]);
+      fprintf(stderr, "ccmap icount: unknown argument '%s' (expected out=FILE [pcs=FILE])\n", argv[i]);
       return -1;
     }
+  }
+  if (g_pcs_path != NULL) {
+    g_pcs = calloc(PCS_CAPACITY, sizeof *g_pcs);
+    if (g_pcs == NULL) {
+      fprintf(stderr, "ccmap icount: no memory for the per-address table\n");
+      return -1;
+    }
+    FILE *pcs = fopen(g_pcs_path, "w"); /* truncated now, as FILE */
+    if (pcs == NULL) {
+      fprintf(stderr, "ccmap icount: cannot write %s: %s\n", g_pcs_path, strerror(errno));
+      return -1;
+    }
+    fclose(pcs);
   }
   if (g_out_path == NULL) {
     fprintf(stderr, "ccmap icount: missing argument out=FILE\n");
