@@ -247,9 +247,10 @@ using U8 = std::uint32_t __attribute__((vector_size(32)));
 template <int kLayers>
 CCMAP_FRONT_LOOP std::size_t finish_entries_x8(std::size_t first, std::size_t n, const float (&bounds)[kFrontMaxLayers],
                                                const FineSlot& fine, FrontChunk& __restrict out) noexcept {
+  constexpr auto kBounds = static_cast<std::size_t>(kLayers);
   const std::size_t done = first + (n - first) / 8U * 8U;
-  F8 bound[static_cast<std::size_t>(kLayers)];
-  for (std::size_t k = 0; k < std::size_t{kLayers}; ++k) {
+  F8 bound[kBounds];
+  for (std::size_t k = 0; k < kBounds; ++k) {
     bound[k] = F8{} + bounds[k];
   }
   const U8 side = U8{} + fine.side;
@@ -271,7 +272,7 @@ CCMAP_FRONT_LOOP std::size_t finish_entries_x8(std::size_t first, std::size_t n,
     std::memcpy(&iy0, &out.iy0[i], sizeof iy0);
     std::memcpy(&z, &out.z[i], sizeof z);
     I8 layer = I8{};
-    for (std::size_t k = 0; k < std::size_t{kLayers}; ++k) {
+    for (std::size_t k = 0; k < kBounds; ++k) {
       layer -= (r2 > bound[k]);
     }
     const I8 noisy = (layer >= kLayers) | ~(r2 > F8{});  // beyond the last bound, or at the sensor
