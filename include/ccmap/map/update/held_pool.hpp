@@ -12,9 +12,9 @@
 // or the index of its slot. The update path hands CCM cells' in-gate points over by runs
 // (AcceptRun, below), OMG cells' one by one. A slot holds the held points' own statistics (for
 // CCM and OMG cells a cell of the same kind, built by the same update from an empty cell), the
-// cell's number, global index and layer, the points inside and outside its gate since the slot was taken, and
-// the frames it has lived. Slots go to cells in the order of their first held point; when all
-// kSlots are taken, a held point of a cell without a slot is dropped and counted
+// cell's number, global index and layer, the points inside and outside its gate since the slot
+// was taken, and the frames it has lived. Slots go to cells in the order of their first held
+// point; when all kSlots are taken, a held point of a cell without a slot is dropped and counted
 // (gated_pool_full), so a change over more cells than that gets in over several frames.
 // No heap, no exceptions; O(1) per point; O(cells of the pool's layers + slots) per frame.
 #pragma once
