@@ -719,7 +719,7 @@ ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t siz
  * the sequence words, with fences), so the exchange is free of data races in the C11/C++11
  * memory model, also for 32-bit targets. A reader on the ground decodes the bytes alone
  * (ccmap_product_decode, the C++ header-only decoder, Python ccmap.decode_product). */
-#define CCMAP_PRODUCT_HEADER_SIZE 80u
+#define CCMAP_PRODUCT_HEADER_SIZE 88u
 #define CCMAP_PRODUCT_CELL_SIZE 12u
 #define CCMAP_PRODUCT_CRC_SIZE 4u
 #define CCMAP_PRODUCT_VERSION 1u
@@ -728,7 +728,7 @@ ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t siz
 #define CCMAP_PRODUCT_READ_TRIES 8u
 /* Bytes of a product of side_x * side_y cells. */
 #define CCMAP_PRODUCT_SIZE(side_x, side_y) \
-  (CCMAP_PRODUCT_HEADER_SIZE + CCMAP_PRODUCT_CELL_SIZE * (uint32_t)(side_x) * (uint32_t)(side_y) + CCMAP_PRODUCT_CRC_SIZE)
+  (CCMAP_PRODUCT_HEADER_SIZE + CCMAP_PRODUCT_CELL_SIZE * (side_x) * (side_y) + CCMAP_PRODUCT_CRC_SIZE)
 /* Caller storage for the double buffer of products of up to `cells` cells: two slots + staging. */
 #define CCMAP_PRODUCT_BUFFERS_STORAGE_SIZE(cells) (3u * CCMAP_PRODUCT_SIZE(cells, 1u))
 
