@@ -4,6 +4,7 @@
 // points at it), the Stack<Config> at kStackOffset. Every entry point checks the header's magic
 // and preset, then dispatches to the preset's Stack through a generic lambda.
 #include "ccmap/ccmap.h"
+#include "ccmap/capi_params.hpp"
 
 #include <cstddef>
 #include <atomic>
@@ -628,6 +629,11 @@ void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
 }
 
 }  // namespace
+
+void stack_params_to_c(const StackParams& params, ccmap_params* out) noexcept { params_to_c(params, out, true); }
+Status stack_params_from_c(const ccmap_params& params, StackParams* out) noexcept { return params_from_c(params, out); }
+std::uint32_t c_params_crc(const ccmap_params& params) noexcept { return params_crc(params); }
+
 }  // namespace ccmap
 
 using ccmap::Status;
