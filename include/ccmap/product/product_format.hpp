@@ -42,8 +42,8 @@ struct ProductHeader {
   std::uint32_t map_sequence = 0U;      ///< +16 frame updates the map had folded in (since init or load)
   std::uint32_t params_crc = 0U;        ///< +20 CRC-32 of the C parameters the map ran with (ccmap_health)
   std::uint16_t preset = 0U;            ///< +24 ccmap_preset
-  std::uint16_t answer = 0U;            ///< +26 0: the stack's answer at each cell centre; 1: the layer's own
-  std::int16_t layer = 0;               ///< +28 the layer whose window and cells these are
+  std::int16_t layer = 0;               ///< +26 the layer whose window and cells these are
+  std::uint16_t answer = 0U;            ///< +28 0: the stack's answer at each cell centre; 1: the layer's own
   std::uint16_t cell_bytes = 0U;        ///< +30 kProductCellSize
   std::uint16_t side_x = 0U;            ///< +32 cells along x
   std::uint16_t side_y = 0U;            ///< +34 cells along y
@@ -142,8 +142,8 @@ inline void encode_product_header(const ProductHeader& h, std::uint8_t* out) noe
   put_u32(out + 16, h.map_sequence);
   put_u32(out + 20, h.params_crc);
   put_u16(out + 24, h.preset);
-  put_u16(out + 26, h.answer);
-  put_u16(out + 28, static_cast<std::uint16_t>(h.layer));
+  put_u16(out + 26, static_cast<std::uint16_t>(h.layer));
+  put_u16(out + 28, h.answer);
   put_u16(out + 30, static_cast<std::uint16_t>(kProductCellSize));
   put_u16(out + 32, h.side_x);
   put_u16(out + 34, h.side_y);
@@ -185,8 +185,8 @@ inline void encode_product_header(const ProductHeader& h, std::uint8_t* out) noe
   h.map_sequence = get_u32(data + 16);
   h.params_crc = get_u32(data + 20);
   h.preset = get_u16(data + 24);
-  h.answer = get_u16(data + 26);
-  h.layer = static_cast<std::int16_t>(get_u16(data + 28));
+  h.layer = static_cast<std::int16_t>(get_u16(data + 26));
+  h.answer = get_u16(data + 28);
   h.cell_bytes = get_u16(data + 30);
   h.side_x = get_u16(data + 32);
   h.side_y = get_u16(data + 34);
