@@ -13,19 +13,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "ccmap/ccmap.h"
-#include "harness.h"
-
-#define CHECK(cond) ccmap_test_check((cond) ? 1 : 0, __FILE__, __LINE__, #cond)
-
-#define CHECK_STATUS(expr, expected)                                                          \
-  do {                                                                                        \
-    const ccmap_status got_ = (expr);                                                         \
-    ccmap_test_check_texts(got_ == (expected), __FILE__, __LINE__, #expr,                     \
-                           ccmap_status_string(got_), ccmap_status_string(expected));         \
-  } while (0)
-
-#define CHECK_NEAR(a, b, tol) ccmap_test_check_near((float)(a), (float)(b), (float)(tol), __FILE__, __LINE__, #a)
+#include "capi_checks.h"
 
 static ccmap_cadre_storage g_storage;
 static ccmap_cadre_storage g_storage_copy;

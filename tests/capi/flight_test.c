@@ -11,17 +11,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "ccmap/ccmap.h"
-#include "harness.h"
-
-#define CHECK(cond) ccmap_test_check((cond) ? 1 : 0, __FILE__, __LINE__, #cond)
-#define CHECK_STATUS(expr, expected)                                                          \
-  do {                                                                                        \
-    const ccmap_status got_ = (expr);                                                         \
-    ccmap_test_check_texts(got_ == (expected), __FILE__, __LINE__, #expr,                     \
-                           ccmap_status_string(got_), ccmap_status_string(expected));         \
-  } while (0)
-#define CHECK_EQ(a, b) ccmap_test_check_equal((int64_t)(a), (int64_t)(b), __FILE__, __LINE__, #a " == " #b)
+#include "capi_checks.h"
 
 static ccmap_cadre_storage g_a;
 static ccmap_cadre_storage g_b;
