@@ -715,9 +715,9 @@ ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t siz
  * at and accepts the copy only if the slot's sequence was even and unchanged across the copy
  * (acquire) and the CRC, size and product sequence agree; else it tries again, at most
  * CCMAP_PRODUCT_READ_TRIES times (CCMAP_BUSY). The writer never waits for a reader. Every access
- * to the slots and sequence words is a 32-bit atomic (relaxed for the bytes, release/acquire for
- * the sequence words, with fences), so the exchange is free of data races in the C11/C++11
- * memory model, also for 32-bit targets. A reader on the ground decodes the bytes alone
+ * to the slots and sequence words is a 32-bit atomic (the product's words stored with release and
+ * loaded with acquire; include/ccmap/product/product_buffers.hpp gives the argument), so the
+ * exchange is free of data races in the C11/C++11 memory model, also for 32-bit targets. A reader on the ground decodes the bytes alone
  * (ccmap_product_decode, the C++ header-only decoder, Python ccmap.decode_product). */
 #define CCMAP_PRODUCT_HEADER_SIZE 88u
 #define CCMAP_PRODUCT_CELL_SIZE 12u

@@ -692,7 +692,9 @@ ccmap_status ccmap_init(ccmap_map* map, const ccmap_params* params) {
   }
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack, ccmap::HandleHeader& header) {
     const Status status = stack.init(p);
-    ccmap::remember_params(header, *params);
+    if (status == Status::kOk) {
+      ccmap::remember_params(header, *params);
+    }
     header.products_published = 0U;
     return ccmap::to_c(status);
   });
