@@ -82,8 +82,9 @@ static_assert(CCMAP_PRODUCT_HEADER_SIZE == kProductHeaderSize && CCMAP_PRODUCT_C
                   CCMAP_PRODUCT_READ_TRIES == kProductReadTries && CCMAP_PRODUCT_SIZE(3, 5) == product_size(3U, 5U),
               "ccmap.h product constants != product/product_format.hpp");
 // ccmap_params has no padding: its bytes (the CRC of ccmap_health.params_crc) are its fields.
-static_assert(sizeof(ccmap_params) == (7U + CCMAP_MAX_LAYERS + 6U + 3U) * 4U + sizeof(ccmap_noise_params) + 2U * 4U &&
-                  sizeof(ccmap_noise_params) == 8U * 4U,
+static_assert(sizeof(ccmap_params) == std::size_t{7U + CCMAP_MAX_LAYERS + 6U + 3U + 2U} * sizeof(float) +
+                                          sizeof(ccmap_noise_params) &&
+                  sizeof(ccmap_noise_params) == std::size_t{8U} * sizeof(float),
               "ccmap_params must have no padding");
 static_assert(sizeof(ccmap_frame_counters) == sizeof(FrameCounters), "ccmap_frame_counters != FrameCounters");
 
@@ -257,11 +258,17 @@ bool valid_preset(std::int64_t preset) noexcept {
 }
 
 std::size_t storage_size(ccmap_preset preset) noexcept {
-  return visit_preset(preset, std::size_t{0}, [](auto tag) { return Preset<typename decltype(tag)::type>::kStorageSize; });
+  return visit_preset(preset, std::size_t{0}, [](auto tag) {
+    using Config = typename decltype(tag)::type;
+    return Preset<Config>::kStorageSize;
+  });
 }
 
 std::size_t storage_align(ccmap_preset preset) noexcept {
-  return visit_preset(preset, std::size_t{0}, [](auto tag) { return Preset<typename decltype(tag)::type>::kStorageAlign; });
+  return visit_preset(preset, std::size_t{0}, [](auto tag) {
+    using Config = typename decltype(tag)::type;
+    return Preset<Config>::kStorageAlign;
+  });
 }
 
 // ---- handles: one header layout, two kinds (map, exchange) ----
@@ -331,7 +338,8 @@ Result dispatch(const Handle* handle, Result bad, Fn&& fn) noexcept {
     return damaged ? damaged_result(bad) : bad;
   }
   return visit_preset(header->preset, bad, [&](auto tag) {
-    auto& object = object_of<typename decltype(tag)::type>(handle);
+    using Config = typename decltype(tag)::type;
+    auto& object = object_of<Config>(handle);
     if constexpr (std::is_invocable_v<Fn&, decltype(object), HandleHeader&>) {
       return fn(object, *header);
     } else {
@@ -668,7 +676,10 @@ ccmap_status ccmap_default_params(ccmap_preset preset, ccmap_params* out) {
   if (out == nullptr || !ccmap::valid_preset(static_cast<std::int64_t>(preset))) {
     return CCMAP_INVALID_ARGUMENT;
   }
-  const float width = ccmap::visit_preset(preset, 0.0F, [](auto tag) { return decltype(tag)::type::kDefaultFinestCellWidthM; });
+  const float width = ccmap::visit_preset(preset, 0.0F, [](auto tag) {
+    using Config = typename decltype(tag)::type;
+    return Config::kDefaultFinestCellWidthM;
+  });
   ccmap::params_to_c(ccmap::default_stack_params(width), out);
   return CCMAP_OK;
 }
@@ -950,22 +961,34 @@ ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t siz
 // ---- map exchange ----
 size_t ccmap_delta_max_size(ccmap_preset preset) {
   return ccmap::visit_preset(preset, std::size_t{0},
-                             [](auto tag) { return ccmap::MapExchange<typename decltype(tag)::type>::max_delta_size(); });
+                             [](auto tag) {
+    using Config = typename decltype(tag)::type;
+    return ccmap::MapExchange<Config>::max_delta_size();
+  });
 }
 
 size_t ccmap_delta_min_size(ccmap_preset preset) {
   return ccmap::visit_preset(preset, std::size_t{0},
-                             [](auto tag) { return ccmap::MapExchange<typename decltype(tag)::type>::min_delta_size(); });
+                             [](auto tag) {
+    using Config = typename decltype(tag)::type;
+    return ccmap::MapExchange<Config>::min_delta_size();
+  });
 }
 
 size_t ccmap_exchange_storage_size(ccmap_preset preset) {
   return ccmap::visit_preset(preset, std::size_t{0},
-                             [](auto tag) { return ccmap::ExchangePreset<typename decltype(tag)::type>::kStorageSize; });
+                             [](auto tag) {
+    using Config = typename decltype(tag)::type;
+    return ccmap::ExchangePreset<Config>::kStorageSize;
+  });
 }
 
 size_t ccmap_exchange_storage_align(ccmap_preset preset) {
   return ccmap::visit_preset(preset, std::size_t{0},
-                             [](auto tag) { return ccmap::ExchangePreset<typename decltype(tag)::type>::kStorageAlign; });
+                             [](auto tag) {
+    using Config = typename decltype(tag)::type;
+    return ccmap::ExchangePreset<Config>::kStorageAlign;
+  });
 }
 
 ccmap_status ccmap_exchange_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_exchange** out) {
@@ -1154,7 +1177,8 @@ ccmap_status ccmap_validate_params(ccmap_preset preset, const ccmap_params* para
     return ccmap::to_c(converted);
   }
   return ccmap::visit_preset(preset, CCMAP_INVALID_ARGUMENT, [&p](auto tag) {
-    return ccmap::to_c(ccmap::Stack<typename decltype(tag)::type>::validate_params(p));
+    using Config = typename decltype(tag)::type;
+    return ccmap::to_c(ccmap::Stack<Config>::validate_params(p));
   });
 }
 

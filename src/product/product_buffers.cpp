@@ -9,7 +9,9 @@ namespace {
 
 [[nodiscard]] std::uint32_t load_relaxed(const std::uint32_t* p) noexcept { return __atomic_load_n(p, __ATOMIC_RELAXED); }
 [[nodiscard]] std::uint32_t load_acquire(const std::uint32_t* p) noexcept { return __atomic_load_n(p, __ATOMIC_ACQUIRE); }
+// NOLINTNEXTLINE(readability-non-const-parameter): __atomic_store_n writes through p
 void store_relaxed(std::uint32_t* p, std::uint32_t v) noexcept { __atomic_store_n(p, v, __ATOMIC_RELAXED); }
+// NOLINTNEXTLINE(readability-non-const-parameter): __atomic_store_n writes through p
 void store_release(std::uint32_t* p, std::uint32_t v) noexcept { __atomic_store_n(p, v, __ATOMIC_RELEASE); }
 
 /// Words of a slot.
@@ -62,7 +64,7 @@ Status product_commit(ProductBuffers& buffers, std::uint32_t bytes) noexcept {
   const auto* staged = reinterpret_cast<const std::uint8_t*>(slot(buffers, 2U));
   for (std::uint32_t i = 0; i < bytes / 4U; ++i) {
     std::uint32_t word = 0U;
-    std::memcpy(&word, staged + 4U * i, sizeof word);
+    std::memcpy(&word, staged + std::size_t{4U} * i, sizeof word);
     store_release(target + i, word);  // release: the odd sequence is visible before this word
   }
   store_release(sequence, v + 2U);  // even: whole
@@ -100,7 +102,7 @@ Status product_read(const ProductBuffers& buffers, std::uint8_t* out, std::size_
     if (fits_slot && fits_out) {
       for (std::uint32_t i = 0; i < total / 4U; ++i) {
         const std::uint32_t word = load_acquire(source + i);  // acquire: v2 is read after this word
-        std::memcpy(out + 4U * i, &word, sizeof word);
+        std::memcpy(out + std::size_t{4U} * i, &word, sizeof word);
       }
     }
     const std::uint32_t v2 = load_relaxed(sequence);

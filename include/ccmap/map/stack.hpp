@@ -31,7 +31,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
+#include <iterator>
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/core/assert.hpp"
@@ -182,7 +182,7 @@ class Stack {
     }
     const std::uint32_t changed = changed_param_fields(params_, params);
     std::uint32_t reinit = changed & param_field::kReinitAlways;
-    if (std::memcmp(routing.max_range_sq, routing_.max_range_sq, sizeof routing.max_range_sq) != 0) {
+    if (!detail::same_float_bits(routing.max_range_sq, routing_.max_range_sq, std::size(routing.max_range_sq))) {
       reinit |= changed & (param_field::kNoise | param_field::kFinestMaxSigma);
     }
     if (reinit != 0U) {

@@ -111,6 +111,7 @@
 #include "ccmap/core/assert.hpp"
 #include "ccmap/core/status.hpp"
 #include "ccmap/persistence/snapshot.hpp"
+#include "ccmap/core/float_bits.hpp"
 #include "ccmap/map/stack.hpp"
 
 namespace ccmap {
@@ -193,15 +194,6 @@ inline constexpr std::size_t kDeltaHeaderBytes = 12U + kSnapshotFingerprintBytes
 inline constexpr std::size_t kDeltaLayerHeaderBytes = 12U;
 inline constexpr std::size_t kDeltaTrailerBytes = 4U;
 static_assert(kDeltaHeaderBytes == 88U, "the delta header is documented as 88 bytes");
-
-/// True if two floats have the same bit pattern (grid alignment: widths must match exactly).
-[[nodiscard]] inline bool same_float_bits(float a, float b) noexcept {
-  std::uint32_t ua = 0U;
-  std::uint32_t ub = 0U;
-  std::memcpy(&ua, &a, sizeof ua);
-  std::memcpy(&ub, &b, sizeof ub);
-  return ua == ub;
-}
 
 /// Bytes of the LEB128 varint of v (1..5).
 [[nodiscard]] constexpr std::size_t varint_bytes(std::uint32_t v) noexcept {

@@ -62,7 +62,7 @@ template <typename Config>
   const float width = stack.layer_cell_width(spec.layer);
   const CellIndex centre = stack.layer_centre(spec.layer);
   const std::int32_t half = static_cast<std::int32_t>(side / 2U);
-  const CellIndex min{centre.x - half, centre.y - half};
+  const CellIndex first{centre.x - half, centre.y - half};
   // Costs first, one byte per cell at the start of the cell area; each cell's record then
   // replaces them from the last to the first (record i starts at byte 12 i >= i).
   std::uint8_t* cells = staging + kProductHeaderSize;
@@ -74,8 +74,8 @@ template <typename Config>
   }
   for (std::uint32_t i = side * side; i-- > 0U;) {
     const std::uint8_t cost = cells[i];
-    const std::int32_t ix = min.x + static_cast<std::int32_t>(i % side);
-    const std::int32_t iy = min.y + static_cast<std::int32_t>(i / side);
+    const std::int32_t ix = first.x + static_cast<std::int32_t>(i % side);
+    const std::int32_t iy = first.y + static_cast<std::int32_t>(i / side);
     const float x = grid::cell_centre(ix, width);
     const float y = grid::cell_centre(iy, width);
     const QueryResult q = spec.answer == ProductAnswer::kStack ? stack.query(x, y) : stack.query_layer(spec.layer, x, y);
@@ -99,10 +99,10 @@ template <typename Config>
   h.side_x = static_cast<std::uint16_t>(side);
   h.side_y = static_cast<std::uint16_t>(side);
   h.cell_width_m = width;
-  h.min_index_x = min.x;
-  h.min_index_y = min.y;
-  h.min_corner_x_m = static_cast<float>(min.x) * width;
-  h.min_corner_y_m = static_cast<float>(min.y) * width;
+  h.min_index_x = first.x;
+  h.min_index_y = first.y;
+  h.min_corner_x_m = static_cast<float>(first.x) * width;
+  h.min_corner_y_m = static_cast<float>(first.y) * width;
   h.centre_x_m = static_cast<float>(centre.x) * width;
   h.centre_y_m = static_cast<float>(centre.y) * width;
   h.pose_x = spec.pose_x;
