@@ -476,6 +476,7 @@ void result_to_c(const QueryResult& q, ccmap_query_result* out) noexcept {
   out->elevation_variance = q.elevation_variance;
   out->weight = q.weight;
   out->cell_class = static_cast<std::int32_t>(q.cell_class);
+  out->upset = q.upset ? 1 : 0;
 }
 
 ccmap_footprint_result footprint_to_c(const FootprintResult& r) noexcept {
@@ -494,6 +495,7 @@ ccmap_footprint_result footprint_to_c(const FootprintResult& r) noexcept {
   c.worst_x = r.worst_x;
   c.worst_y = r.worst_y;
   c.cells_visited = r.cells_visited;
+  c.upset_share = r.upset_share;
   return c;
 }
 
@@ -505,6 +507,7 @@ FootprintResult footprint_from_c(const ccmap_footprint_result& c) noexcept {
                       ? static_cast<CellClass>(c.worst_class)
                       : CellClass::kUnknown;
   r.unknown_share = c.unknown_share;
+  r.upset_share = c.upset_share;
   return r;
 }
 

@@ -12,7 +12,8 @@
 // Values (costmap_2d's): 0 free .. 252 cost, 253 inscribed, 254 lethal, 255 unknown. A pixel takes
 // the worst of the map's answers over its whole square (each part answered by the finest layer
 // that knows it, as Stack::query would: planner/detail/region_walk.hpp), in the order
-//   lethal (a part is obstacle, steep or a drop-off) > unknown (a part is not known, or off the map) > cost,
+//   lethal (a part is obstacle, steep or a drop-off) > unknown (a part is not known, or off the map,
+//   or distrusted after a single-event upset: map/detail/integrity.hpp) > cost,
 // so a pixel is free only if all of it is known and traversable. The cost of a traversable part:
 //   cost = min(252, round(252 * max(inclination / max_inclination,
 //                                   sqrt(normal_variance / threshold))))
