@@ -274,10 +274,16 @@ class RegionWalk {
   }
 
   /// The answer of path_[j] (inside layer j's window), computed once per visit of that cell.
+  /// The kept answer is returned inline; the computation is a call of its own (its register
+  /// saves then stay off the kept answer's path).
   const RegionAnswer& answer(int j) noexcept {
     if (answered_[j]) {
       return answers_[j];
     }
+    return compute_answer(j);
+  }
+
+  [[gnu::noinline]] const RegionAnswer& compute_answer(int j) noexcept {
     answered_[j] = true;
     RegionAnswer& a = answers_[j];
     a = unknown_answer(j);
@@ -311,11 +317,21 @@ class RegionWalk {
     if constexpr (Layers::kHasFine) {
       const FineCell& cell = layers_.fine.cell_unchecked(c);
       reads_.add(1U);
-      if (cell_distrusted(layers_, cell)) {
-        a.upset = true;  // integrity
+      // Integrity: a distrusted cell is upset. Its check is read only when it would answer (with
+      // CCM layers, a cell that looks unknown is checked by the first CCM layer's pooling, which
+      // the walk asks next: the piece is upset there), so an unknown cell costs no signature.
+      if (distrust_mark(cell)) {
+        a.upset = true;
         return a;
       }
       if (!view_.fine_known(cell)) {
+        if constexpr (Layers::kCcmLayerCount == 0) {
+          a.upset = !cell_intact(layers_, cell);
+        }
+        return a;
+      }
+      if (!cell_intact(layers_, cell)) {
+        a.upset = true;
         return a;
       }
       a.known = true;
