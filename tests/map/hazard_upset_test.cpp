@@ -15,8 +15,8 @@
 // neither hazard nor unknown found) with status kOk: asserted never. Printed per campaign:
 // trials detected (a call answered kCorrupt, the scrub or the pool counted a corrupted cell or
 // slot, or an answer said upset), undetected (of which some answer changed), hazards answered
-// unknown, hazards lost. Trials per campaign: CCMAP_HAZARD_UPSET_TRIALS (default 1000;
-// tests/map/CMakeLists.txt sets fewer under the emulator).
+// unknown, hazards lost. Trials per campaign: CCMAP_HAZARD_UPSET_TRIALS, else
+// CCMAP_HAZARD_UPSET_DEFAULT_TRIALS (1000; tests/map/CMakeLists.txt sets 150 for the emulator).
 #include <gtest/gtest.h>
 
 #include <array>
@@ -235,10 +235,14 @@ Scene& scene() {
   return sc;
 }
 
+#ifndef CCMAP_HAZARD_UPSET_DEFAULT_TRIALS
+#define CCMAP_HAZARD_UPSET_DEFAULT_TRIALS 1000
+#endif
+
 std::size_t trials_per_campaign() {
   const char* env = std::getenv("CCMAP_HAZARD_UPSET_TRIALS");
   const long n = env != nullptr ? std::strtol(env, nullptr, 10) : 0L;
-  return n > 0 ? static_cast<std::size_t>(n) : 1000U;
+  return n > 0 ? static_cast<std::size_t>(n) : std::size_t{CCMAP_HAZARD_UPSET_DEFAULT_TRIALS};
 }
 
 enum class Target { kAnywhere, kLiveCell };
