@@ -18,17 +18,48 @@
  * frame, relative to the stack origin chosen by the integrator (never absolute world
  * coordinates). See docs/integration.md.
  *
- * Errors: a NULL pointer argument, a handle that was not produced by ccmap_place, or a bad
- * enum value is answered with CCMAP_INVALID_ARGUMENT and changes nothing. A handle whose storage
- * header an upset damaged (docs/integration.md, "Radiation: single-event upsets") is answered
- * with CCMAP_CORRUPT and changes nothing: place and init the map again. Functions that return a
- * number answer 0 for a bad or damaged handle. A map used before a successful ccmap_init or
- * ccmap_load_snapshot answers CCMAP_NOT_INITIALISED; a map whose own state (parameters, windows)
- * failed its check after an upset answers CCMAP_CORRUPT to every call but ccmap_init and
- * ccmap_load_snapshot, changing nothing. Each call below names its other refusals;
- * "refused (counted)" means the map also counts it (ccmap_get_counters) and is left unchanged.
+ * Errors: a NULL pointer argument or a bad enum value is answered with CCMAP_INVALID_ARGUMENT
+ * and changes nothing. Functions that return a number answer 0 for a bad or damaged handle. A map
+ * used before a successful ccmap_init or ccmap_load_snapshot answers CCMAP_NOT_INITIALISED. Each
+ * call below names its other refusals; "refused (counted)" means the map also counts it
+ * (ccmap_get_counters, ccmap_get_health) and is left unchanged.
  *
- * Thread safety: none inside; one map must not be used by two threads at once.
+ * CCMAP_CORRUPT versus misuse: two different faults, two different responses.
+ *  - Misuse (a programming error): a handle that ccmap_place never produced (a wrong pointer, an
+ *    exchange handed over as a map, storage another object overwrote) is answered with
+ *    CCMAP_INVALID_ARGUMENT. The map behind it, if any, is not known to be damaged: do not wipe
+ *    it; fix the caller (count it, raise a software fault).
+ *  - A damaged map (an upset: docs/integration.md, "Radiation: single-event upsets"): the map's
+ *    own state (its storage header, parameters, windows, derived constants) failed its check and
+ *    every call but ccmap_init, ccmap_load_snapshot and ccmap_get_health answers CCMAP_CORRUPT,
+ *    changing nothing. Its cells can no longer be trusted: re-init it (ccmap_place + ccmap_init),
+ *    or load the last good snapshot. ccmap_get_health(...).state runs the same check on demand.
+ *    A snapshot or delta that fails its checks is also CCMAP_CORRUPT: that one refuses the data,
+ *    not the map (the map is unchanged and healthy).
+ *  Single cells an upset changed are not a CCMAP_CORRUPT: they read as unknown and the scrub
+ *  resets and counts them (ccmap_health.corrupted_cells).
+ *
+ * Threads (every call below is marked):
+ *  [writer] calls change the map; [map reader] calls only read it. Both kinds run on the map's
+ *  own thread (the mapper's rate group): one map must not be used by two threads at once, and
+ *  nothing inside locks. [any thread] calls touch no map: ccmap_product_read and the decoders
+ *  read the caller-owned product buffers that ccmap_publish fills, from any thread, concurrently
+ *  with the writer, lock-free ("Readers beside the writer" below; docs/integration.md, "Flight
+ *  interface"). [set-up] calls change process-wide state: call them before other threads run.
+ *  Writers (the map's thread): ccmap_place, ccmap_init, ccmap_set_params, ccmap_reset_counters,
+ *    ccmap_move_to(_uncertain), ccmap_update_frame(_sensor), ccmap_load_snapshot,
+ *    ccmap_merge_snapshot, ccmap_exchange_init/export/merge_delta/merge_snapshot (they write the
+ *    exchange and, merges, the map).
+ *  Map readers (the map's thread): ccmap_get_params, ccmap_get_health, ccmap_get_counters,
+ *    ccmap_query(_layer), ccmap_query_footprint/path/arc, ccmap_fill_costmap, ccmap_export_layer,
+ *    ccmap_layer_*, ccmap_save_snapshot, ccmap_snapshot_size, ccmap_register_frame(_sensor),
+ *    ccmap_align_snapshot/delta, ccmap_exchange_get_counters, ccmap_publish (it writes only the
+ *    product buffers: one publishing thread per buffers).
+ *  Any thread: ccmap_product_read, ccmap_product_decode, ccmap_validate_params,
+ *    ccmap_default_params(_for_width), ccmap_default_registration_params, ccmap_footprint_class,
+ *    ccmap_status_string, ccmap_cell_class_string, the size and alignment functions,
+ *    ccmap_platform_name.
+ *  Set-up: ccmap_set_fault_hook, ccmap_product_buffers_init.
  */
 #ifndef CCMAP_CCMAP_H
 #define CCMAP_CCMAP_H
@@ -51,15 +82,18 @@ typedef enum ccmap_status {
   CCMAP_INVALID_ARGUMENT = 6,  /* NULL pointer, bad handle, inconsistent sizes, bad configuration */
   CCMAP_BUFFER_TOO_SMALL = 7,  /* the caller's buffer cannot hold the result */
   CCMAP_NOT_INITIALISED = 8,   /* map used before a successful ccmap_init or ccmap_load_snapshot */
-  CCMAP_CORRUPT = 9,           /* snapshot failed its integrity or validity checks; or the map's own
-                                  state (its storage header, parameters, windows) failed its check
-                                  after a single-event upset: re-init (or load a snapshot) */
+  CCMAP_CORRUPT = 9,           /* data (snapshot, delta, product) failed its integrity checks: the
+                                  data is refused; or the map's own state (storage header, parameters,
+                                  windows) failed its check after an upset: re-init or load a snapshot
+                                  (never the answer to misuse: see "CCMAP_CORRUPT versus misuse") */
   CCMAP_VERSION_MISMATCH = 10, /* snapshot of another format version or another preset */
   CCMAP_DUPLICATE = 11,        /* map exchange: delta already merged (sender, sequence) or this map's own */
   CCMAP_MISALIGNED = 12,       /* map exchange: another cell width, or an origin offset off the coarsest grid */
   CCMAP_INSUFFICIENT_OVERLAP = 13, /* registration: too few samples on known cells of the map */
   CCMAP_DEGENERATE_INPUT = 14,     /* registration: no usable points, or all of them at one spot */
   CCMAP_NOT_CONVERGED = 15,        /* registration: no solution within the iteration or search bounds */
+  CCMAP_BUSY = 16,                 /* product read: the writer replaced the product during every try
+                                      (CCMAP_PRODUCT_READ_TRIES): nothing changed, read again later */
   CCMAP_STATUS_MAX_ENUM_ = 0x7FFFFFFF /* not a status: keeps the enum 32 bits wide */
 } ccmap_status;
 
@@ -76,6 +110,12 @@ typedef enum ccmap_preset {
 } ccmap_preset;
 
 #define CCMAP_MAX_LAYERS 8
+
+/* [any thread] 1 if this build of the library carries `preset`, else 0. The CMake cache variable
+ * CCMAP_CAPI_PRESETS (default "all"; e.g. "cadre" for a flight image) chooses which presets the C
+ * API instantiates; every call naming another preset (ccmap_place, ccmap_default_params,
+ * ccmap_validate_params, the size functions, ...) answers CCMAP_INVALID_ARGUMENT (or 0). */
+int32_t ccmap_preset_available(ccmap_preset preset);
 
 /* Storage for a map placed by ccmap_place. The sizes are upper bounds with headroom for future
  * versions (the library checks at build time that its map fits, and that each KiB figure below
@@ -184,6 +224,65 @@ ccmap_status ccmap_default_params_for_width(float finest_cell_width_m, ccmap_par
  * outlier_gate_sigma neither 0 nor in [1, 100], change_share outside (0, 0.5]).
  * CCMAP_NON_FINITE_INPUT: NaN or Inf in any other parameter (the noise model's included). */
 ccmap_status ccmap_init(ccmap_map* map, const ccmap_params* params);
+
+/* ---- parameters as commands ----------------------------------------------------------------- */
+/* One bit per member of ccmap_params (a mask names fields: which changed, which need a re-init). */
+#define CCMAP_PARAM_FINEST_CELL_WIDTH_M (1u << 0)
+#define CCMAP_PARAM_WEIGHT_LIMIT (1u << 1)
+#define CCMAP_PARAM_COVERAGE_TAU (1u << 2)
+#define CCMAP_PARAM_MIN_WEIGHT (1u << 3)
+#define CCMAP_PARAM_OBSTACLE_FRACTION (1u << 4)
+#define CCMAP_PARAM_MAX_INCLINATION (1u << 5)
+#define CCMAP_PARAM_KALMAN_MIN_VARIANCE (1u << 6)
+#define CCMAP_PARAM_NORMAL_VARIANCE_THRESHOLD (1u << 7)
+#define CCMAP_PARAM_FINEST_MAX_SIGMA_M (1u << 8)
+#define CCMAP_PARAM_OUTLIER_GATE_SIGMA (1u << 9)
+#define CCMAP_PARAM_CHANGE_MIN_POINTS (1u << 10)
+#define CCMAP_PARAM_CHANGE_SHARE (1u << 11)
+#define CCMAP_PARAM_FRAME_POINT_BUDGET (1u << 12)
+#define CCMAP_PARAM_FRAME_TIME_BUDGET_US (1u << 13)
+#define CCMAP_PARAM_FREE_SPACE_RAYS (1u << 14)
+#define CCMAP_PARAM_FREE_SPACE_CLEAR_FRAMES (1u << 15)
+#define CCMAP_PARAM_SENSOR_VIEW_AXIS (1u << 16)
+#define CCMAP_PARAM_NOISE (1u << 17)
+#define CCMAP_PARAM_ALL ((1u << 18) - 1u)
+/* Fields a running map can never take without a re-init: the cell width binds every layer. The
+ * noise model and finest_max_sigma_m need one only when they change the routing (which layer a
+ * range goes to); ccmap_set_params decides that by building the new routing table. */
+#define CCMAP_PARAM_REINIT_ALWAYS CCMAP_PARAM_FINEST_CELL_WIDTH_M
+
+/* [any thread: touches no map] Exactly ccmap_init's checks of `params` for a map of `preset`,
+ * nothing touched: CCMAP_OK if ccmap_init would accept them, else the status ccmap_init would
+ * answer (CCMAP_INVALID_ARGUMENT, CCMAP_NON_FINITE_INPUT; the list at ccmap_init), and
+ * CCMAP_INVALID_ARGUMENT for NULL params or a bad preset (or one this build left out:
+ * CCMAP_CAPI_PRESETS). It takes a preset, not a map: the checks depend on the preset's shape
+ * only (layer count, what is compiled in), so a ground tool or a table-validation callback can
+ * run them with no map at hand, and no handle can be misused to change one. */
+ccmap_status ccmap_validate_params(ccmap_preset preset, const ccmap_params* params);
+
+/* [map reader] The map's parameters as it runs with them (after ccmap_init, ccmap_set_params,
+ * or ccmap_load_snapshot, which brings the snapshot's own). Thresholds given as <= 0 (calibrate)
+ * read back as given (the values in use: ccmap_health.layers[k].normal_variance_threshold).
+ * CCMAP_INVALID_ARGUMENT (NULL out, bad handle), CCMAP_NOT_INITIALISED, CCMAP_CORRUPT (out
+ * untouched). */
+ccmap_status ccmap_get_params(const ccmap_map* map, ccmap_params* out);
+
+/* [writer] Changes the parameters of an initialised map and keeps every cell: after CCMAP_OK the
+ * map is the one ccmap_init(params) followed by the same frames and moves would have built, as
+ * far as the changed fields allow (classification, coverage, thresholds, gate and change rule,
+ * budgets, free space, weight limit, Kalman floor, a noise model that keeps the routing: they act
+ * on the next frame or query; cells already folded keep the points they took). Held points of
+ * the outlier gate are judged under the new gate at the next frame's end.
+ * needs_reinit (may be NULL) receives the mask (CCMAP_PARAM_*) of the changed fields that need a
+ * re-init; 0 on CCMAP_OK and on every refusal that is not about them.
+ * Refused, the map bitwise unchanged (its cells, parameters, counters, seals):
+ *  CCMAP_INVALID_ARGUMENT: NULL params, a bad handle, params ccmap_validate_params refuses (the
+ *    status it answers is returned, CCMAP_NON_FINITE_INPUT included), or a change that needs a
+ *    re-init (*needs_reinit != 0 says which fields: finest_cell_width_m; noise or
+ *    finest_max_sigma_m when the routing they build differs from the map's);
+ *  CCMAP_NOT_INITIALISED; CCMAP_CORRUPT (the state check failed: re-init).
+ * Counts accepted changes (ccmap_health.params_changes); params_crc follows. */
+ccmap_status ccmap_set_params(ccmap_map* map, const ccmap_params* params, uint32_t* needs_reinit);
 
 /* ---- run phase ------------------------------------------------------------------------------ */
 /* What happened to the points of one frame (ccmap::FrameCounters). */
@@ -521,6 +620,70 @@ typedef struct ccmap_counters {
  * counters say what the map saw before). */
 ccmap_status ccmap_get_counters(const ccmap_map* map, ccmap_counters* out);
 
+/* ---- health (housekeeping telemetry) -------------------------------------------------------- */
+/* One layer's window and contents. */
+typedef struct ccmap_layer_health {
+  float cell_width_m;
+  int32_t centre_index_x;          /* window centre: global cell index of this layer */
+  int32_t centre_index_y;
+  float centre_x_m;                /* the same in metres (map frame): index * cell_width_m */
+  float centre_y_m;
+  uint32_t observed_cells;         /* cells of this layer holding points (weight > 0), intact ones only */
+  float normal_variance_threshold; /* in use (calibrated at init when the parameter was <= 0), m^2 */
+} ccmap_layer_health;
+
+typedef struct ccmap_health {
+  int32_t initialised;        /* 1 after a successful ccmap_init or ccmap_load_snapshot, else 0 */
+  int32_t state;              /* ccmap_status of the state check run by this call: CCMAP_OK,
+                                 CCMAP_NOT_INITIALISED or CCMAP_CORRUPT (then re-init or load) */
+  int32_t preset;             /* ccmap_preset */
+  int32_t layer_count;
+  /* ---- counters since init, load or ccmap_reset_counters (saturating at 2^32 - 1) ---- */
+  uint32_t frames_accepted;   /* frame updates folded in */
+  uint32_t frames_refused;    /* frame updates refused as a whole */
+  uint32_t moves_refused;
+  uint32_t points_received;   /* over the accepted frames */
+  uint32_t points_used;
+  uint32_t points_skipped_budget;
+  uint32_t corrupted_cells;   /* upsets: cells reset by the scrub or a read (ccmap_frame_counters) */
+  uint32_t corrupted_slots;   /* upsets: held-point slots dropped */
+  uint32_t params_changes;    /* ccmap_set_params accepted */
+  uint32_t products_published; /* ccmap_publish accepted */
+  /* ---- the last accepted frame ---- */
+  uint64_t last_frame_ns;     /* its duration (platform monotonic clock), 0 before the first */
+  uint32_t last_frame_points; /* its points received */
+  uint32_t last_frame_used;   /* of them folded in */
+  /* ---- identity of what the map runs with ---- */
+  uint32_t params_crc;        /* CRC-32 (IEEE 802.3) of the ccmap_params bytes ccmap_get_params
+                                 writes: the ground compares it with the table it sent */
+  uint32_t map_sequence;      /* frame updates since init or load (wraps; never reset by
+                                 ccmap_reset_counters): the product's frame sequence */
+  uint32_t fault_count;       /* contract violations reported to the fault hook, process-wide */
+  ccmap_layer_health layers[CCMAP_MAX_LAYERS]; /* [0, layer_count) written, the rest zero */
+} ccmap_health;
+
+/* [map reader] Fills *out. Answers CCMAP_OK whenever out was written, also for an uninitialised
+ * or damaged map (out->state says which; counters and windows of a damaged map are what its
+ * memory holds, to be read as evidence, not trusted); the state check is run now, whatever
+ * the last call found. Cost: the state check plus one pass over every cell (observed_cells).
+ * CCMAP_INVALID_ARGUMENT: NULL out, a bad handle (out untouched); CCMAP_CORRUPT: the handle's
+ * storage header is damaged (out untouched: nothing in it can be trusted to pick a preset). */
+ccmap_status ccmap_get_health(const ccmap_map* map, ccmap_health* out);
+
+/* [writer] Zeroes the counters ccmap_health counts since a reset (frames_accepted ..
+ * products_published) and those of ccmap_get_counters; changes no cell, no parameter, not
+ * map_sequence (map exchange numbers its deltas by it). CCMAP_INVALID_ARGUMENT (bad handle),
+ * CCMAP_NOT_INITIALISED, CCMAP_CORRUPT. */
+ccmap_status ccmap_reset_counters(ccmap_map* map);
+
+/* [set-up] The fault hook: every contract violation inside the library (an assert that reports
+ * and returns a safe value; include/ccmap/core/assert.hpp) calls hook(context, file, line,
+ * expression) on the thread that found it; the hook must return (raise an event, count, log).
+ * NULL restores the platform's default (ccmap::platform::fault). Process-wide, for every map.
+ * Always CCMAP_OK. */
+typedef void (*ccmap_fault_hook)(void* context, const char* file, int line, const char* expression);
+ccmap_status ccmap_set_fault_hook(ccmap_fault_hook hook, void* context);
+
 /* ---- snapshots (include/ccmap/persistence/snapshot.hpp has the byte format) ------------------------- */
 /* Bytes of a snapshot of this map (0 for a bad handle). */
 size_t ccmap_snapshot_size(const ccmap_map* map);
@@ -534,6 +697,138 @@ ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t c
  * mismatch, content no save writes), CCMAP_VERSION_MISMATCH (another format version or a snapshot
  * of another preset). */
 ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size);
+
+/* ---- readers beside the writer: the map product ---------------------------------------------- */
+/* A product is a compact, self-contained picture of one layer's window for a planner in another
+ * thread or a ground station: little-endian bytes, versioned, CRC-checked (byte format:
+ * include/ccmap/product/product_format.hpp; every field: docs/icd.md).
+ *   header (CCMAP_PRODUCT_HEADER_SIZE bytes): magic "CCMP", version, sizes, product sequence,
+ *     map sequence (frames folded in), params CRC, preset, layer, answer mode, side_x, side_y,
+ *     cell width, global index and map-frame corner of cell (0, 0), the layer's window centre,
+ *     the caller's pose (echoed), a caller tag;
+ *   side_x * side_y cells (CCMAP_PRODUCT_CELL_SIZE bytes each, x fastest, row 0 at the lowest y):
+ *     hazard class, costmap_2d cost, query status, answering layer, height (m), inclination (dz/dxy);
+ *   CRC-32 (IEEE 802.3) of every byte before it.
+ * Each cell holds what ccmap_query (answer CCMAP_PRODUCT_STACK) or ccmap_query_layer (answer
+ * CCMAP_PRODUCT_LAYER) answers at the cell's centre, and the cost ccmap_fill_costmap gives that
+ * cell's square (no inflation).
+ *
+ * Double buffering: two slots and a private staging area in caller-owned memory
+ * (ccmap_product_buffers). The writer composes the product in the staging area, then copies it
+ * into the slot readers are not pointed at, inside a per-slot sequence lock (odd while being
+ * written), and only then points readers at it (release). A reader copies the slot it is pointed
+ * at and accepts the copy only if the slot's sequence was even and unchanged across the copy
+ * (acquire) and the CRC, size and product sequence agree; else it tries again, at most
+ * CCMAP_PRODUCT_READ_TRIES times (CCMAP_BUSY). The writer never waits for a reader. Every access
+ * to the slots and sequence words is a 32-bit atomic (relaxed for the bytes, release/acquire for
+ * the sequence words, with fences), so the exchange is free of data races in the C11/C++11
+ * memory model, also for 32-bit targets. A reader on the ground decodes the bytes alone
+ * (ccmap_product_decode, the C++ header-only decoder, Python ccmap.decode_product). */
+#define CCMAP_PRODUCT_HEADER_SIZE 88u
+#define CCMAP_PRODUCT_CELL_SIZE 12u
+#define CCMAP_PRODUCT_CRC_SIZE 4u
+#define CCMAP_PRODUCT_VERSION 1u
+#define CCMAP_PRODUCT_MAGIC 0x504D4343u /* bytes 'C' 'C' 'M' 'P' */
+#define CCMAP_PRODUCT_MAX_SIDE 256u
+#define CCMAP_PRODUCT_READ_TRIES 8u
+/* Bytes of a product of side_x * side_y cells. */
+#define CCMAP_PRODUCT_SIZE(side_x, side_y) \
+  (CCMAP_PRODUCT_HEADER_SIZE + CCMAP_PRODUCT_CELL_SIZE * (side_x) * (side_y) + CCMAP_PRODUCT_CRC_SIZE)
+/* Caller storage for the double buffer of products of up to `cells` cells: two slots + staging. */
+#define CCMAP_PRODUCT_BUFFERS_STORAGE_SIZE(cells) (3u * CCMAP_PRODUCT_SIZE(cells, 1u))
+
+typedef enum ccmap_product_answer {
+  CCMAP_PRODUCT_STACK = 0, /* each cell: the stack's answer at its centre (finest layer that knows) */
+  CCMAP_PRODUCT_LAYER = 1  /* each cell: the chosen layer's own answer */
+} ccmap_product_answer;
+
+typedef struct ccmap_product_spec {
+  int32_t layer;    /* whose window and cells the product covers, [0, ccmap_layer_count) */
+  int32_t answer;   /* ccmap_product_answer */
+  float pose_x;     /* the robot pose the product belongs to (map frame, m, rad), echoed into the */
+  float pose_y;     /* header as given (finite; the caller's estimate at the frame it follows) */
+  float pose_z;
+  float pose_yaw;
+  uint32_t tag;     /* echoed (e.g. the caller's time tag of the frame) */
+} ccmap_product_spec;
+
+/* The double buffer. Set it up with ccmap_product_buffers_init; then its members belong to the
+ * library (written by ccmap_publish, read by ccmap_product_read: never touch them directly). */
+typedef struct ccmap_product_buffers {
+  uint32_t magic;            /* set by ccmap_product_buffers_init */
+  uint32_t slot_bytes;       /* capacity of each slot (bytes, a multiple of 4) */
+  uint32_t* storage;         /* slot 0, slot 1, staging: 3 * slot_bytes bytes, 4-byte aligned */
+  uint32_t published;        /* atomic: products published; the latest is in slot (published & 1) */
+  uint32_t slot_sequence[2]; /* atomic: per-slot sequence lock, odd while the writer writes it */
+} ccmap_product_buffers;
+
+/* [set-up] Binds storage[0 .. storage_size) (4-byte aligned, at least 3 slots) as the double
+ * buffer of products up to floor(storage_size / 3) bytes each; nothing published yet. Call it
+ * before the writer and readers start. CCMAP_INVALID_ARGUMENT: NULL, misaligned storage, a
+ * storage_size above 3 * 2^31 or not holding a product of one cell. */
+ccmap_status ccmap_product_buffers_init(ccmap_product_buffers* buffers, void* storage, size_t storage_size);
+
+/* [map reader; the one writer of `buffers`] Composes the product of spec->layer's window and
+ * publishes it (the readers see it from their next read). Cost: one query per cell and one
+ * costmap of the window (docs/performance.md). Refused, nothing published (the readers keep the
+ * previous product): CCMAP_INVALID_ARGUMENT (NULL, bad handle, buffers not set up, a bad layer or
+ * answer, a non-finite pose), CCMAP_BUFFER_TOO_SMALL (the layer's product exceeds a slot),
+ * CCMAP_NOT_INITIALISED, CCMAP_CORRUPT. One thread publishes into a given buffers at a time. */
+ccmap_status ccmap_publish(const ccmap_map* map, const ccmap_product_spec* spec, ccmap_product_buffers* buffers);
+
+/* [any thread, no map handle] Copies the latest whole product into out[0 .. *written) and
+ * checks it (sequence lock, size, CRC). CCMAP_OK: out holds a product that was whole at one
+ * instant; CCMAP_NOT_INITIALISED: nothing published yet; CCMAP_BUSY: the writer replaced the slot
+ * during each of CCMAP_PRODUCT_READ_TRIES tries (only when it publishes faster than a copy
+ * takes); CCMAP_CORRUPT: a slot that no writer touched during the copy fails its CRC or header
+ * (the shared memory was damaged: an upset, a stray write; the next publish replaces it);
+ * CCMAP_BUFFER_TOO_SMALL: capacity below the product's size; CCMAP_INVALID_ARGUMENT: NULL, buffers
+ * not set up. *written is 0 on every answer but CCMAP_OK. Never writes to `buffers`. */
+ccmap_status ccmap_product_read(const ccmap_product_buffers* buffers, void* out, size_t capacity, size_t* written);
+
+/* A decoded product header (host order). */
+typedef struct ccmap_product_header {
+  uint32_t version;
+  uint32_t total_bytes;
+  uint32_t product_sequence; /* 1 for the first product of these buffers, +1 per publish */
+  uint32_t map_sequence;     /* the map's frame updates since init or load (ccmap_health.map_sequence) */
+  uint32_t params_crc;       /* ccmap_health.params_crc at publish */
+  int32_t preset;
+  int32_t layer;
+  int32_t answer;            /* ccmap_product_answer */
+  uint32_t side_x;
+  uint32_t side_y;
+  float cell_width_m;
+  int32_t min_index_x;       /* global index (of `layer`) of cell (0, 0) */
+  int32_t min_index_y;
+  float min_corner_x_m;      /* map-frame corner (lowest x, lowest y) of cell (0, 0) */
+  float min_corner_y_m;
+  float centre_x_m;          /* the layer's window centre (ccmap_layer_health) */
+  float centre_y_m;
+  float pose_x;              /* ccmap_product_spec, echoed */
+  float pose_y;
+  float pose_z;
+  float pose_yaw;
+  uint32_t tag;
+} ccmap_product_header;
+
+/* One decoded cell. */
+typedef struct ccmap_product_cell {
+  int32_t cell_class;  /* ccmap_cell_class */
+  int32_t cost;        /* costmap_2d value, CCMAP_COST_* */
+  int32_t status;      /* ccmap_status of the query at the cell centre (CCMAP_OK, CCMAP_UNKNOWN, ...) */
+  int32_t layer;       /* answering layer, -1 if none */
+  float height_m;      /* 0 unless status is CCMAP_OK */
+  float inclination;   /* dz/dxy; 0 unless status is CCMAP_OK */
+} ccmap_product_cell;
+
+/* [any thread, no map] Checks a product's bytes (size, magic, version, CRC) and decodes its
+ * header; cells may be NULL (header only), else cells[0 .. side_x * side_y) are decoded if
+ * cell_capacity holds them. CCMAP_CORRUPT (bad magic, sizes or CRC), CCMAP_VERSION_MISMATCH
+ * (another version), CCMAP_BUFFER_TOO_SMALL (cell_capacity), CCMAP_INVALID_ARGUMENT (NULL data
+ * or header). */
+ccmap_status ccmap_product_decode(const void* data, size_t size, ccmap_product_header* header,
+                                  ccmap_product_cell* cells, size_t cell_capacity);
 
 /* ---- map exchange between rovers (include/ccmap/persistence/exchange.hpp: rules and byte format) ---- */
 /* An exchange holds one copy of its map's cells (what it last sent) and a table of 8 peers; it

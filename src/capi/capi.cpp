@@ -4,8 +4,10 @@
 // points at it), the Stack<Config> at kStackOffset. Every entry point checks the header's magic
 // and preset, then dispatches to the preset's Stack through a generic lambda.
 #include "ccmap/ccmap.h"
+#include "ccmap/capi_params.hpp"
 
 #include <cstddef>
+#include <atomic>
 #include <cstring>
 #include <new>
 #include <type_traits>
@@ -17,6 +19,9 @@
 #include "ccmap/persistence/exchange.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/map/param_fields.hpp"
+#include "ccmap/product/product_format.hpp"
+#include "ccmap/product/publish.hpp"
 #include "ccmap/registration/alignment.hpp"
 #include "ccmap/platform/platform.hpp"
 
@@ -42,6 +47,7 @@ CCMAP_SAME_STATUS(CCMAP_MISALIGNED, kMisaligned);
 CCMAP_SAME_STATUS(CCMAP_INSUFFICIENT_OVERLAP, kInsufficientOverlap);
 CCMAP_SAME_STATUS(CCMAP_DEGENERATE_INPUT, kDegenerateInput);
 CCMAP_SAME_STATUS(CCMAP_NOT_CONVERGED, kNotConverged);
+CCMAP_SAME_STATUS(CCMAP_BUSY, kBusy);
 #undef CCMAP_SAME_STATUS
 static_assert(static_cast<int>(CCMAP_CLASS_UNKNOWN) == static_cast<int>(CellClass::kUnknown), "class");
 static_assert(static_cast<int>(CCMAP_CLASS_TRAVERSABLE) == static_cast<int>(CellClass::kTraversable), "class");
@@ -49,6 +55,36 @@ static_assert(static_cast<int>(CCMAP_CLASS_OBSTACLE) == static_cast<int>(CellCla
 static_assert(static_cast<int>(CCMAP_CLASS_STEEP) == static_cast<int>(CellClass::kSteep), "class");
 static_assert(static_cast<int>(CCMAP_CLASS_DROP) == static_cast<int>(CellClass::kDropOff), "class");
 static_assert(CCMAP_MAX_LAYERS == kMaxLayers, "CCMAP_MAX_LAYERS != kMaxLayers");
+// Parameter commands: the C field bits are the C++ ones.
+static_assert(CCMAP_PARAM_FINEST_CELL_WIDTH_M == param_field::kFinestCellWidth &&
+                  CCMAP_PARAM_WEIGHT_LIMIT == param_field::kWeightLimit &&
+                  CCMAP_PARAM_COVERAGE_TAU == param_field::kCoverageTau && CCMAP_PARAM_MIN_WEIGHT == param_field::kMinWeight &&
+                  CCMAP_PARAM_OBSTACLE_FRACTION == param_field::kObstacleFraction &&
+                  CCMAP_PARAM_MAX_INCLINATION == param_field::kMaxInclination &&
+                  CCMAP_PARAM_KALMAN_MIN_VARIANCE == param_field::kKalmanMinVariance &&
+                  CCMAP_PARAM_NORMAL_VARIANCE_THRESHOLD == param_field::kNormalVarianceThreshold &&
+                  CCMAP_PARAM_FINEST_MAX_SIGMA_M == param_field::kFinestMaxSigma &&
+                  CCMAP_PARAM_OUTLIER_GATE_SIGMA == param_field::kOutlierGateSigma &&
+                  CCMAP_PARAM_CHANGE_MIN_POINTS == param_field::kChangeMinPoints &&
+                  CCMAP_PARAM_CHANGE_SHARE == param_field::kChangeShare &&
+                  CCMAP_PARAM_FRAME_POINT_BUDGET == param_field::kFramePointBudget &&
+                  CCMAP_PARAM_FRAME_TIME_BUDGET_US == param_field::kFrameTimeBudget &&
+                  CCMAP_PARAM_FREE_SPACE_RAYS == param_field::kFreeSpaceRays &&
+                  CCMAP_PARAM_FREE_SPACE_CLEAR_FRAMES == param_field::kFreeSpaceClearFrames &&
+                  CCMAP_PARAM_SENSOR_VIEW_AXIS == param_field::kSensorViewAxis &&
+                  CCMAP_PARAM_NOISE == param_field::kNoise && CCMAP_PARAM_ALL == param_field::kAll &&
+                  CCMAP_PARAM_REINIT_ALWAYS == param_field::kReinitAlways,
+              "CCMAP_PARAM_* != ccmap::param_field");
+// The product: the C constants are the format's.
+static_assert(CCMAP_PRODUCT_HEADER_SIZE == kProductHeaderSize && CCMAP_PRODUCT_CELL_SIZE == kProductCellSize &&
+                  CCMAP_PRODUCT_CRC_SIZE == kProductCrcSize && CCMAP_PRODUCT_VERSION == kProductVersion &&
+                  CCMAP_PRODUCT_MAGIC == kProductMagic && CCMAP_PRODUCT_MAX_SIDE == kProductMaxSide &&
+                  CCMAP_PRODUCT_READ_TRIES == kProductReadTries && CCMAP_PRODUCT_SIZE(3, 5) == product_size(3U, 5U),
+              "ccmap.h product constants != product/product_format.hpp");
+// ccmap_params has no padding: its bytes (the CRC of ccmap_health.params_crc) are its fields.
+static_assert(sizeof(ccmap_params) == (7U + CCMAP_MAX_LAYERS + 6U + 3U) * 4U + sizeof(ccmap_noise_params) + 2U * 4U &&
+                  sizeof(ccmap_noise_params) == 8U * 4U,
+              "ccmap_params must have no padding");
 static_assert(sizeof(ccmap_frame_counters) == sizeof(FrameCounters), "ccmap_frame_counters != FrameCounters");
 
 // Points: the caller's float[3 n] is read as PointXYZ[n]. PointXYZ is documented (types.hpp) to
@@ -82,11 +118,17 @@ static_assert(std::is_standard_layout<PathPoint>::value && sizeof(PathPoint) == 
 constexpr std::uint32_t kHandleMagic = 0x43434D48U;  // "CCMH"
 
 /// The start of the caller's storage. `check` seals magic and preset (header_check): a header an
-/// upset changed is refused (CCMAP_CORRUPT), never trusted to pick a preset.
+/// upset changed is refused (CCMAP_CORRUPT), never trusted to pick a preset. The C API's own
+/// state of a map follows (not in an exchange's header): the ccmap_params last accepted and its
+/// CRC (ccmap_get_params answers them while they still describe what the map runs with), and the
+/// products published since init or ccmap_reset_counters.
 struct HandleHeader {
   std::uint32_t magic;
   std::uint32_t preset;
   std::uint32_t check;
+  std::uint32_t products_published;
+  ccmap_params params;
+  std::uint32_t params_crc;  ///< CRC-32 of `params`; anything else: no copy (load_snapshot, an upset)
 };
 
 /// Check word of a header: any single changed bit of magic, preset or check makes it disagree.
@@ -115,18 +157,21 @@ HeaderState classify_header(const HandleHeader& h, std::uint32_t magic, std::uin
   }
   return bits <= 2 ? HeaderState::kDamaged : HeaderState::kForeign;
 }
-constexpr std::size_t kStackOffset = 16U;
+constexpr std::size_t kStackOffset = (sizeof(HandleHeader) + CCMAP_STORAGE_ALIGN - 1U) / CCMAP_STORAGE_ALIGN * CCMAP_STORAGE_ALIGN;
 static_assert(sizeof(HandleHeader) <= kStackOffset, "header must fit before the stack");
 
-template <typename Config>
-struct Preset {
-  using StackType = Stack<Config>;
-  static_assert(kStackOffset % alignof(StackType) == 0U, "stack offset must respect the stack's alignment");
-  static_assert(alignof(StackType) <= CCMAP_STORAGE_ALIGN, "CCMAP_STORAGE_ALIGN too small");
-  static constexpr std::size_t kStorageSize = kStackOffset + sizeof(StackType);
-  static constexpr std::size_t kStorageAlign = alignof(StackType) > alignof(HandleHeader) ? alignof(StackType)
-                                                                                          : alignof(HandleHeader);
+/// Bytes and alignment of the caller's storage for an object (a Stack or a MapExchange) placed
+/// behind a handle header.
+template <typename Object>
+struct Placement {
+  static_assert(kStackOffset % alignof(Object) == 0U, "the object's offset must respect its alignment");
+  static_assert(alignof(Object) <= CCMAP_STORAGE_ALIGN, "CCMAP_STORAGE_ALIGN too small");
+  static constexpr std::size_t kStorageSize = kStackOffset + sizeof(Object);
+  static constexpr std::size_t kStorageAlign = alignof(Object) > alignof(HandleHeader) ? alignof(Object)
+                                                                                       : alignof(HandleHeader);
 };
+template <typename Config>
+using Preset = Placement<Stack<Config>>;
 
 // F' style: the storage the header promises must hold the implementation.
 static_assert(Preset<CadreConfig>::kStorageSize <= CCMAP_CADRE_STORAGE_SIZE, "raise CCMAP_CADRE_STORAGE_SIZE");
@@ -147,14 +192,7 @@ static_assert(snapshot_size<SingleOmgConfig>() == CCMAP_SINGLE_OMG_SNAPSHOT_SIZE
 constexpr std::uint32_t kExchangeMagic = 0x58434D43U;  // "CMCX"
 
 template <typename Config>
-struct ExchangePreset {
-  using ExchangeType = MapExchange<Config>;
-  static_assert(kStackOffset % alignof(ExchangeType) == 0U, "exchange offset must respect its alignment");
-  static_assert(alignof(ExchangeType) <= CCMAP_STORAGE_ALIGN, "CCMAP_STORAGE_ALIGN too small");
-  static constexpr std::size_t kStorageSize = kStackOffset + sizeof(ExchangeType);
-  static constexpr std::size_t kStorageAlign = alignof(ExchangeType) > alignof(HandleHeader) ? alignof(ExchangeType)
-                                                                                             : alignof(HandleHeader);
-};
+using ExchangePreset = Placement<MapExchange<Config>>;
 static_assert(ExchangePreset<CadreConfig>::kStorageSize <= CCMAP_CADRE_EXCHANGE_STORAGE_SIZE,
               "raise CCMAP_CADRE_EXCHANGE_STORAGE_SIZE");
 static_assert(ExchangePreset<SingleCcmConfig>::kStorageSize <= CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE,
@@ -178,64 +216,98 @@ static_assert(CCMAP_CADRE_EXCHANGE_STORAGE_SIZE == 464U * 1024U &&
 
 ccmap_status to_c(Status status) noexcept { return static_cast<ccmap_status>(status); }
 
+// ---- the presets this build carries (CMake: CCMAP_CAPI_PRESETS) and the one visitor over them ----
+#if !defined(CCMAP_CAPI_WITH_CADRE) && !defined(CCMAP_CAPI_WITH_SINGLE_CCM) && \
+    !defined(CCMAP_CAPI_WITH_SINGLE_KALMAN) && !defined(CCMAP_CAPI_WITH_SINGLE_OMG)
+#define CCMAP_CAPI_WITH_CADRE 1
+#define CCMAP_CAPI_WITH_SINGLE_CCM 1
+#define CCMAP_CAPI_WITH_SINGLE_KALMAN 1
+#define CCMAP_CAPI_WITH_SINGLE_OMG 1
+#endif
+
+template <typename Config>
+struct PresetTag {
+  using type = Config;
+};
+
+/// Calls fn(PresetTag<Config>{}) for `preset` if this build carries it, else answers `bad`: the
+/// only place that maps a preset number to a type.
+template <typename Result, typename Fn>
+Result visit_preset(std::int64_t preset, Result bad, Fn&& fn) noexcept {
+  switch (preset) {
+#ifdef CCMAP_CAPI_WITH_CADRE
+    case CCMAP_PRESET_CADRE: return fn(PresetTag<CadreConfig>{});
+#endif
+#ifdef CCMAP_CAPI_WITH_SINGLE_CCM
+    case CCMAP_PRESET_SINGLE_CCM: return fn(PresetTag<SingleCcmConfig>{});
+#endif
+#ifdef CCMAP_CAPI_WITH_SINGLE_KALMAN
+    case CCMAP_PRESET_SINGLE_KALMAN: return fn(PresetTag<SingleKalmanConfig>{});
+#endif
+#ifdef CCMAP_CAPI_WITH_SINGLE_OMG
+    case CCMAP_PRESET_SINGLE_OMG: return fn(PresetTag<SingleOmgConfig>{});
+#endif
+    default: break;
+  }
+  return bad;
+}
+
 bool valid_preset(std::int64_t preset) noexcept {
-  return preset >= static_cast<std::int64_t>(CCMAP_PRESET_CADRE) &&
-         preset <= static_cast<std::int64_t>(CCMAP_PRESET_SINGLE_OMG);
+  return visit_preset(preset, false, [](auto) { return true; });
 }
 
 std::size_t storage_size(ccmap_preset preset) noexcept {
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: return Preset<CadreConfig>::kStorageSize;
-    case CCMAP_PRESET_SINGLE_CCM: return Preset<SingleCcmConfig>::kStorageSize;
-    case CCMAP_PRESET_SINGLE_KALMAN: return Preset<SingleKalmanConfig>::kStorageSize;
-    case CCMAP_PRESET_SINGLE_OMG: return Preset<SingleOmgConfig>::kStorageSize;
-    default: break;
-  }
-  return 0U;
+  return visit_preset(preset, std::size_t{0}, [](auto tag) { return Preset<typename decltype(tag)::type>::kStorageSize; });
 }
 
 std::size_t storage_align(ccmap_preset preset) noexcept {
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: return Preset<CadreConfig>::kStorageAlign;
-    case CCMAP_PRESET_SINGLE_CCM: return Preset<SingleCcmConfig>::kStorageAlign;
-    case CCMAP_PRESET_SINGLE_KALMAN: return Preset<SingleKalmanConfig>::kStorageAlign;
-    case CCMAP_PRESET_SINGLE_OMG: return Preset<SingleOmgConfig>::kStorageAlign;
-    default: break;
-  }
-  return 0U;
+  return visit_preset(preset, std::size_t{0}, [](auto tag) { return Preset<typename decltype(tag)::type>::kStorageAlign; });
 }
 
-float default_width(ccmap_preset preset) noexcept {
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: return CadreConfig::kDefaultFinestCellWidthM;
-    case CCMAP_PRESET_SINGLE_CCM: return SingleCcmConfig::kDefaultFinestCellWidthM;
-    case CCMAP_PRESET_SINGLE_KALMAN: return SingleKalmanConfig::kDefaultFinestCellWidthM;
-    case CCMAP_PRESET_SINGLE_OMG: return SingleOmgConfig::kDefaultFinestCellWidthM;
-    default: break;
-  }
-  return 0.0F;
-}
+// ---- handles: one header layout, two kinds (map, exchange) ----
+template <typename Handle>
+struct HandleKind;
+template <>
+struct HandleKind<ccmap_map> {
+  static constexpr std::uint32_t kMagic = kHandleMagic;
+  static constexpr std::uint32_t kOther = kExchangeMagic;
+  template <typename Config>
+  using Object = Stack<Config>;
+};
+template <>
+struct HandleKind<ccmap_exchange> {
+  static constexpr std::uint32_t kMagic = kExchangeMagic;
+  static constexpr std::uint32_t kOther = kHandleMagic;
+  template <typename Config>
+  using Object = MapExchange<Config>;
+};
 
-const HandleHeader* header_of(const ccmap_map* map, bool* damaged = nullptr) noexcept {
-  if (map == nullptr) {
+/// The header of a valid handle, nullptr otherwise (*damaged: it is one an upset changed).
+template <typename Handle>
+HandleHeader* header_of(const Handle* handle, bool* damaged = nullptr) noexcept {
+  if (damaged != nullptr) {
+    *damaged = false;
+  }
+  if (handle == nullptr) {
     return nullptr;
   }
-  const auto* header = std::launder(static_cast<const HandleHeader*>(static_cast<const void*>(map)));
-  const HeaderState state =
-      classify_header(*header, kHandleMagic, kExchangeMagic, valid_preset(static_cast<std::int64_t>(header->preset)));
+  // The handle is the caller's (non-const) storage; the const in the C signatures is the C
+  // API's promise, kept by only calling const members from const entry points.
+  auto* header = std::launder(static_cast<HandleHeader*>(const_cast<void*>(static_cast<const void*>(handle))));
+  const HeaderState state = classify_header(*header, HandleKind<Handle>::kMagic, HandleKind<Handle>::kOther,
+                                            valid_preset(static_cast<std::int64_t>(header->preset)));
   if (damaged != nullptr) {
     *damaged = state == HeaderState::kDamaged;
   }
   return state == HeaderState::kValid ? header : nullptr;
 }
 
-template <typename Config>
-Stack<Config>& stack_of(const ccmap_map* map) noexcept {
-  const auto* bytes = static_cast<const unsigned char*>(static_cast<const void*>(map));
-  // The handle is the caller's (non-const) storage; the const in the C signatures is the C
-  // API's promise, kept by only calling const Stack members from const entry points.
-  auto* stack_bytes = const_cast<unsigned char*>(bytes + kStackOffset);
-  return *std::launder(static_cast<Stack<Config>*>(static_cast<void*>(stack_bytes)));
+/// The object (Stack or MapExchange of Config) placed behind a handle.
+template <typename Config, typename Handle>
+auto& object_of(const Handle* handle) noexcept {
+  using Object = typename HandleKind<Handle>::template Object<Config>;
+  auto* bytes = const_cast<unsigned char*>(static_cast<const unsigned char*>(static_cast<const void*>(handle)));
+  return *std::launder(static_cast<Object*>(static_cast<void*>(bytes + kStackOffset)));
 }
 
 /// Result of an entry point for a handle whose header an upset damaged: CCMAP_CORRUPT for a
@@ -249,23 +321,23 @@ Result damaged_result(Result bad) noexcept {
   }
 }
 
-/// Calls fn(Stack<Config>&) for the map's preset; `bad` for a NULL or foreign handle, CCMAP_CORRUPT
-/// (or `bad`, for a number) for a damaged one.
-template <typename Result, typename Fn>
-Result dispatch(const ccmap_map* map, Result bad, Fn&& fn) noexcept {
+/// Calls fn(object) for the handle's preset (fn(object, header) when fn takes two); `bad` for a
+/// NULL or foreign handle, CCMAP_CORRUPT (or `bad`, for a number) for a damaged one.
+template <typename Result, typename Handle, typename Fn>
+Result dispatch(const Handle* handle, Result bad, Fn&& fn) noexcept {
   bool damaged = false;
-  const HandleHeader* header = header_of(map, &damaged);
+  HandleHeader* header = header_of(handle, &damaged);
   if (header == nullptr) {
     return damaged ? damaged_result(bad) : bad;
   }
-  switch (static_cast<ccmap_preset>(header->preset)) {
-    case CCMAP_PRESET_CADRE: return fn(stack_of<CadreConfig>(map));
-    case CCMAP_PRESET_SINGLE_CCM: return fn(stack_of<SingleCcmConfig>(map));
-    case CCMAP_PRESET_SINGLE_KALMAN: return fn(stack_of<SingleKalmanConfig>(map));
-    case CCMAP_PRESET_SINGLE_OMG: return fn(stack_of<SingleOmgConfig>(map));
-    default: break;
-  }
-  return bad;
+  return visit_preset(header->preset, bad, [&](auto tag) {
+    auto& object = object_of<typename decltype(tag)::type>(handle);
+    if constexpr (std::is_invocable_v<Fn&, decltype(object), HandleHeader&>) {
+      return fn(object, *header);
+    } else {
+      return fn(object);
+    }
+  });
 }
 
 /// The registration parameters of the C call (NULL: the defaults).
@@ -308,50 +380,12 @@ void registration_to_c(const RegistrationResult& r, float centre_x, float centre
   out->cells = cells;
 }
 
-const HandleHeader* exchange_header_of(const ccmap_exchange* exchange, bool* damaged = nullptr) noexcept {
-  if (exchange == nullptr) {
-    return nullptr;
-  }
-  const auto* header = std::launder(static_cast<const HandleHeader*>(static_cast<const void*>(exchange)));
-  const HeaderState state =
-      classify_header(*header, kExchangeMagic, kHandleMagic, valid_preset(static_cast<std::int64_t>(header->preset)));
-  if (damaged != nullptr) {
-    *damaged = state == HeaderState::kDamaged;
-  }
-  return state == HeaderState::kValid ? header : nullptr;
-}
-
-template <typename Config>
-MapExchange<Config>& exchange_of(const ccmap_exchange* exchange) noexcept {
-  const auto* bytes = static_cast<const unsigned char*>(static_cast<const void*>(exchange));
-  auto* exchange_bytes = const_cast<unsigned char*>(bytes + kStackOffset);  // the caller's storage, as stack_of
-  return *std::launder(static_cast<MapExchange<Config>*>(static_cast<void*>(exchange_bytes)));
-}
-
-/// Calls fn(MapExchange<Config>&) for the exchange's preset; `bad` for a NULL or foreign handle.
-template <typename Result, typename Fn>
-Result dispatch_exchange(const ccmap_exchange* exchange, Result bad, Fn&& fn) noexcept {
-  bool damaged = false;
-  const HandleHeader* header = exchange_header_of(exchange, &damaged);
-  if (header == nullptr) {
-    return damaged ? damaged_result(bad) : bad;
-  }
-  switch (static_cast<ccmap_preset>(header->preset)) {
-    case CCMAP_PRESET_CADRE: return fn(exchange_of<CadreConfig>(exchange));
-    case CCMAP_PRESET_SINGLE_CCM: return fn(exchange_of<SingleCcmConfig>(exchange));
-    case CCMAP_PRESET_SINGLE_KALMAN: return fn(exchange_of<SingleKalmanConfig>(exchange));
-    case CCMAP_PRESET_SINGLE_OMG: return fn(exchange_of<SingleOmgConfig>(exchange));
-    default: break;
-  }
-  return bad;
-}
-
 /// Calls fn(MapExchange<C>&, Stack<C>&) when the exchange and the map are of the same preset.
 template <typename Fn>
 ccmap_status dispatch_pair(ccmap_exchange* exchange, ccmap_map* map, Fn&& fn) noexcept {
   bool exchange_damaged = false;
   bool map_damaged = false;
-  const HandleHeader* e = exchange_header_of(exchange, &exchange_damaged);
+  const HandleHeader* e = header_of(exchange, &exchange_damaged);
   const HandleHeader* m = header_of(map, &map_damaged);
   if (exchange_damaged || map_damaged) {
     return CCMAP_CORRUPT;
@@ -359,15 +393,34 @@ ccmap_status dispatch_pair(ccmap_exchange* exchange, ccmap_map* map, Fn&& fn) no
   if (e == nullptr || m == nullptr || e->preset != m->preset) {
     return CCMAP_INVALID_ARGUMENT;
   }
-  switch (static_cast<ccmap_preset>(e->preset)) {
-    case CCMAP_PRESET_CADRE: return fn(exchange_of<CadreConfig>(exchange), stack_of<CadreConfig>(map));
-    case CCMAP_PRESET_SINGLE_CCM: return fn(exchange_of<SingleCcmConfig>(exchange), stack_of<SingleCcmConfig>(map));
-    case CCMAP_PRESET_SINGLE_KALMAN:
-      return fn(exchange_of<SingleKalmanConfig>(exchange), stack_of<SingleKalmanConfig>(map));
-    case CCMAP_PRESET_SINGLE_OMG: return fn(exchange_of<SingleOmgConfig>(exchange), stack_of<SingleOmgConfig>(map));
-    default: break;
+  return visit_preset(e->preset, CCMAP_INVALID_ARGUMENT, [&](auto tag) {
+    using Config = typename decltype(tag)::type;
+    return fn(object_of<Config>(exchange), object_of<Config>(map));
+  });
+}
+
+/// ccmap_place and ccmap_exchange_place: the object of `preset` and its header in `storage`.
+template <typename Handle>
+ccmap_status place_handle(void* storage, std::size_t size, ccmap_preset preset, Handle** out) noexcept {
+  if (storage == nullptr || out == nullptr || !valid_preset(static_cast<std::int64_t>(preset))) {
+    return CCMAP_INVALID_ARGUMENT;
   }
-  return CCMAP_INVALID_ARGUMENT;
+  return visit_preset(preset, CCMAP_INVALID_ARGUMENT, [&](auto tag) {
+    using Config = typename decltype(tag)::type;
+    using Object = typename HandleKind<Handle>::template Object<Config>;
+    if (reinterpret_cast<std::uintptr_t>(storage) % Placement<Object>::kStorageAlign != 0U) {
+      return CCMAP_INVALID_ARGUMENT;
+    }
+    if (size < Placement<Object>::kStorageSize) {
+      return CCMAP_BUFFER_TOO_SMALL;
+    }
+    new (static_cast<unsigned char*>(storage) + kStackOffset) Object();
+    const auto p = static_cast<std::uint32_t>(preset);
+    constexpr std::uint32_t kMagic = HandleKind<Handle>::kMagic;
+    new (storage) HandleHeader{kMagic, p, header_check(kMagic, p), 0U, ccmap_params{}, 0U};
+    *out = static_cast<Handle*>(storage);
+    return CCMAP_OK;
+  });
 }
 
 void merge_report_to_c(const MergeReport& r, ccmap_merge_report* out) noexcept {
@@ -381,14 +434,11 @@ constexpr std::size_t snapshot_bytes(const Stack<Config>&) noexcept {
   return snapshot_size<Config>();
 }
 
-template <typename Config>
-void place(void* storage) noexcept {
-  auto* bytes = static_cast<unsigned char*>(storage);
-  new (bytes + kStackOffset) Stack<Config>();
-}
-
 // ---- parameters ----
-void params_to_c(const StackParams& p, ccmap_params* out) noexcept {
+/// `p` as C parameters. The noise model: the CADRE stereo numbers (default_stack_params' model)
+/// unless noise_from_model, then p.noise itself (stereo as focal 1 px, baseline 1 m and
+/// disparity sigma k: the same model, bitwise, once converted back).
+void params_to_c(const StackParams& p, ccmap_params* out, bool noise_from_model = false) noexcept {
   *out = ccmap_params{};
   out->finest_cell_width_m = p.finest_cell_width_m;
   out->weight_limit = p.weight_limit;
@@ -420,6 +470,18 @@ void params_to_c(const StackParams& p, ccmap_params* out) noexcept {
   out->noise.lidar_sigma_per_m = 0.0F;
   out->noise.weight_mode = CCMAP_WEIGHT_CONSTANT;
   out->noise.reference_range_m = p.noise.reference_range_m();
+  if (noise_from_model) {
+    const sensor::NoiseModel& n = p.noise;
+    const bool stereo = n.kind() == sensor::SensorKind::kStereo;
+    out->noise.sensor = stereo ? CCMAP_SENSOR_STEREO : CCMAP_SENSOR_LIDAR;
+    out->noise.stereo_focal_px = stereo ? 1.0F : 0.0F;
+    out->noise.stereo_baseline_m = stereo ? 1.0F : 0.0F;
+    out->noise.stereo_disparity_sigma_px = stereo ? n.stereo_sigma_per_range_sq() : 0.0F;
+    out->noise.lidar_sigma0_m = n.lidar_sigma0_m();
+    out->noise.lidar_sigma_per_m = n.lidar_sigma_per_m();
+    out->noise.weight_mode =
+        n.weight_mode() == sensor::WeightMode::kConstant ? CCMAP_WEIGHT_CONSTANT : CCMAP_WEIGHT_INVERSE_VARIANCE;
+  }
 }
 
 Status params_from_c(const ccmap_params& c, StackParams* out) noexcept {
@@ -462,6 +524,30 @@ Status params_from_c(const ccmap_params& c, StackParams* out) noexcept {
   }
   *out = p;
   return Status::kOk;
+}
+
+std::uint32_t params_crc(const ccmap_params& p) noexcept {
+  return product_crc32(reinterpret_cast<const std::uint8_t*>(&p), sizeof p);
+}
+
+/// Keeps the C parameters a map accepted (ccmap_init, ccmap_set_params), sealed by their CRC.
+void remember_params(HandleHeader& header, const ccmap_params& p) noexcept {
+  header.params = p;
+  header.params_crc = params_crc(p);
+}
+
+/// The parameters the map runs with, as C parameters: the ones it was given while they are intact
+/// and still convert to exactly what the stack holds, else the stack's own (after a load).
+template <typename Config>
+ccmap_params current_params(const Stack<Config>& stack, const HandleHeader& header) noexcept {
+  StackParams given{};
+  if (params_crc(header.params) == header.params_crc && params_from_c(header.params, &given) == Status::kOk &&
+      changed_param_fields(given, stack.params()) == 0U) {
+    return header.params;
+  }
+  ccmap_params out{};
+  params_to_c(stack.params(), &out, true);
+  return out;
 }
 
 void result_to_c(const QueryResult& q, ccmap_query_result* out) noexcept {
@@ -546,6 +632,11 @@ void counters_to_c(const FrameCounters& f, ccmap_frame_counters* out) noexcept {
 }
 
 }  // namespace
+
+void stack_params_to_c(const StackParams& params, ccmap_params* out) noexcept { params_to_c(params, out, true); }
+Status stack_params_from_c(const ccmap_params& params, StackParams* out) noexcept { return params_from_c(params, out); }
+std::uint32_t c_params_crc(const ccmap_params& params) noexcept { return params_crc(params); }
+
 }  // namespace ccmap
 
 using ccmap::Status;
@@ -554,7 +645,7 @@ extern "C" {
 
 const char* ccmap_status_string(ccmap_status status) {
   const int s = static_cast<int>(status);
-  if (s < static_cast<int>(CCMAP_OK) || s > static_cast<int>(CCMAP_NOT_CONVERGED)) {
+  if (s < static_cast<int>(CCMAP_OK) || s > static_cast<int>(CCMAP_BUSY)) {
     return "invalid_status";
   }
   return ccmap::to_string(static_cast<Status>(s));
@@ -573,33 +664,15 @@ size_t ccmap_cadre_storage_size(void) { return ccmap::storage_size(CCMAP_PRESET_
 size_t ccmap_cadre_storage_align(void) { return ccmap::storage_align(CCMAP_PRESET_CADRE); }
 
 ccmap_status ccmap_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_map** out) {
-  if (storage == nullptr || out == nullptr || !ccmap::valid_preset(static_cast<std::int64_t>(preset))) {
-    return CCMAP_INVALID_ARGUMENT;
-  }
-  if (reinterpret_cast<std::uintptr_t>(storage) % ccmap::storage_align(preset) != 0U) {
-    return CCMAP_INVALID_ARGUMENT;
-  }
-  if (storage_size < ccmap::storage_size(preset)) {
-    return CCMAP_BUFFER_TOO_SMALL;
-  }
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: ccmap::place<ccmap::CadreConfig>(storage); break;
-    case CCMAP_PRESET_SINGLE_CCM: ccmap::place<ccmap::SingleCcmConfig>(storage); break;
-    case CCMAP_PRESET_SINGLE_KALMAN: ccmap::place<ccmap::SingleKalmanConfig>(storage); break;
-    case CCMAP_PRESET_SINGLE_OMG: ccmap::place<ccmap::SingleOmgConfig>(storage); break;
-    default: return CCMAP_INVALID_ARGUMENT;
-  }
-  new (storage) ccmap::HandleHeader{ccmap::kHandleMagic, static_cast<std::uint32_t>(preset),
-                                    ccmap::header_check(ccmap::kHandleMagic, static_cast<std::uint32_t>(preset))};
-  *out = static_cast<ccmap_map*>(storage);
-  return CCMAP_OK;
+  return ccmap::place_handle<ccmap_map>(storage, storage_size, preset, out);
 }
 
 ccmap_status ccmap_default_params(ccmap_preset preset, ccmap_params* out) {
   if (out == nullptr || !ccmap::valid_preset(static_cast<std::int64_t>(preset))) {
     return CCMAP_INVALID_ARGUMENT;
   }
-  ccmap::params_to_c(ccmap::default_stack_params(ccmap::default_width(preset)), out);
+  const float width = ccmap::visit_preset(preset, 0.0F, [](auto tag) { return decltype(tag)::type::kDefaultFinestCellWidthM; });
+  ccmap::params_to_c(ccmap::default_stack_params(width), out);
   return CCMAP_OK;
 }
 
@@ -620,7 +693,12 @@ ccmap_status ccmap_init(ccmap_map* map, const ccmap_params* params) {
   if (converted != Status::kOk) {
     return ccmap::to_c(converted);
   }
-  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&p](auto& stack) { return ccmap::to_c(stack.init(p)); });
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack, ccmap::HandleHeader& header) {
+    const Status status = stack.init(p);
+    ccmap::remember_params(header, *params);
+    header.products_published = 0U;
+    return ccmap::to_c(status);
+  });
 }
 
 ccmap_status ccmap_move_to(ccmap_map* map, float x, float y) {
@@ -859,78 +937,40 @@ ccmap_status ccmap_save_snapshot(const ccmap_map* map, uint8_t* buffer, size_t c
 }
 
 ccmap_status ccmap_load_snapshot(ccmap_map* map, const uint8_t* data, size_t size) {
-  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack) {
-    return ccmap::to_c(ccmap::load_snapshot(stack, data, size));
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack, ccmap::HandleHeader& header) {
+    const Status status = ccmap::load_snapshot(stack, data, size);
+    if (status == Status::kOk) {
+      header.params = ccmap_params{};  // the snapshot brought its own: ccmap_get_params answers those
+      header.params_crc = ~ccmap::params_crc(header.params);
+      header.products_published = 0U;
+    }
+    return ccmap::to_c(status);
   });
 }
 
 // ---- map exchange ----
 size_t ccmap_delta_max_size(ccmap_preset preset) {
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: return ccmap::MapExchange<ccmap::CadreConfig>::max_delta_size();
-    case CCMAP_PRESET_SINGLE_CCM: return ccmap::MapExchange<ccmap::SingleCcmConfig>::max_delta_size();
-    case CCMAP_PRESET_SINGLE_KALMAN: return ccmap::MapExchange<ccmap::SingleKalmanConfig>::max_delta_size();
-    case CCMAP_PRESET_SINGLE_OMG: return ccmap::MapExchange<ccmap::SingleOmgConfig>::max_delta_size();
-    default: break;
-  }
-  return 0U;
+  return ccmap::visit_preset(preset, std::size_t{0},
+                             [](auto tag) { return ccmap::MapExchange<typename decltype(tag)::type>::max_delta_size(); });
 }
 
 size_t ccmap_delta_min_size(ccmap_preset preset) {
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: return ccmap::MapExchange<ccmap::CadreConfig>::min_delta_size();
-    case CCMAP_PRESET_SINGLE_CCM: return ccmap::MapExchange<ccmap::SingleCcmConfig>::min_delta_size();
-    case CCMAP_PRESET_SINGLE_KALMAN: return ccmap::MapExchange<ccmap::SingleKalmanConfig>::min_delta_size();
-    case CCMAP_PRESET_SINGLE_OMG: return ccmap::MapExchange<ccmap::SingleOmgConfig>::min_delta_size();
-    default: break;
-  }
-  return 0U;
+  return ccmap::visit_preset(preset, std::size_t{0},
+                             [](auto tag) { return ccmap::MapExchange<typename decltype(tag)::type>::min_delta_size(); });
 }
 
 size_t ccmap_exchange_storage_size(ccmap_preset preset) {
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: return ccmap::ExchangePreset<ccmap::CadreConfig>::kStorageSize;
-    case CCMAP_PRESET_SINGLE_CCM: return ccmap::ExchangePreset<ccmap::SingleCcmConfig>::kStorageSize;
-    case CCMAP_PRESET_SINGLE_KALMAN: return ccmap::ExchangePreset<ccmap::SingleKalmanConfig>::kStorageSize;
-    case CCMAP_PRESET_SINGLE_OMG: return ccmap::ExchangePreset<ccmap::SingleOmgConfig>::kStorageSize;
-    default: break;
-  }
-  return 0U;
+  return ccmap::visit_preset(preset, std::size_t{0},
+                             [](auto tag) { return ccmap::ExchangePreset<typename decltype(tag)::type>::kStorageSize; });
 }
 
 size_t ccmap_exchange_storage_align(ccmap_preset preset) {
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: return ccmap::ExchangePreset<ccmap::CadreConfig>::kStorageAlign;
-    case CCMAP_PRESET_SINGLE_CCM: return ccmap::ExchangePreset<ccmap::SingleCcmConfig>::kStorageAlign;
-    case CCMAP_PRESET_SINGLE_KALMAN: return ccmap::ExchangePreset<ccmap::SingleKalmanConfig>::kStorageAlign;
-    case CCMAP_PRESET_SINGLE_OMG: return ccmap::ExchangePreset<ccmap::SingleOmgConfig>::kStorageAlign;
-    default: break;
-  }
-  return 0U;
+  return ccmap::visit_preset(preset, std::size_t{0},
+                             [](auto tag) { return ccmap::ExchangePreset<typename decltype(tag)::type>::kStorageAlign; });
 }
 
 ccmap_status ccmap_exchange_place(void* storage, size_t storage_size, ccmap_preset preset, ccmap_exchange** out) {
-  if (storage == nullptr || out == nullptr || !ccmap::valid_preset(static_cast<std::int64_t>(preset))) {
-    return CCMAP_INVALID_ARGUMENT;
-  }
-  if (reinterpret_cast<std::uintptr_t>(storage) % ccmap_exchange_storage_align(preset) != 0U) {
-    return CCMAP_INVALID_ARGUMENT;
-  }
-  if (storage_size < ccmap_exchange_storage_size(preset)) {
-    return CCMAP_BUFFER_TOO_SMALL;
-  }
-  auto* bytes = static_cast<unsigned char*>(storage) + ccmap::kStackOffset;
-  switch (preset) {
-    case CCMAP_PRESET_CADRE: new (bytes) ccmap::MapExchange<ccmap::CadreConfig>(); break;
-    case CCMAP_PRESET_SINGLE_CCM: new (bytes) ccmap::MapExchange<ccmap::SingleCcmConfig>(); break;
-    case CCMAP_PRESET_SINGLE_KALMAN: new (bytes) ccmap::MapExchange<ccmap::SingleKalmanConfig>(); break;
-    case CCMAP_PRESET_SINGLE_OMG: new (bytes) ccmap::MapExchange<ccmap::SingleOmgConfig>(); break;
-    default: return CCMAP_INVALID_ARGUMENT;
-  }
-  new (storage) ccmap::HandleHeader{ccmap::kExchangeMagic, static_cast<std::uint32_t>(preset),
-                                    ccmap::header_check(ccmap::kExchangeMagic, static_cast<std::uint32_t>(preset))};
-  *out = static_cast<ccmap_exchange*>(storage);
-  return CCMAP_OK;
+  return ccmap::place_handle<ccmap_exchange>(storage, storage_size, preset, out);
 }
 
 ccmap_status ccmap_exchange_init(ccmap_exchange* exchange, ccmap_map* map, const ccmap_exchange_params* params) {
@@ -950,7 +990,7 @@ ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, si
   if (report != nullptr) {
     *report = ccmap_export_report{};
   }
-  return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
+  return ccmap::dispatch(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
     ccmap::ExportReport r{};
     const Status status = ex.export_delta(buffer, capacity, ccmap::ExportOptions{weight_floor, finest_layer}, written, &r);
     if (report != nullptr) {
@@ -964,7 +1004,7 @@ ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, si
 ccmap_status ccmap_exchange_merge_delta(ccmap_exchange* exchange, const uint8_t* data, size_t size,
                                         ccmap_merge_report* report) {
   ccmap::merge_report_to_c(ccmap::MergeReport{}, report);
-  return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
+  return ccmap::dispatch(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
     ccmap::MergeReport r{};
     const Status status = ex.merge_delta(data, size, &r);
     ccmap::merge_report_to_c(r, report);
@@ -976,7 +1016,7 @@ ccmap_status ccmap_exchange_merge_snapshot(ccmap_exchange* exchange, const uint8
                                            int32_t offset_x_cells, int32_t offset_y_cells, float offset_z_m,
                                            ccmap_merge_report* report) {
   ccmap::merge_report_to_c(ccmap::MergeReport{}, report);
-  return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
+  return ccmap::dispatch(exchange, CCMAP_INVALID_ARGUMENT, [&](auto& ex) {
     ccmap::MergeReport r{};
     const Status status =
         ex.merge_snapshot(data, size, ccmap::CellIndex{offset_x_cells, offset_y_cells}, offset_z_m, &r);
@@ -1001,7 +1041,7 @@ ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_e
   if (out == nullptr) {
     return CCMAP_INVALID_ARGUMENT;
   }
-  return ccmap::dispatch_exchange(exchange, CCMAP_INVALID_ARGUMENT, [out](const auto& ex) {
+  return ccmap::dispatch(exchange, CCMAP_INVALID_ARGUMENT, [out](const auto& ex) {
     const ccmap::ExchangeCounters& c = ex.counters();
     *out = ccmap_exchange_counters{c.deltas_exported,   c.deltas_merged,      c.snapshots_merged, c.refused,
                                    c.refused_corrupt,   c.refused_duplicate,  c.refused_misaligned, c.deltas_missed,
@@ -1098,6 +1138,210 @@ ccmap_status ccmap_align_delta(const ccmap_map* map, const uint8_t* data, size_t
     ccmap::registration_to_c(a.correction, a.centre_x_m, a.centre_y_m, a.cells, out);
     return ccmap::to_c(a.correction.status);
   });
+}
+
+int32_t ccmap_preset_available(ccmap_preset preset) {
+  return ccmap::valid_preset(static_cast<std::int64_t>(preset)) ? 1 : 0;
+}
+
+// ---- parameters as commands ----
+ccmap_status ccmap_validate_params(ccmap_preset preset, const ccmap_params* params) {
+  if (params == nullptr || !ccmap::valid_preset(static_cast<std::int64_t>(preset))) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::StackParams p{};
+  const Status converted = ccmap::params_from_c(*params, &p);
+  if (converted != Status::kOk) {
+    return ccmap::to_c(converted);
+  }
+  return ccmap::visit_preset(preset, CCMAP_INVALID_ARGUMENT, [&p](auto tag) {
+    return ccmap::to_c(ccmap::Stack<typename decltype(tag)::type>::validate_params(p));
+  });
+}
+
+ccmap_status ccmap_get_params(const ccmap_map* map, ccmap_params* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [out](const auto& stack, const ccmap::HandleHeader& header) {
+    const Status state = stack.state_status();
+    if (state == Status::kOk) {
+      *out = ccmap::current_params(stack, header);
+    }
+    return ccmap::to_c(state);
+  });
+}
+
+ccmap_status ccmap_set_params(ccmap_map* map, const ccmap_params* params, uint32_t* needs_reinit) {
+  if (needs_reinit != nullptr) {
+    *needs_reinit = 0U;
+  }
+  if (params == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  ccmap::StackParams p{};
+  const Status converted = ccmap::params_from_c(*params, &p);
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](auto& stack, ccmap::HandleHeader& header) {
+    // The map's own state answers first (as every call): a damaged or uninitialised map says so.
+    const Status state = stack.state_status();
+    if (state != Status::kOk) {
+      return ccmap::to_c(state);
+    }
+    if (converted != Status::kOk) {
+      return ccmap::to_c(converted);
+    }
+    const Status status = stack.set_params(p, needs_reinit);
+    if (status == Status::kOk) {
+      ccmap::remember_params(header, *params);
+    }
+    return ccmap::to_c(status);
+  });
+}
+
+// ---- health ----
+ccmap_status ccmap_get_health(const ccmap_map* map, ccmap_health* out) {
+  if (out == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [out](const auto& stack, const ccmap::HandleHeader& header) {
+    using StackType = std::remove_reference_t<decltype(stack)>;
+    ccmap_health h{};
+    const Status state = stack.state_status();
+    h.initialised = stack.initialised() ? 1 : 0;
+    h.state = static_cast<std::int32_t>(state);
+    h.preset = static_cast<std::int32_t>(header.preset);
+    h.layer_count = StackType::kLayerCount;
+    const ccmap::FrameCounters& totals = stack.total_counters();
+    h.frames_accepted = stack.frames_since_reset();
+    h.frames_refused = stack.rejected_frames();
+    h.moves_refused = stack.rejected_moves();
+    h.points_received = totals.received;
+    h.points_used = totals.used;
+    h.points_skipped_budget = totals.skipped_budget;
+    h.corrupted_cells = totals.corrupted_cells;
+    h.corrupted_slots = totals.corrupted_slots;
+    h.params_changes = stack.params_changes();
+    h.products_published = header.products_published;
+    h.last_frame_ns = stack.last_update_ns();
+    h.last_frame_points = stack.last_frame().received;
+    h.last_frame_used = stack.last_frame().used;
+    h.params_crc = state == Status::kOk ? ccmap::params_crc(ccmap::current_params(stack, header)) : 0U;
+    h.map_sequence = stack.accepted_frames();
+    h.fault_count = ccmap::assert_failure_count();
+    for (int layer = 0; layer < StackType::kLayerCount; ++layer) {
+      ccmap_layer_health& l = h.layers[layer];
+      const ccmap::CellIndex centre = stack.layer_centre(layer);
+      l.cell_width_m = stack.layer_cell_width(layer);
+      l.centre_index_x = centre.x;
+      l.centre_index_y = centre.y;
+      l.centre_x_m = static_cast<float>(centre.x) * l.cell_width_m;
+      l.centre_y_m = static_cast<float>(centre.y) * l.cell_width_m;
+      l.observed_cells = stack.observed_cells(layer);
+      l.normal_variance_threshold = stack.normal_variance_threshold(layer);
+    }
+    *out = h;
+    return CCMAP_OK;
+  });
+}
+
+ccmap_status ccmap_reset_counters(ccmap_map* map) {
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [](auto& stack, ccmap::HandleHeader& header) {
+    const Status status = stack.reset_counters();
+    if (status == Status::kOk) {
+      header.products_published = 0U;
+    }
+    return ccmap::to_c(status);
+  });
+}
+
+namespace {
+std::atomic<ccmap_fault_hook> g_fault_hook{nullptr};
+std::atomic<void*> g_fault_context{nullptr};
+
+void fault_trampoline(const char* file, int line, const char* expression) {
+  const ccmap_fault_hook hook = g_fault_hook.load();
+  if (hook != nullptr) {
+    hook(g_fault_context.load(), file, line, expression);
+  }
+}
+}  // namespace
+
+ccmap_status ccmap_set_fault_hook(ccmap_fault_hook hook, void* context) {
+  g_fault_context.store(context);
+  g_fault_hook.store(hook);
+  (void)ccmap::set_assert_hook(hook != nullptr ? &fault_trampoline : nullptr);
+  return CCMAP_OK;
+}
+
+// ---- the map product ----
+ccmap_status ccmap_product_buffers_init(ccmap_product_buffers* buffers, void* storage, size_t storage_size) {
+  return ccmap::to_c(ccmap::product_buffers_init(buffers, storage, storage_size));
+}
+
+ccmap_status ccmap_publish(const ccmap_map* map, const ccmap_product_spec* spec, ccmap_product_buffers* buffers) {
+  if (spec == nullptr || buffers == nullptr ||
+      (spec->answer != CCMAP_PRODUCT_STACK && spec->answer != CCMAP_PRODUCT_LAYER)) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack, ccmap::HandleHeader& header) {
+    ccmap::ProductSpec p{};
+    p.layer = spec->layer;
+    p.answer = spec->answer == CCMAP_PRODUCT_STACK ? ccmap::ProductAnswer::kStack : ccmap::ProductAnswer::kLayer;
+    p.pose_x = spec->pose_x;
+    p.pose_y = spec->pose_y;
+    p.pose_z = spec->pose_z;
+    p.pose_yaw = spec->pose_yaw;
+    p.tag = spec->tag;
+    p.preset = static_cast<std::uint16_t>(header.preset);
+    p.params_crc = stack.state_status() == Status::kOk ? ccmap::params_crc(ccmap::current_params(stack, header)) : 0U;
+    const Status status = ccmap::publish_product(stack, p, *buffers);
+    if (status == Status::kOk && header.products_published != UINT32_MAX) {
+      ++header.products_published;
+    }
+    return ccmap::to_c(status);
+  });
+}
+
+ccmap_status ccmap_product_read(const ccmap_product_buffers* buffers, void* out, size_t capacity, size_t* written) {
+  if (written != nullptr) {
+    *written = 0U;
+  }
+  if (buffers == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  return ccmap::to_c(ccmap::product_read(*buffers, static_cast<std::uint8_t*>(out), capacity, written));
+}
+
+ccmap_status ccmap_product_decode(const void* data, size_t size, ccmap_product_header* header,
+                                  ccmap_product_cell* cells, size_t cell_capacity) {
+  if (data == nullptr || header == nullptr) {
+    return CCMAP_INVALID_ARGUMENT;
+  }
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  ccmap::ProductHeader h{};
+  const Status status = ccmap::decode_product_header(bytes, size, &h);
+  if (status != Status::kOk) {
+    return ccmap::to_c(status);
+  }
+  const std::size_t count = std::size_t{h.side_x} * h.side_y;
+  if (cells != nullptr && cell_capacity < count) {
+    return CCMAP_BUFFER_TOO_SMALL;
+  }
+  *header = ccmap_product_header{h.version,      h.total_bytes,    h.product_sequence, h.map_sequence,
+                                 h.params_crc,   h.preset,         h.layer,            h.answer,
+                                 h.side_x,       h.side_y,         h.cell_width_m,     h.min_index_x,
+                                 h.min_index_y,  h.min_corner_x_m, h.min_corner_y_m,   h.centre_x_m,
+                                 h.centre_y_m,   h.pose_x,         h.pose_y,           h.pose_z,
+                                 h.pose_yaw,     h.tag};
+  if (cells != nullptr) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const ccmap::ProductCell c = ccmap::decode_product_cell(bytes, i);
+      cells[i] = ccmap_product_cell{c.cell_class, c.cost, c.status,
+                                    c.layer == ccmap::kProductNoLayer ? -1 : static_cast<std::int32_t>(c.layer),
+                                    c.height_m, c.inclination};
+    }
+  }
+  return CCMAP_OK;
 }
 
 const char* ccmap_platform_name(void) { return ccmap::platform::name(); }

@@ -20,6 +20,7 @@ const char* to_string(Status status) noexcept {
     case Status::kInsufficientOverlap: return "insufficient_overlap";
     case Status::kDegenerateInput: return "degenerate_input";
     case Status::kNotConverged: return "not_converged";
+    case Status::kBusy: return "busy";
   }
   return "invalid_status";
 }

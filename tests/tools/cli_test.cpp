@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "ccmap/map/stack.hpp"
+#include "ccmap/product/publish.hpp"
 #include "cli_run.hpp"
 #include "csv_writer.hpp"
 #include "temp_dir.hpp"
@@ -1059,4 +1061,69 @@ TEST(CliMerge, RefusalsSayWhy) {
   ASSERT_EQ(std::sscanf(r.out.c_str() + origin_at, "(origin %lf %lf %lf", &ox, &oy, &oz), 3) << r.out;
   ASSERT_EQ(std::sscanf(r.out.c_str() + offset_at, "offset 0.080 -0.160 %lf", &dz), 1) << r.out;
   EXPECT_NEAR(dz, -oz, 1e-9) << r.out;
+}
+
+// 'ccmap product': the header and every cell it prints against the map's own answers (a CADRE
+// stack mapped here, its product published into buffers in memory and written to a file).
+TEST(CliProduct, PrintsEveryCellAsTheMapAnswersIt) {
+  const TempDir dir(kTempPrefix);
+  static ccmap::Stack<ccmap::CadreConfig> stack;
+  ASSERT_EQ(stack.init(ccmap::default_stack_params(0.04F)), ccmap::Status::kOk);
+  std::vector<ccmap::PointXYZ> points;
+  for (int j = 0; j < 60; ++j) {
+    for (int i = 0; i < 60; ++i) {
+      const float x = -0.9F + 0.03F * static_cast<float>(i);
+      const float y = -0.9F + 0.03F * static_cast<float>(j);
+      points.push_back({x, y, 0.05F * x + ((x > 0.3F && x < 0.6F && std::fabs(y) < 0.2F) ? 0.3F : 0.0F)});
+    }
+  }
+  ASSERT_EQ(stack.update_frame(points.data(), points.size(), ccmap::PointXYZ{0.0F, 0.0F, 0.8F}, nullptr),
+            ccmap::Status::kOk);
+  std::vector<std::uint32_t> storage(3U * ccmap::product_size(64U, 64U) / 4U);
+  ccmap::ProductBuffers buffers{};
+  ASSERT_EQ(ccmap::product_buffers_init(&buffers, storage.data(), storage.size() * 4U), ccmap::Status::kOk);
+  ccmap::ProductSpec spec{};
+  spec.layer = 1;
+  spec.tag = 42U;
+  ASSERT_EQ(ccmap::publish_product(stack, spec, buffers), ccmap::Status::kOk);
+  std::vector<std::uint8_t> bytes(ccmap::product_size(64U, 64U));
+  std::size_t written = 0U;
+  ASSERT_EQ(ccmap::product_read(buffers, bytes.data(), bytes.size(), &written), ccmap::Status::kOk);
+  const std::filesystem::path file = dir / "p.ccmp";
+  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
+                                              static_cast<std::streamsize>(written));
+  const CliRun run = ccmap::test::run_ccmap({"product", "--in", file.string(), "--cells", "--png", (dir / "p").string()});
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.out.find("\ntag 42\n"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("\nlayer 1\n"), std::string::npos) << run.out;
+  std::istringstream lines(run.out.substr(run.out.find("ix iy class")));
+  std::string header;
+  std::getline(lines, header);
+  const float w = stack.layer_cell_width(1);
+  int rows = 0, known = 0;
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::istringstream f(line);
+    int ix = 0, iy = 0, cost = 0, layer = 0;
+    std::string cell_class, status;
+    float height = 0.0F;
+    f >> ix >> iy >> cell_class >> cost >> status >> layer >> height;
+    const ccmap::QueryResult q = stack.query((static_cast<float>(ix) + 0.5F) * w, (static_cast<float>(iy) + 0.5F) * w);
+    EXPECT_EQ(cell_class, ccmap::to_string(q.cell_class)) << line;
+    EXPECT_EQ(status, ccmap::to_string(q.status)) << line;
+    if (q.status == ccmap::Status::kOk) {
+      ++known;
+      EXPECT_NEAR(height, q.height_m, 1e-5F) << line;
+    }
+    ++rows;
+  }
+  EXPECT_EQ(rows, 64 * 64);
+  EXPECT_GT(known, 100);
+  EXPECT_TRUE(std::filesystem::exists(dir / "p_class.png") && std::filesystem::exists(dir / "p_height.png"));
+  bytes[300] ^= 1U;
+  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
+                                              static_cast<std::streamsize>(written));
+  const CliRun damaged = ccmap::test::run_ccmap({"product", "--in", file.string()});
+  EXPECT_EQ(damaged.code, 1);
+  EXPECT_NE(damaged.err.find("not a whole map product (corrupt)"), std::string::npos) << damaged.err;
 }

@@ -27,3 +27,4 @@ ccmap_add_python_test(ccmap_python_module test_module.py)
 # The example on the real scan (skipped without ../shared/data), and its message without it.
 ccmap_add_python_test(ccmap_python_example test_example.py Example.test_maps_the_crop_and_writes_a_png)
 ccmap_add_python_test(ccmap_python_example_without_data test_example.py Example.test_without_data_it_says_why)
+ccmap_add_python_test(ccmap_python_flight test_flight.py)

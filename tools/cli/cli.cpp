@@ -28,6 +28,7 @@
 #include "origin.hpp"
 #include "png.hpp"
 #include "raster_io.hpp"
+#include "product_view.hpp"
 #include "saved_map.hpp"
 #include "tiling.hpp"
 
@@ -130,6 +131,9 @@ struct Options {
   bool register_frames = false;  ///< map --register: each frame after the first registered before it is folded
   bool align = false;            ///< merge --align: each map aligned with the first before it is merged
   int epsg = 0;          ///< --epsg CODE; 0: none given
+  std::string product_in;   ///< product --in FILE
+  std::string product_png;  ///< product --png PREFIX
+  bool product_cells = false;  ///< product --cells
   /// A planner query (--footprint or --path) without --poses: a map centred on it, not tiles.
   [[nodiscard]] bool centred_map() const { return (have_footprint || !path.empty()) && poses.empty(); }
 };
@@ -443,6 +447,18 @@ void add_merge_command(CLI::App& app, Options& o) {
                   "printed as not applied (docs/design.md, 'Merging at an offset that is not whole cells')");
   add_output_options(merge, o);
   merge->footer(kMergeFooter);
+}
+
+void add_product_command(CLI::App& app, Options& o) {
+  CLI::App* product = app.add_subcommand("product", "check, print and draw a map product (what ccmap_publish writes)");
+  add_name(product, "--in", "FILE", "a file name",
+           "the product's bytes (from ccmap_product_read, Python's Map.product, a\n"
+           "downlink); checked with the library's decoder (size, version, CRC)",
+           &o.product_in)
+      ->required();
+  product->add_flag("--cells", o.product_cells, "also prints every cell: ix iy class cost status layer height_m inclination");
+  add_name(product, "--png", "PREFIX", "a file name prefix",
+           "also writes PREFIX_class.png, PREFIX_cost.png and PREFIX_height.png (north up)", &o.product_png);
 }
 
 /// For an option given to the wrong command: "--at belongs to 'ccmap query'", or empty when no
@@ -1188,18 +1204,19 @@ int run_cli(int argc, char** argv, std::ostream& out, std::ostream& err) {
     app.get_formatter()->label("Usage", "usage");
     app.get_formatter()->column_width(34);
     app.require_subcommand(1);
-    app.footer("Run 'ccmap map --help', 'ccmap query --help' or 'ccmap merge --help' for the options.");
+    app.footer("Run 'ccmap map --help', 'ccmap query --help', 'ccmap merge --help' or 'ccmap product --help' for\nthe options.");
     add_map_command(app, o);
     add_query_command(app, o);
     add_merge_command(app, o);
+    add_product_command(app, o);
     if (argc >= 2 && argv != nullptr && argv[1] != nullptr && argv[1][0] != '-') {
       const std::string command = argv[1];
       if (command == "help") {
         out << app.help();
         return 0;
       }
-      if (command != "map" && command != "query" && command != "merge") {
-        fail("unknown command '" + command + "' (expected map, query or merge)", 2);
+      if (command != "map" && command != "query" && command != "merge" && command != "product") {
+        fail("unknown command '" + command + "' (expected map, query, merge or product)", 2);
       }
     }
     try {
@@ -1221,6 +1238,12 @@ int run_cli(int argc, char** argv, std::ostream& out, std::ostream& err) {
     }
     o.command = app.get_subcommands().at(0)->get_name();
     if (o.command == "merge") return run_merge(o, out);
+    if (o.command == "product") {
+      std::string error;
+      const int code = view_product(o.product_in, o.product_cells, o.product_png, out, &error);
+      if (code != 0) fail(error, code);
+      return 0;
+    }
     return o.command == "map" ? run_map(o, out) : run_query(o, out);
   } catch (const CliError& e) {
     err << "ccmap: error: " << e.message << "\n";

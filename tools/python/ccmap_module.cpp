@@ -35,8 +35,11 @@
 #include <string>
 #include <vector>
 
+#include "ccmap/capi_params.hpp"
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/param_fields.hpp"
 #include "ccmap/map/types.hpp"
+#include "ccmap/product/product_format.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 #include "map_adapter.hpp"
 
@@ -461,6 +464,7 @@ const Preset& preset_arg(const std::string& name) {
 /// The sensor keywords, gathered before the noise model is built.
 struct SensorArgs {
   std::string kind = "stereo";
+  bool kind_given = false;
   sensor::StereoParams stereo = sensor::kCadreStereoParams;
   bool stereo_given = false;
   sensor::LidarParams lidar{0.005F, 0.0F};  // the `ccmap` CLI's lidar default (5 mm)
@@ -494,6 +498,7 @@ bool sensor_keyword(const std::string& key, py::handle value, SensorArgs* s) {
   }
   if (key == "sensor") {
     s->kind = string_arg(value, key);
+    s->kind_given = true;
     if (s->kind != "stereo" && s->kind != "lidar") {
       throw StatusError(Status::kInvalidArgument, "sensor must be 'stereo' or 'lidar', not '" + s->kind + "'");
     }
@@ -539,11 +544,23 @@ std::uint32_t count_arg(py::handle value, const std::string& name) {
   return static_cast<std::uint32_t>(v);
 }
 
-/// default_stack_params(width) with the keywords applied.
-StackParams build_params(const Preset& preset, py::handle cell_width, const py::kwargs& kwargs) {
-  const float width = cell_width.is_none() ? preset.default_cell_width_m : number_arg(cell_width, "cell_width");
-  StackParams params = default_stack_params(width);
+/// default_stack_params(width) with the keywords applied; with `base` (Map.set_params), *base
+/// with the keywords applied (its noise model kept unless a sensor keyword is given).
+StackParams build_params(const Preset& preset, py::handle cell_width, const py::kwargs& kwargs,
+                         const StackParams* base = nullptr) {
+  StackParams params{};
+  if (base != nullptr) {
+    params = *base;
+    if (!cell_width.is_none()) params.finest_cell_width_m = number_arg(cell_width, "cell_width");
+  } else {
+    const float width = cell_width.is_none() ? preset.default_cell_width_m : number_arg(cell_width, "cell_width");
+    params = default_stack_params(width);
+  }
   SensorArgs sensor_args;
+  if (base != nullptr && base->noise.kind() == sensor::SensorKind::kLidar) {
+    sensor_args.kind = "lidar";
+    sensor_args.lidar = sensor::LidarParams{base->noise.lidar_sigma0_m(), base->noise.lidar_sigma_per_m()};
+  }
   for (const auto& item : kwargs) {
     const std::string key = py::str(item.first);
     bool known = false;
@@ -588,9 +605,9 @@ StackParams build_params(const Preset& preset, py::handle cell_width, const py::
   if (sensor_args.kind == "stereo" && !sensor_args.lidar_keys.empty()) {
     throw py::type_error(sensor_args.lidar_keys.front() + " applies to sensor='lidar' (the default is 'stereo')");
   }
-  if (sensor_args.kind == "lidar") {
+  if (sensor_args.kind == "lidar" && (base == nullptr || sensor_args.kind_given || !sensor_args.lidar_keys.empty())) {
     params.noise = sensor::NoiseModel::lidar(sensor_args.lidar);
-  } else if (sensor_args.stereo_given) {
+  } else if (sensor_args.stereo_given || (base != nullptr && sensor_args.kind_given)) {
     params.noise = sensor::NoiseModel::stereo(sensor_args.stereo);
   }  // else: default_stack_params' CADRE stereo model
   if (sensor_args.weight_mode_given) params.noise.set_weight_mode(sensor_args.weight_mode, sensor_args.reference_range_m);
@@ -648,6 +665,87 @@ py::dict registration_dict(const RegistrationResult& r, float centre_x, float ce
   d["lever_m"] = r.lever_m;
   d["residual_sigma"] = r.residual_sigma;
   d["centre"] = py::make_tuple(centre_x, centre_y);
+  d["cells"] = cells;
+  return d;
+}
+
+/// The names of the param_field bits (ccmap.h CCMAP_PARAM_*, in bit order): the C member names.
+const char* const kParamFieldNames[] = {
+    "finest_cell_width_m", "weight_limit",      "coverage_tau",       "min_weight",
+    "obstacle_fraction",   "max_inclination",   "kalman_min_variance", "normal_variance_threshold",
+    "finest_max_sigma_m",  "outlier_gate_sigma", "change_min_points",  "change_share",
+    "frame_point_budget",  "frame_time_budget_us", "free_space_rays",  "free_space_clear_frames",
+    "sensor_view_axis",    "noise"};
+static_assert(sizeof kParamFieldNames / sizeof kParamFieldNames[0] == 18U && param_field::kAll == (1U << 18U) - 1U,
+              "one name per param_field bit");
+
+std::vector<std::string> param_field_names(std::uint32_t mask) {
+  std::vector<std::string> names;
+  for (std::uint32_t bit = 0; bit < 18U; ++bit) {
+    if ((mask & (1U << bit)) != 0U) names.emplace_back(kParamFieldNames[bit]);
+  }
+  return names;
+}
+
+/// ccmap.decode_product: the standalone decoder's answer as a dict (the header fields by their
+/// ccmap_product_header names) with the cells as a (side_y, side_x) structured array.
+py::dict decode_product(py::handle data) {
+  PyObject* as_bytes = PyBytes_FromObject(data.ptr());
+  if (as_bytes == nullptr) throw py::error_already_set();
+  const std::string bytes = py::reinterpret_steal<py::bytes>(as_bytes);
+  const auto* p = reinterpret_cast<const std::uint8_t*>(bytes.data());
+  ProductHeader h{};
+  check(decode_product_header(p, bytes.size(), &h), "not a whole map product");
+  py::dict d;
+  d["version"] = h.version;
+  d["total_bytes"] = h.total_bytes;
+  d["product_sequence"] = h.product_sequence;
+  d["map_sequence"] = h.map_sequence;
+  d["params_crc"] = h.params_crc;
+  d["preset"] = h.preset;
+  d["layer"] = h.layer;
+  d["answer"] = h.answer == 0U ? "stack" : "layer";
+  d["side_x"] = h.side_x;
+  d["side_y"] = h.side_y;
+  d["cell_width_m"] = h.cell_width_m;
+  d["min_index_x"] = h.min_index_x;
+  d["min_index_y"] = h.min_index_y;
+  d["min_corner_x_m"] = h.min_corner_x_m;
+  d["min_corner_y_m"] = h.min_corner_y_m;
+  d["centre_x_m"] = h.centre_x_m;
+  d["centre_y_m"] = h.centre_y_m;
+  d["pose_x"] = h.pose_x;
+  d["pose_y"] = h.pose_y;
+  d["pose_z"] = h.pose_z;
+  d["pose_yaw"] = h.pose_yaw;
+  d["tag"] = h.tag;
+  py::list names, formats;
+  for (const char* name : {"cell_class", "cost", "status", "layer"}) {
+    names.append(name);
+    formats.append(name == std::string("layer") ? "i2" : "u1");
+  }
+  names.append("height_m");
+  formats.append("f4");
+  names.append("inclination");
+  formats.append("f4");
+  py::dict spec;
+  spec["names"] = names;
+  spec["formats"] = formats;
+  const py::dtype dtype = py::dtype::from_args(spec);
+  py::array cells(dtype, std::vector<py::ssize_t>{h.side_y, h.side_x});
+  auto* out = static_cast<std::uint8_t*>(cells.mutable_data());
+  const auto stride = static_cast<std::size_t>(dtype.itemsize());
+  for (std::size_t i = 0; i < std::size_t{h.side_x} * h.side_y; ++i) {
+    const ProductCell c = decode_product_cell(p, i);
+    const std::int16_t layer = c.layer == kProductNoLayer ? std::int16_t{-1} : static_cast<std::int16_t>(c.layer);
+    std::uint8_t* rec = out + i * stride;
+    rec[0] = c.cell_class;
+    rec[1] = c.cost;
+    rec[2] = c.status;
+    std::memcpy(rec + 3, &layer, sizeof layer);
+    std::memcpy(rec + 5, &c.height_m, sizeof c.height_m);
+    std::memcpy(rec + 9, &c.inclination, sizeof c.inclination);
+  }
   d["cells"] = cells;
   return d;
 }
@@ -903,6 +1001,91 @@ class Map {
     return d;
   }
 
+  // ---- the flight interface (docs/integration.md, "Flight interface") ----
+  /// Keyword overrides of the running parameters, applied keeping every cell (Stack::set_params).
+  void set_params(const py::kwargs& kwargs) {
+    py::object cell_width = py::none();
+    py::kwargs rest;
+    for (const auto& item : kwargs) {
+      if (std::string(py::str(item.first)) == "cell_width") {
+        cell_width = py::reinterpret_borrow<py::object>(item.second);
+      } else {
+        rest[item.first] = item.second;
+      }
+    }
+    const StackParams params = build_params(*preset_, cell_width, rest, &map_->params());
+    std::uint32_t needs_reinit = 0U;
+    const Status status = map_->set_params(params, &needs_reinit);
+    if (needs_reinit != 0U) {
+      std::string names;
+      for (const std::string& n : param_field_names(needs_reinit)) names += (names.empty() ? "" : ", ") + n;
+      throw StatusError(status, "these changes need a re-init (a new Map): " + names);
+    }
+    check(status, "the map refused the parameters (it is unchanged)");
+  }
+  void reset_counters() { check(map_->reset_counters(), "reset_counters"); }
+  /// ccmap_health's fields by name (layers: one dict per layer).
+  py::dict health() const {
+    const Status state = map_->state_status();
+    const FrameCounters& totals = map_->total_counters();
+    py::dict d;
+    d["initialised"] = map_->initialised();
+    d["state"] = to_string(state);
+    d["preset"] = preset_->name;
+    d["layer_count"] = map_->layer_count();
+    d["frames_accepted"] = map_->frames_since_reset();
+    d["frames_refused"] = map_->rejected_frames();
+    d["moves_refused"] = map_->rejected_moves();
+    d["points_received"] = totals.received;
+    d["points_used"] = totals.used;
+    d["points_skipped_budget"] = totals.skipped_budget;
+    d["corrupted_cells"] = totals.corrupted_cells;
+    d["corrupted_slots"] = totals.corrupted_slots;
+    d["params_changes"] = map_->params_changes();
+    d["products_published"] = 0U;  // a Python map publishes through product(), not into shared buffers
+    d["last_frame_ns"] = map_->last_update_ns();
+    d["last_frame_points"] = map_->last_frame().received;
+    d["last_frame_used"] = map_->last_frame().used;
+    d["params_crc"] = params_crc();
+    d["map_sequence"] = map_->accepted_frames();
+    d["fault_count"] = assert_failure_count();
+    py::list layers;
+    for (int k = 0; k < map_->layer_count(); ++k) {
+      const CellIndex c = map_->layer_centre(k);
+      const float w = map_->layer_cell_width(k);
+      py::dict l;
+      l["cell_width_m"] = w;
+      l["centre_index_x"] = c.x;
+      l["centre_index_y"] = c.y;
+      l["centre_x_m"] = static_cast<float>(c.x) * w;
+      l["centre_y_m"] = static_cast<float>(c.y) * w;
+      l["observed_cells"] = map_->observed_cells(k);
+      l["normal_variance_threshold"] = map_->normal_variance_threshold(k);
+      layers.append(l);
+    }
+    d["layers"] = layers;
+    return d;
+  }
+  /// The map product of layer k's window (bytes; ccmap.decode_product reads it).
+  py::bytes product(py::handle k, const std::string& answer, py::handle pose_obj, std::uint32_t tag) const {
+    const int layer = layer_arg(k);
+    if (answer != "stack" && answer != "layer") {
+      throw StatusError(Status::kInvalidArgument, "answer must be 'stack' or 'layer', not '" + answer + "'");
+    }
+    float pose[4] = {0.0F, 0.0F, 0.0F, 0.0F};
+    if (!pose_obj.is_none()) {
+      if (PyUnicode_Check(pose_obj.ptr()) || !PySequence_Check(pose_obj.ptr()) ||
+          py::reinterpret_borrow<py::sequence>(pose_obj).size() != 4U) {
+        throw py::type_error("pose must be a sequence (x, y, z, yaw)");
+      }
+      const auto values = py::reinterpret_borrow<py::sequence>(pose_obj);
+      for (std::size_t i = 0; i < 4U; ++i) pose[i] = number_arg(values[i], "pose");
+    }
+    std::vector<std::uint8_t> bytes;
+    check(map_->product(layer, answer == "layer", pose, tag, params_crc(), &bytes), "product");
+    return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  }
+
   std::string repr() const {
     std::string widths;
     for (const float w : cell_widths()) {
@@ -915,6 +1098,12 @@ class Map {
   }
 
  private:
+  /// ccmap_health.params_crc of a map given no C parameters: the CRC of what ccmap_get_params answers.
+  std::uint32_t params_crc() const {
+    ccmap_params c{};
+    stack_params_to_c(map_->params(), &c);
+    return c_params_crc(c);
+  }
   int layer_arg(py::handle k) const {
     if (PyBool_Check(k.ptr()) || !PyIndex_Check(k.ptr())) throw py::type_error("layer must be an int");
     const auto value = k.cast<long long>();
@@ -977,6 +1166,33 @@ PYBIND11_MODULE(ccmap, m) {
       },
       py::arg("preset"), py::arg("paper_cell") = false,
       "Bytes of a snapshot of the preset (fixed by its configuration and CCM cell kind).");
+
+  m.def(
+      "validate_params",
+      [](const std::string& preset, py::object cell_width, const py::kwargs& kwargs) {
+        const cp::Preset& p = cp::preset_arg(preset);
+        const ccmap::StackParams params = cp::build_params(p, cell_width, kwargs);
+        return std::string(ccmap::to_string(p.make()->validate_params(params)));
+      },
+      py::arg("preset") = "cadre", py::arg("cell_width") = py::none(),
+      "Map()'s parameter checks without a map: 'ok' if Map(preset, cell_width, **params) would accept\n"
+      "them, else the status name it would refuse them with.");
+  m.def("decode_product", &cp::decode_product, py::arg("data"),
+        "Check and decode a map product (bytes from Map.product, ccmap_product_read or the ground link):\n"
+        "a dict of the header fields (docs/icd.md) and 'cells', a (side_y, side_x) structured array\n"
+        "(cell_class, cost, status, layer, height_m, inclination; row 0 = the lowest y). StatusError\n"
+        "'corrupt' / 'version_mismatch' for bytes that are not a whole product of this version.");
+  {
+    py::list fields;
+    for (const char* name : cp::kParamFieldNames) fields.append(name);
+    m.attr("PARAM_FIELDS") = py::tuple(fields);
+    py::list statuses;
+    for (int st = 0; st <= static_cast<int>(ccmap::Status::kBusy); ++st) {
+      statuses.append(ccmap::to_string(static_cast<ccmap::Status>(st)));
+    }
+    m.attr("STATUS_NAMES") = py::tuple(statuses);
+    m.attr("PRODUCT_VERSION") = ccmap::kProductVersion;
+  }
 
   py::class_<Map>(m, "Map",
                   "A robot-centric multi-resolution terrain map: one of the library's Stack presets.\n\n"
@@ -1098,5 +1314,22 @@ PYBIND11_MODULE(ccmap, m) {
       .def_property_readonly("rejected_moves", &Map::rejected_moves)
       .def_property_readonly("rejected_frames", &Map::rejected_frames)
       .def_property_readonly("last_update_ns", &Map::last_update_ns, "Duration of the last accepted update (ns).")
+      .def("set_params", &Map::set_params,
+           "Change the running parameters by keyword (the Map() keywords, cell_width included), keeping\n"
+           "every cell. Refused (StatusError, the map unchanged): parameters Map() would refuse, or\n"
+           "changes that need a new map (the message names them: the cell width; a noise model or\n"
+           "finest_max_sigma_m that changes which layer a range goes to).")
+      .def("reset_counters", &Map::reset_counters,
+           "Zero the counters health() counts since a reset; cells, parameters and map_sequence stay.")
+      .def("health", &Map::health,
+           "The map's health as a dict with ccmap_health's fields (docs/icd.md): initialised, state (the\n"
+           "state check run now), frames_accepted/refused, moves_refused, points_*, corrupted_cells/slots,\n"
+           "params_changes, last_frame_ns/points/used, params_crc, map_sequence, fault_count, layers (per\n"
+           "layer: cell_width_m, centre_index_x/y, centre_x/y_m, observed_cells, normal_variance_threshold).")
+      .def("product", &Map::product, py::arg("layer") = 0, py::arg("answer") = "stack", py::arg("pose") = py::none(),
+           py::arg("tag") = 0U,
+           "The map product of one layer's window as bytes (the format ccmap_publish writes; read it with\n"
+           "ccmap.decode_product). answer: 'stack' (each cell: the map's answer at its centre) or 'layer'\n"
+           "(that layer's own); pose (x, y, z, yaw) and tag are echoed into the header.")
       .def("__repr__", &Map::repr);
 }

@@ -1,6 +1,7 @@
 #include "map_adapter.hpp"
 
 #include "ccmap/persistence/snapshot.hpp"
+#include "ccmap/product/publish.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/registration/alignment.hpp"
 
@@ -69,6 +70,46 @@ class StackAdapter final : public MapAdapter {
   std::uint32_t rejected_moves() const override { return stack_->rejected_moves(); }
   std::uint32_t rejected_frames() const override { return stack_->rejected_frames(); }
   std::uint64_t last_update_ns() const override { return stack_->last_update_ns(); }
+
+  Status validate_params(const StackParams& params) const override { return StackType::validate_params(params); }
+  Status set_params(const StackParams& params, std::uint32_t* needs_reinit) override {
+    return stack_->set_params(params, needs_reinit);
+  }
+  Status reset_counters() override { return stack_->reset_counters(); }
+  Status state_status() const override { return stack_->state_status(); }
+  std::uint32_t frames_since_reset() const override { return stack_->frames_since_reset(); }
+  std::uint32_t accepted_frames() const override { return stack_->accepted_frames(); }
+  std::uint32_t params_changes() const override { return stack_->params_changes(); }
+  const FrameCounters& last_frame() const override { return stack_->last_frame(); }
+  std::uint32_t observed_cells(int layer) const override { return stack_->observed_cells(layer); }
+  Status product(int layer, bool layer_answer, const float (&pose)[4], std::uint32_t tag, std::uint32_t params_crc,
+                 std::vector<std::uint8_t>* bytes) const override {
+    const auto side = static_cast<std::uint32_t>(StackType::layer_side(layer < 0 ? 0 : layer));
+    std::vector<std::uint32_t> storage(3U * product_size(side, side) / 4U + 3U);
+    ProductBuffers buffers{};
+    Status status = product_buffers_init(&buffers, storage.data(), storage.size() * sizeof(std::uint32_t));
+    if (status != Status::kOk) {
+      return status;
+    }
+    ProductSpec spec{};
+    spec.layer = layer;
+    spec.answer = layer_answer ? ProductAnswer::kLayer : ProductAnswer::kStack;
+    spec.pose_x = pose[0];
+    spec.pose_y = pose[1];
+    spec.pose_z = pose[2];
+    spec.pose_yaw = pose[3];
+    spec.tag = tag;
+    spec.params_crc = params_crc;
+    status = publish_product(*stack_, spec, buffers);
+    if (status != Status::kOk) {
+      return status;
+    }
+    bytes->resize(product_size(side, side));
+    std::size_t written = 0U;
+    status = product_read(buffers, bytes->data(), bytes->size(), &written);
+    bytes->resize(written);
+    return status;
+  }
 
  private:
   std::unique_ptr<StackType> stack_ = std::make_unique<StackType>();  // MBs: never on the C++ stack

@@ -62,6 +62,22 @@ class MapAdapter {
   [[nodiscard]] virtual std::uint32_t rejected_moves() const = 0;
   [[nodiscard]] virtual std::uint32_t rejected_frames() const = 0;
   [[nodiscard]] virtual std::uint64_t last_update_ns() const = 0;
+
+  // ---- the flight interface (ccmap.h, "parameters as commands", "health", "the map product") ----
+  /// Stack<Config>::validate_params: init()'s checks, nothing touched.
+  [[nodiscard]] virtual Status validate_params(const StackParams& params) const = 0;
+  /// Stack::set_params (cells kept); *needs_reinit: the param_field mask of a refusal.
+  [[nodiscard]] virtual Status set_params(const StackParams& params, std::uint32_t* needs_reinit) = 0;
+  [[nodiscard]] virtual Status reset_counters() = 0;
+  [[nodiscard]] virtual Status state_status() const = 0;
+  [[nodiscard]] virtual std::uint32_t frames_since_reset() const = 0;
+  [[nodiscard]] virtual std::uint32_t accepted_frames() const = 0;
+  [[nodiscard]] virtual std::uint32_t params_changes() const = 0;
+  [[nodiscard]] virtual const FrameCounters& last_frame() const = 0;
+  [[nodiscard]] virtual std::uint32_t observed_cells(int layer) const = 0;
+  /// The product of one layer's window (product/publish.hpp), its bytes in *bytes.
+  [[nodiscard]] virtual Status product(int layer, bool layer_answer, const float (&pose)[4], std::uint32_t tag,
+                                       std::uint32_t params_crc, std::vector<std::uint8_t>* bytes) const = 0;
 };
 
 /// One preset: its CLI name, the library's configuration behind it, factories for its full-cell

@@ -35,6 +35,7 @@ enum class Status : std::uint8_t {
   kInsufficientOverlap,  ///< registration: too few samples on known cells of the map
   kDegenerateInput,      ///< registration: no usable points, or all of them at one spot
   kNotConverged,         ///< registration: no solution within the iteration or search bounds
+  kBusy,                 ///< product read: the writer replaced the product during every try (read again)
 };
 
 /// Short, stable, lower-case name of a status ("ok", "non_finite_input", ...). Never nullptr.

@@ -31,12 +31,14 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/core/assert.hpp"
 #include "ccmap/grid/ring_grid.hpp"
 #include "ccmap/map/classify.hpp"
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/param_fields.hpp"
 #include "ccmap/map/query/answers.hpp"
 #include "ccmap/map/update/front.hpp"
 #include "ccmap/map/detail/integrity.hpp"
@@ -107,24 +109,17 @@ class Stack {
     ready_ = 0U;
     seal_ = detail::StateSeal{};
     update_seal_ = detail::StateSeal{};
-    const Status status = validate_stack_params(params, kLayerCount);
+    sensor::RoutingTable<kLayerCount> routing{};
+    const Status status = derive(params, &routing);
     if (status != Status::kOk) {
       return status;
-    }
-    if (!kConfigOutlierGate<Config> && params.outlier_gate_sigma > 0.0F) {
-      return Status::kInvalidArgument;  // the gate is not compiled into this Config (map/config.hpp)
     }
     params_ = params;
     if (layers_.init(params.finest_cell_width_m) != Status::kOk) {
       return Status::kInvalidArgument;
     }
     detail::clear_all_checks(layers_);  // integrity: every cell cleared, every check 0
-    const Status routing_status =
-        kHasFine ? sensor::build_routing_table(params_.noise, layers_.widths, params_.finest_max_sigma_m, &routing_)
-                 : sensor::build_routing_table(params_.noise, layers_.widths, &routing_);
-    if (routing_status != Status::kOk) {
-      return routing_status;
-    }
+    routing_ = routing;
     for (int layer = 0; layer < kLayerCount; ++layer) {
       thresholds_[layer] = layer_threshold(params_, layer, layers_.widths[layer]);
     }
@@ -143,10 +138,90 @@ class Stack {
     rejected_frames_ = 0U;
     last_update_ns_ = 0U;
     accepted_frames_ = 0U;
+    counted_frames_ = 0U;
+    params_changes_ = 0U;
+    last_frame_ = FrameCounters{};
     scrub_cursor_ = 0U;
     ++generation_;
     ready_ = detail::kStackReady;
     seal_state();
+    return Status::kOk;
+  }
+
+  /// Exactly init()'s checks of `params` for a stack of this Config, nothing touched (no stack
+  /// needed: a ground tool or a table-validation callback runs it): kOk if init(params) would
+  /// succeed, else the status init() would answer.
+  [[nodiscard]] static Status validate_params(const StackParams& params) noexcept {
+    sensor::RoutingTable<kLayerCount> routing{};
+    return derive(params, &routing);
+  }
+
+  /// Changes the parameters of an initialised stack and keeps every cell (a parameter command):
+  /// after kOk the stack is the one init(params) followed by the same frames and moves would
+  /// have built, as far as the changed fields allow: classification, coverage, thresholds
+  /// (calibrated again when <= 0), the gate and change rule (held points kept, judged under the
+  /// new gate at the next frame's end), budgets, free space, weight limit, Kalman floor, and a
+  /// noise model or finest_max_sigma_m whose routing table equals the current one. Cells already
+  /// folded keep the points they took.
+  /// Refused, the stack bitwise unchanged: validate_params' refusals (its status); a change that
+  /// needs a re-init (kInvalidArgument; *needs_reinit, when not nullptr, gets the param_field
+  /// mask of the fields: the cell width, or the noise model / finest_max_sigma_m when they
+  /// change the routing); kNotInitialised; kCorrupt (state_status). *needs_reinit is 0 otherwise.
+  [[nodiscard]] Status set_params(const StackParams& params, std::uint32_t* needs_reinit) noexcept {
+    if (needs_reinit != nullptr) {
+      *needs_reinit = 0U;
+    }
+    const Status state = verify_state();
+    if (state != Status::kOk) {
+      return state;
+    }
+    sensor::RoutingTable<kLayerCount> routing{};
+    const Status status = derive(params, &routing);
+    if (status != Status::kOk) {
+      return status;
+    }
+    const std::uint32_t changed = changed_param_fields(params_, params);
+    std::uint32_t reinit = changed & param_field::kReinitAlways;
+    if (std::memcmp(routing.max_range_sq, routing_.max_range_sq, sizeof routing.max_range_sq) != 0) {
+      reinit |= changed & (param_field::kNoise | param_field::kFinestMaxSigma);
+    }
+    if (reinit != 0U) {
+      if (needs_reinit != nullptr) {
+        *needs_reinit = reinit;
+      }
+      return Status::kInvalidArgument;
+    }
+    float thresholds[Layers::kLayerSlots]{};
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      thresholds[layer] = layer_threshold(params, layer, layers_.widths[layer]);
+    }
+    // Refuses only what derive() refused: nothing is changed before it has answered.
+    if (update_.set_constants(params, routing_.max_range_sq, layers_) != Status::kOk) {
+      return Status::kInvalidArgument;
+    }
+    params_ = params;
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      thresholds_[layer] = thresholds[layer];
+    }
+    free_space_.set_constants(params_, routing_.max_range_sq, layers_);
+    params_changes_ = params_changes_ == UINT32_MAX ? params_changes_ : params_changes_ + 1U;
+    seal_state();
+    return Status::kOk;
+  }
+
+  /// Zeroes the counters (total_counters, rejected_moves, rejected_frames, frames_since_reset,
+  /// params_changes); no cell, parameter or accepted_frames() (map exchange numbers its deltas
+  /// by it) changes. kNotInitialised; kCorrupt (state_status).
+  [[nodiscard]] Status reset_counters() noexcept {
+    const Status state = verify_state();
+    if (state != Status::kOk) {
+      return state;
+    }
+    totals_ = FrameCounters{};
+    rejected_moves_ = 0U;
+    rejected_frames_ = 0U;
+    counted_frames_ = 0U;
+    params_changes_ = 0U;
     return Status::kOk;
   }
 
@@ -457,6 +532,29 @@ class Stack {
   /// Cells with held points at the end of the last frame, before the change rule decided (the
   /// held-point slots it took; at most kCcmHeldSlots + kFineHeldSlots).
   [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
+  /// Frame updates accepted since init, load_snapshot() or reset_counters() (saturating).
+  [[nodiscard]] std::uint32_t frames_since_reset() const noexcept { return counted_frames_; }
+  /// set_params() accepted since init, load_snapshot() or reset_counters() (saturating).
+  [[nodiscard]] std::uint32_t params_changes() const noexcept { return params_changes_; }
+  /// Counters of the last accepted frame update (zero before the first).
+  [[nodiscard]] const FrameCounters& last_frame() const noexcept { return last_frame_; }
+  /// Cells of `layer` holding points (weight > 0) whose bits agree with their check; 0 for a bad
+  /// layer or a stack whose state failed its check. One pass over the layer.
+  [[nodiscard]] std::uint32_t observed_cells(int layer) const noexcept {
+    if (layer < 0 || layer >= kLayerCount || query_status() != Status::kOk) {
+      return 0U;
+    }
+    std::uint32_t count = 0U;
+    auto tally = [this, &count](CellIndex, const auto& cell) {
+      count += (cell.weight > 0.0F && detail::cell_intact(layers_, cell)) ? 1U : 0U;
+    };
+    if (layer_is_ccm(layer)) {
+      layers_.ccm_grid(layer).for_each(tally);
+    } else {
+      layers_.fine.for_each(tally);
+    }
+    return count;
+  }
   /// Frame updates accepted since init (wraps at 2^32): the sequence number that map exchange
   /// (persistence/exchange.hpp) puts in its deltas. Restarts at 0 with init() and load_snapshot().
   [[nodiscard]] std::uint32_t accepted_frames() const noexcept { return accepted_frames_; }
@@ -581,9 +679,39 @@ class Stack {
     update_seal_ = update_seal();
   }
 
+  /// init()'s checks of `params` (validate_params, set_params): the routing table they build in
+  /// *routing. Nothing of the stack is touched.
+  [[nodiscard]] static Status derive(const StackParams& params, sensor::RoutingTable<kLayerCount>* routing) noexcept {
+    const Status status = validate_stack_params(params, kLayerCount);
+    if (status != Status::kOk) {
+      return status;
+    }
+    if (!kConfigOutlierGate<Config> && params.outlier_gate_sigma > 0.0F) {
+      return Status::kInvalidArgument;  // the gate is not compiled into this Config (map/config.hpp)
+    }
+    float widths[Layers::kLayerSlots]{};
+    float width = params.finest_cell_width_m;
+    for (float& w : widths) {  // the widths LayerSet::init binds
+      w = width;
+      width *= 2.0F;
+    }
+    const Status routing_status =
+        kHasFine ? sensor::build_routing_table(params.noise, widths, params.finest_max_sigma_m, routing)
+                 : sensor::build_routing_table(params.noise, widths, routing);
+    if (routing_status != Status::kOk) {
+      return routing_status;
+    }
+    detail::FrontConfig front{};
+    return detail::make_front_config(widths[0], routing->max_range_sq, kLayerCount, &front) == Status::kOk
+               ? Status::kOk
+               : Status::kInvalidArgument;
+  }
+
   void finish_frame(const FrameCounters& frame, std::uint64_t start, FrameCounters* counters) noexcept {
     detail::accumulate(totals_, frame);
     ++accepted_frames_;
+    counted_frames_ = counted_frames_ == UINT32_MAX ? counted_frames_ : counted_frames_ + 1U;
+    last_frame_ = frame;
     const std::uint64_t end = platform::monotonic_ns();
     last_update_ns_ = end >= start ? end - start : 0U;
     write_counters(frame, counters);
@@ -613,6 +741,9 @@ class Stack {
   std::uint32_t rejected_frames_ = 0U;
   std::uint64_t last_update_ns_ = 0U;
   std::uint32_t accepted_frames_ = 0U;  ///< accepted frame updates since init (bookkeeping)
+  std::uint32_t counted_frames_ = 0U;   ///< accepted frame updates since init or reset_counters()
+  std::uint32_t params_changes_ = 0U;   ///< set_params() accepted since init or reset_counters()
+  FrameCounters last_frame_{};          ///< counters of the last accepted frame
   /// Changes on every init() and every binding of a MapExchange: an exchange bound to an older
   /// generation refuses to run (its record of what was sent no longer describes these cells).
   std::uint32_t generation_ = 0U;

@@ -92,6 +92,15 @@ class OutlierGate {
   /// Gate constants of every layer (k from the params, V from the routing bounds max_range_sq_m2),
   /// empty pools. The gate is on iff params.outlier_gate_sigma > 0.
   void init(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
+    set_constants(params, max_range_sq_m2, layers);
+    ccm_held_.clear();
+    fine_held_.clear();
+    last_frame_slots_ = 0U;
+  }
+
+  /// The constants of init() alone, the pools kept (Stack::set_params: held points are judged
+  /// under the new constants at the next frame's end).
+  void set_constants(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
     on_ = params.outlier_gate_sigma > 0.0F;
     // A cell is known from min_weight on (and never while empty).
     mature_weight_ = params.min_weight > 1.0e-30F ? params.min_weight : 1.0e-30F;
@@ -103,9 +112,6 @@ class OutlierGate {
       constants_[layer] = make_gate_constants(params.outlier_gate_sigma, floor_variance);
       sight_margin_[layer] = params.outlier_gate_sigma * std::sqrt(floor_variance);
     }
-    ccm_held_.clear();
-    fine_held_.clear();
-    last_frame_slots_ = 0U;
   }
 
   [[nodiscard]] bool on() const noexcept { return on_; }

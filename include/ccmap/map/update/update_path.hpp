@@ -78,15 +78,31 @@ class UpdatePath {
   /// max_range_sq_m2: the routing table's squared ranges (m^2), per layer. Empties the frame
   /// batches and the held points. kInvalidArgument if the front refuses the width or bounds.
   [[nodiscard]] Status init(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
-    const Status status = make_front_config(layers.widths[0], max_range_sq_m2, Layers::kLayerCount, &front_);
-    constant_weight_ = params.noise.weight_mode() == sensor::WeightMode::kConstant;
+    const Status status = set_constants(params, max_range_sq_m2, layers);
     if constexpr (kGateCompiled) {
       gate_.init(params, max_range_sq_m2, layers);
     }
     batch_.clear();
+    return status;
+  }
+
+  /// The constants of init() alone, nothing else touched (Stack::set_params; the gate's held
+  /// points are kept). On a refusal of the front configuration nothing is changed.
+  [[nodiscard]] Status set_constants(const StackParams& params, const float* max_range_sq_m2,
+                                     const Layers& layers) noexcept {
+    FrontConfig front{};
+    const Status status = make_front_config(layers.widths[0], max_range_sq_m2, Layers::kLayerCount, &front);
+    if (status != Status::kOk) {
+      return status;
+    }
+    front_ = front;
+    constant_weight_ = params.noise.weight_mode() == sensor::WeightMode::kConstant;
+    if constexpr (kGateCompiled) {
+      gate_.set_constants(params, max_range_sq_m2, layers);
+    }
     point_budget_ = params.frame_point_budget;
     time_budget_ns_ = std::uint64_t{params.frame_time_budget_us} * 1000U;
-    return status;
+    return Status::kOk;
   }
 
   [[nodiscard]] const FrontConfig& front() const noexcept { return front_; }

@@ -113,6 +113,7 @@ class FreeSpace<Config, false> {
   using Layers = LayerSet<Config>;
   static constexpr bool kEnabled = false;
   [[nodiscard]] Status init(const StackParams&, const float*, const Layers&) noexcept { return Status::kOk; }
+  void set_constants(const StackParams&, const float*, const Layers&) noexcept {}
   void follow(int, CellIndex) noexcept {}
   void run_map(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, const float*,
                std::size_t, const FramePose&, FrameCounters&) noexcept {}
@@ -146,6 +147,17 @@ class FreeSpace<Config, true> {
       }
       offset_[layer] = offset;
       offset += static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
+    }
+    set_constants(params, max_range_sq_m2, layers);
+    frames_ = 0U;
+    contradicted_count_ = 0U;
+    return Status::kOk;
+  }
+
+  /// The constants of init() alone (margins, ray count, clear frames, view axis); the records
+  /// and the frame count kept (Stack::set_params).
+  void set_constants(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
+    for (int layer = 0; layer < kLayerCount; ++layer) {
       const float width = layers.widths[layer];
       const float sigma = layer_max_sigma(params, max_range_sq_m2[layer], width, Layers::is_ccm(layer));
       const float step = params.obstacle_fraction * width;
@@ -165,9 +177,6 @@ class FreeSpace<Config, true> {
     view_axis_[2] = params.sensor_view_axis[2];
     view_axis_set_ = !(view_axis_[0] >= 0.0F && view_axis_[0] <= 0.0F && view_axis_[1] >= 0.0F &&
                        view_axis_[1] <= 0.0F && view_axis_[2] >= 0.0F && view_axis_[2] <= 0.0F);
-    frames_ = 0U;
-    contradicted_count_ = 0U;
-    return Status::kOk;
   }
 
   /// The record grid of `layer` follows the layer's window to `centre` (Stack::move_to calls it

@@ -1,0 +1,1 @@
+target_sources(ccmap_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/product_buffers.cpp)
