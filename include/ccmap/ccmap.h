@@ -587,6 +587,8 @@ typedef struct ccmap_costmap_spec {
   float resolution_m;
   uint32_t side;
   float inflation_radius_m;
+  uint32_t max_rows;   /* row budget: 0 fills every row; else the central band of max_rows rows
+                          only, every other pixel 255 (unknown) and counted (rows_skipped) */
 } ccmap_costmap_spec;
 
 typedef struct ccmap_costmap_stats {
@@ -596,6 +598,7 @@ typedef struct ccmap_costmap_stats {
   uint32_t lethal;     /* 254 */
   uint32_t unknown;    /* 255 */
   uint32_t cells_visited;
+  uint32_t rows_skipped; /* rows left unknown by the row budget */
 } ccmap_costmap_stats;
 
 /* Fills cost[0 .. side^2) in the costmap_2d convention (0 free .. 252, 253 inscribed, 254 lethal,

@@ -830,12 +830,14 @@ ccmap_status ccmap_fill_costmap(const ccmap_map* map, const ccmap_costmap_spec* 
   if (spec == nullptr) {
     return CCMAP_INVALID_ARGUMENT;
   }
-  const ccmap::CostmapSpec s{spec->centre_x, spec->centre_y, spec->resolution_m, spec->side, spec->inflation_radius_m};
+  const ccmap::CostmapSpec s{spec->centre_x, spec->centre_y, spec->resolution_m, spec->side, spec->inflation_radius_m,
+                             spec->max_rows};
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
     ccmap::CostmapStats st{};
     const Status status = ccmap::fill_costmap(stack, s, cost, capacity, &st);
     if (stats != nullptr) {
-      *stats = ccmap_costmap_stats{st.free, st.cost, st.inscribed, st.lethal, st.unknown, st.cells_visited};
+      *stats = ccmap_costmap_stats{st.free, st.cost, st.inscribed, st.lethal, st.unknown, st.cells_visited,
+                                   st.rows_skipped};
     }
     return ccmap::to_c(status);
   });

@@ -20,6 +20,7 @@
 //   region 10 move_to over 2.52, 5.04, 10.0, 20.0 and 100 m (each from the origin): the move
 //             that clears each layer's cells one by one (a shift of almost its side), and the
 //             jump that replaces every window (5 intervals)
+//   region 11 fill_costmap as region 5 at 2 cm with a row budget of 64 rows (CostmapSpec::max_rows)
 // Under qemu-aarch64 with the plugin the ctest prints and checks the counts; elsewhere the
 // markers are empty and this only checks the calls' results.
 #include <cstdint>
@@ -135,6 +136,13 @@ int main() {
   const Status faded = stack->move_to(0.04F, 0.0F, 0.005F);
   test::icount_end<9>();
   if (faded != Status::kOk) return fail("move refused");
+  CostmapSpec budgeted{0.0F, 0.0F, 0.02F, kMaxCostmapSide, 0.02F * static_cast<float>(kMaxInflationPixels)};
+  budgeted.max_rows = 64U;
+  CostmapStats band{};
+  test::icount_begin<11>();
+  const Status banded = fill_costmap(*stack, budgeted, cost.data(), cost.size(), &band);
+  test::icount_end<11>();
+  if (banded != Status::kOk || band.rows_skipped != kMaxCostmapSide - 64U) return fail("the budgeted costmap");
   for (const float jump_m : {2.52F, 5.04F, 10.0F, 20.0F, 100.0F}) {
     if (stack->move_to(0.0F, 0.0F) != Status::kOk) return fail("move back refused");
     test::icount_begin<10>();
