@@ -126,7 +126,9 @@ class FootprintSink {
     held_ = held_ || a.layer >= 0;
     if (!a.known) {
       unknown_area_ += piece.area;
-      upset_area_ += a.upset ? piece.area : 0.0F;
+      if (a.upset) {
+        upset_area_ += piece.area;
+      }
       return;
     }
     const float ox = rect_.cx - a.centre_x;
