@@ -433,11 +433,14 @@ typedef struct ccmap_query_result {
   float elevation_variance;   /* m^2 */
   float weight;
   int32_t cell_class;         /* ccmap_cell_class */
+  int32_t upset;              /* 1 with CCMAP_UNKNOWN: the answering cell (or one pooled into it) failed
+                                 its check or was reset by the scrub (a single-event upset); unknown
+                                 until new points observe it, and no other layer answers the place */
 } ccmap_query_result;
 
 /* Answer of the finest layer that knows (x, y). Returns out->status (CCMAP_OK,
  * CCMAP_UNKNOWN, CCMAP_OUTSIDE_MAP, CCMAP_NOT_INITIALISED, CCMAP_CORRUPT) or
- * CCMAP_INVALID_ARGUMENT. A cell whose bits an upset changed answers as never observed. */
+ * CCMAP_INVALID_ARGUMENT. A cell whose bits an upset changed answers CCMAP_UNKNOWN with upset = 1. */
 ccmap_status ccmap_query(const ccmap_map* map, float x, float y, ccmap_query_result* out);
 /* Answer of one layer (0 = finest): as ccmap_query, and CCMAP_INVALID_ARGUMENT for a layer outside
  * [0, ccmap_layer_count(map)). */
@@ -512,6 +515,8 @@ typedef struct ccmap_footprint_result {
   float worst_x;           /* that cell's centre (m) */
   float worst_y;
   uint32_t cells_visited;  /* map cells read */
+  float upset_share;       /* [0, unknown_share]: unknown because of an upset; > 0 makes the
+                              footprint unknown whatever the tolerated share */
 } ccmap_footprint_result;
 
 /* Every part of the rectangle answered by the finest layer that knows it, as ccmap_query would
@@ -582,6 +587,8 @@ typedef struct ccmap_costmap_spec {
   float resolution_m;
   uint32_t side;
   float inflation_radius_m;
+  uint32_t max_rows;   /* row budget: 0 fills every row; else the central band of max_rows rows
+                          only, every other pixel 255 (unknown) and counted (rows_skipped) */
 } ccmap_costmap_spec;
 
 typedef struct ccmap_costmap_stats {
@@ -591,6 +598,7 @@ typedef struct ccmap_costmap_stats {
   uint32_t lethal;     /* 254 */
   uint32_t unknown;    /* 255 */
   uint32_t cells_visited;
+  uint32_t rows_skipped; /* rows left unknown by the row budget */
 } ccmap_costmap_stats;
 
 /* Fills cost[0 .. side^2) in the costmap_2d convention (0 free .. 252, 253 inscribed, 254 lethal,

@@ -570,6 +570,7 @@ void result_to_c(const QueryResult& q, ccmap_query_result* out) noexcept {
   out->elevation_variance = q.elevation_variance;
   out->weight = q.weight;
   out->cell_class = static_cast<std::int32_t>(q.cell_class);
+  out->upset = q.upset ? 1 : 0;
 }
 
 ccmap_footprint_result footprint_to_c(const FootprintResult& r) noexcept {
@@ -588,6 +589,7 @@ ccmap_footprint_result footprint_to_c(const FootprintResult& r) noexcept {
   c.worst_x = r.worst_x;
   c.worst_y = r.worst_y;
   c.cells_visited = r.cells_visited;
+  c.upset_share = r.upset_share;
   return c;
 }
 
@@ -599,6 +601,7 @@ FootprintResult footprint_from_c(const ccmap_footprint_result& c) noexcept {
                       ? static_cast<CellClass>(c.worst_class)
                       : CellClass::kUnknown;
   r.unknown_share = c.unknown_share;
+  r.upset_share = c.upset_share;
   return r;
 }
 
@@ -840,12 +843,14 @@ ccmap_status ccmap_fill_costmap(const ccmap_map* map, const ccmap_costmap_spec* 
   if (spec == nullptr) {
     return CCMAP_INVALID_ARGUMENT;
   }
-  const ccmap::CostmapSpec s{spec->centre_x, spec->centre_y, spec->resolution_m, spec->side, spec->inflation_radius_m};
+  const ccmap::CostmapSpec s{spec->centre_x, spec->centre_y, spec->resolution_m, spec->side, spec->inflation_radius_m,
+                             spec->max_rows};
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
     ccmap::CostmapStats st{};
     const Status status = ccmap::fill_costmap(stack, s, cost, capacity, &st);
     if (stats != nullptr) {
-      *stats = ccmap_costmap_stats{st.free, st.cost, st.inscribed, st.lethal, st.unknown, st.cells_visited};
+      *stats = ccmap_costmap_stats{st.free, st.cost, st.inscribed, st.lethal, st.unknown, st.cells_visited,
+                                   st.rows_skipped};
     }
     return ccmap::to_c(status);
   });

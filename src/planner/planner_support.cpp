@@ -15,7 +15,9 @@ CellClass footprint_class(const FootprintResult& result, float max_unknown_share
     return result.worst_class;
   }
   // NaN max_unknown_share: every share "exceeds" it (the safe answer).
-  if (result.worst_class == CellClass::kUnknown || !(result.unknown_share <= max_unknown_share)) {
+  // An upset part is never tolerated (map/detail/integrity.hpp, "distrust").
+  if (result.worst_class == CellClass::kUnknown || !(result.unknown_share <= max_unknown_share) ||
+      result.upset_share > 0.0F) {
     return CellClass::kUnknown;
   }
   return CellClass::kTraversable;

@@ -9,7 +9,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 
 namespace ccmap::detail {
 
@@ -41,17 +40,115 @@ Eigen::Matrix4f reduced(const Eigen::Matrix4f& m, const Eigen::Matrix4f& v, cons
   return r;
 }
 
-/// The eigen-decomposition (ascending eigenvalues, orthonormal eigenvectors); false if it did not
-/// converge. Each of these helpers has its own frame (noinline), so that their Eigen temporaries
-/// do not add up on the caller's stack (docs/performance.md, the stack of register_frame).
+/// One Jacobi rotation of the symmetric a (all of it) and of the eigenvector columns v in the
+/// (p, q) plane that zeroes a[p][q] (Numerical Recipes' form: theta = (a_qq - a_pp) / (2 a_pq),
+/// t = sgn(theta) / (|theta| + sqrt(theta^2 + 1)), A' = P^T A P, V' = V P).
+void jacobi_rotate(float a[4][4], float v[4][4], int p, int q) noexcept {
+  const float apq = a[p][q];
+  const float h = a[q][q] - a[p][p];
+  const float g = 100.0F * std::fabs(apq);
+  float t = 0.0F;
+  if (!(std::fabs(h) + g > std::fabs(h))) {
+    t = apq / h;  // theta beyond float: t = 1 / (2 theta)
+  } else {
+    const float theta = 0.5F * h / apq;
+    t = 1.0F / (std::fabs(theta) + std::sqrt(theta * theta + 1.0F));
+    t = theta < 0.0F ? -t : t;
+  }
+  const float c = 1.0F / std::sqrt(t * t + 1.0F);
+  const float s = t * c;
+  for (int k = 0; k < 4; ++k) {
+    const float akp = a[k][p];
+    const float akq = a[k][q];
+    a[k][p] = c * akp - s * akq;
+    a[k][q] = s * akp + c * akq;
+  }
+  for (int k = 0; k < 4; ++k) {
+    const float apk = a[p][k];
+    const float aqk = a[q][k];
+    a[p][k] = c * apk - s * aqk;
+    a[q][k] = s * apk + c * aqk;
+  }
+  a[p][q] = 0.0F;
+  a[q][p] = 0.0F;
+  for (int k = 0; k < 4; ++k) {
+    const float vkp = v[k][p];
+    const float vkq = v[k][q];
+    v[k][p] = c * vkp - s * vkq;
+    v[k][q] = s * vkp + c * vkq;
+  }
+}
+
+/// Sweeps of the cyclic Jacobi method before it gives up (it converges quadratically: a 4 x 4
+/// float matrix takes 4 to 6).
+constexpr int kJacobiSweeps = 50;
+
+/// The eigen-decomposition (ascending eigenvalues, orthonormal eigenvectors) of the symmetric m
+/// (its upper triangle is read) by the cyclic Jacobi method on plain arrays: no workspace sized
+/// at run time, so no heap path in the object (Eigen's SelfAdjointEigenSolver tridiagonalises
+/// through a self-adjoint product on dynamic blocks, whose workspace comes from malloc above
+/// EIGEN_STACK_ALLOCATION_LIMIT: the symbol stayed in the archive). False if it did not
+/// converge or a value is not finite. Each of these helpers has its own frame (noinline), so
+/// that their temporaries do not add up on the caller's stack (docs/performance.md, the stack
+/// of register_frame).
 [[gnu::noinline]] bool decompose(const Eigen::Matrix4f& m, Eigen::Matrix4f* vectors, Eigen::Vector4f* values) noexcept {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4f> solver(m, Eigen::ComputeEigenvectors);
-  if (solver.info() != Eigen::Success) {
+  float a[4][4];
+  float v[4][4];
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      a[i][j] = i <= j ? m(i, j) : m(j, i);
+      v[i][j] = i == j ? 1.0F : 0.0F;
+    }
+  }
+  bool converged = false;
+  for (int sweep = 1; sweep <= kJacobiSweeps; ++sweep) {
+    float off = 0.0F;
+    for (int p = 0; p < 3; ++p) {
+      for (int q = p + 1; q < 4; ++q) {
+        off += std::fabs(a[p][q]);
+      }
+    }
+    if (!(off > 0.0F)) {
+      converged = !std::isnan(off);  // 0; a NaN never converges
+      break;
+    }
+    // The first sweeps rotate only the larger elements; later, an element negligible beside
+    // both diagonal entries is set to 0 (its rotation would change neither).
+    const float threshold = sweep < 4 ? 0.2F * off / 16.0F : 0.0F;
+    for (int p = 0; p < 3; ++p) {
+      for (int q = p + 1; q < 4; ++q) {
+        const float g = 100.0F * std::fabs(a[p][q]);
+        if (sweep > 4 && !(std::fabs(a[p][p]) + g > std::fabs(a[p][p])) &&
+            !(std::fabs(a[q][q]) + g > std::fabs(a[q][q]))) {
+          a[p][q] = 0.0F;
+          a[q][p] = 0.0F;
+        } else if (std::fabs(a[p][q]) > threshold) {
+          jacobi_rotate(a, v, p, q);
+        }
+      }
+    }
+  }
+  if (!converged) {
     return false;
   }
-  *vectors = solver.eigenvectors();
-  *values = solver.eigenvalues();
-  return true;
+  // Ascending order (selection sort of the four, columns with them).
+  int order[4] = {0, 1, 2, 3};
+  for (int i = 0; i < 3; ++i) {
+    int least = i;
+    for (int j = i + 1; j < 4; ++j) {
+      least = a[order[j]][order[j]] < a[order[least]][order[least]] ? j : least;
+    }
+    const int swap = order[i];
+    order[i] = order[least];
+    order[least] = swap;
+  }
+  for (int k = 0; k < 4; ++k) {
+    (*values)(k) = a[order[k]][order[k]];
+    for (int i = 0; i < 4; ++i) {
+      (*vectors)(i, k) = v[i][order[k]];
+    }
+  }
+  return values->allFinite() && vectors->allFinite();
 }
 
 /// V y with y = (Q^T M Q)^-1 rhs in the kept directions (rhs in V's basis, 0 elsewhere); false

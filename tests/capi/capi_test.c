@@ -383,6 +383,7 @@ static void test_planner_queries(ccmap_map* map) {
   spec.resolution_m = 0.04f;
   spec.side = 60u;
   spec.inflation_radius_m = 0.0f;
+  spec.max_rows = 0u; /* no row budget */
   CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_cost, sizeof g_cost, &stats), CCMAP_OK);
   CHECK(g_cost[(size_t)(41 + 60 * 30)] == CCMAP_COST_LETHAL);  /* (0.46, 0.02): the box edge's cell */
   CHECK(g_cost[(size_t)(12 + 60 * 30)] <= CCMAP_COST_MAX_TRAVERSABLE); /* (-0.7, 0.02) */
@@ -699,7 +700,7 @@ static void test_named_refusals(void) {
   ccmap_path_pose start = {-0.8f, 0.0f, 1.0f, 0.0f};
   ccmap_path_result pr;
   ccmap_footprint_result f;
-  ccmap_costmap_spec spec = {0.0f, 0.0f, 0.04f, 8u, 0.0f};
+  ccmap_costmap_spec spec = {0.0f, 0.0f, 0.04f, 8u, 0.0f, 0u};
   uint8_t cost[64];
   ccmap_cell_record record;
   const size_t n = make_plane();

@@ -430,6 +430,7 @@ static void check_product(const ccmap_map* map, const uint8_t* bytes, size_t siz
   spec.resolution_m = w;
   spec.side = side;
   spec.inflation_radius_m = 0.0f;
+  spec.max_rows = 0u; /* no row budget */
   CHECK_STATUS(ccmap_fill_costmap(map, &spec, g_costs, sizeof g_costs, NULL), CCMAP_OK);
   {
     uint32_t known = 0u, mismatches = 0u;

@@ -9,9 +9,10 @@
 //  - every status is a valid one, every number finite;
 //  - once a call answers CCMAP_CORRUPT, no later call answers with map content;
 //  - a flip in a cell or its check: no answer used the cell (the answers equal those of the same
-//    map with that cell emptied by the test, before and after the update, wherever the scrub
-//    had not yet reset it), and the cell is reset and counted within the scrub's frames unless
-//    a move cleared it first;
+//    map with that cell set by the test to the distrusted cell, map/detail/integrity.hpp: every
+//    place it answers is unknown, upset; before and after the update, wherever the scrub had not
+//    yet reset it), and the cell is reset and counted within the scrub's frames unless a move
+//    cleared it first;
 //  - a flip in a free-space record (4 B per cell, not checked: docs/integration.md section 12):
 //    every class answered is the reference's, or unknown, or a drop-off, or the reference's was a
 //    drop-off (a record can add or remove a drop-off, move its bound, or hasten the clearing of
@@ -88,6 +89,7 @@ void query(ccmap_map* map, float x, float y, Outputs& out) {
   out.status(ccmap_query(map, x, y, &r), "ccmap_query");
   for (const double v : {static_cast<double>(r.layer), static_cast<double>(r.cell_class)}) out.number(v, "ccmap_query");
   out.classes.push_back(static_cast<int>(r.cell_class));
+  out.number(static_cast<double>(r.upset), "ccmap_query");
   for (const float v : {r.cell_width_m, r.height_m, r.slope_x, r.slope_y, r.inclination, r.normal_variance,
                         r.elevation_variance, r.weight}) {
     out.number(v, "ccmap_query");
@@ -109,7 +111,8 @@ void footprint(ccmap_map* map, float x, float y, Outputs& out) {
   out.status(ccmap_query_footprint(map, &f, &r), "ccmap_query_footprint");
   out.number(static_cast<double>(r.worst_class), "footprint");
   out.classes.push_back(static_cast<int>(r.worst_class));
-  for (const float v : {r.unknown_share, r.max_step_m, r.max_inclination, r.min_height_m, r.max_height_m}) {
+  for (const float v : {r.unknown_share, r.max_step_m, r.max_inclination, r.min_height_m, r.max_height_m,
+                        r.upset_share}) {
     out.number(v, "footprint");
   }
 }
@@ -224,7 +227,7 @@ void cell_centre(const Location& l, float* x, float* y) {
   *y = grid::cell_centre(gy, layers.widths[layer]);
 }
 
-/// The cell's bytes and check, for the test's emptied-cell reference.
+/// The cell's bytes and check, for the test's distrusted-cell reference.
 struct CellBytes {
   unsigned char cell[sizeof(CcmCell)];
   detail::CellCheck check;
@@ -246,14 +249,22 @@ bool cell_is_empty(const Location& l) {
   return check_ref(l) == 0U;
 }
 
-/// The answers with the flipped cell emptied (then put back as it was).
+/// The answers with the flipped cell set to the distrusted cell, its check consistent (then put
+/// back as it was).
 template <typename Fn>
 Outputs with_cell_emptied(const Location& l, Fn&& answers) {
   CellBytes saved{};
   std::memcpy(saved.cell, cell_address(l), cell_size(l));
   saved.check = check_ref(l);
-  std::memset(cell_address(l), 0, cell_size(l));
-  check_ref(l) = 0U;
+  if (l.fine) {
+    const KalmanCell distrusted = detail::distrusted_cell<KalmanCell>();
+    std::memcpy(cell_address(l), &distrusted, sizeof distrusted);
+    check_ref(l) = detail::cell_signature(distrusted);
+  } else {
+    const CcmCell distrusted = detail::distrusted_cell<CcmCell>();
+    std::memcpy(cell_address(l), &distrusted, sizeof distrusted);
+    check_ref(l) = detail::cell_signature(distrusted);
+  }
   Outputs out;
   answers(out);
   std::memcpy(cell_address(l), saved.cell, cell_size(l));

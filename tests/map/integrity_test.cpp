@@ -418,8 +418,14 @@ Cell* known_cell(Stack<CadreConfig>& stack, int layer, float* cx, float* cy) {
   return nullptr;
 }
 
+/// The answers at and around a cell of `layer` whose check failed (a flipped bit), before and
+/// after the scrub reset it: every one equals the map's with the cell set to the distrusted cell
+/// by the test (map/detail/integrity.hpp, "distrust"), and the place the cell answers is unknown
+/// with upset set on its layer, in the point query and in a footprint over it (no coarser layer
+/// answers it). The scrub leaves the distrusted cell (counted once), and a point folded into it
+/// clears the mark.
 template <typename Cell>
-void a_flipped_cell_contributes_nothing(int layer, std::size_t bit, const char* what) {
+void a_flipped_cell_is_distrusted(int layer, std::size_t bit, const char* what) {
   auto stack = mapped_cadre();
   float cx = 0.0F;
   float cy = 0.0F;
@@ -428,20 +434,38 @@ void a_flipped_cell_contributes_nothing(int layer, std::size_t bit, const char* 
   auto& layers = mutable_layers(*stack);
   const Cell original = *cell;
   const detail::CellCheck original_check = detail::check_of(layers, *cell);
-  // The answers of the map without the cell (emptied by the test, check 0).
-  *cell = Cell{};
-  detail::check_of(layers, *cell) = 0U;
-  const std::vector<double> without = answers_around(*stack, cx, cy);
+  const Cell distrusted = detail::distrusted_cell<Cell>();
+  EXPECT_TRUE(std::signbit(distrusted.weight) && distrusted.weight == 0.0F);
+  // The answers of the map with the cell distrusted (set by the test, its check consistent).
+  *cell = distrusted;
+  detail::check_of(layers, *cell) = detail::cell_signature(distrusted);
+  const std::vector<double> reference = answers_around(*stack, cx, cy);
   // The map with the cell's bit flipped.
   *cell = flipped(original, bit);
   detail::check_of(layers, *cell) = original_check;
-  if (layer == 0) {  // no finer layer to pool from: the layer does not know the place
+  auto expect_upset_place = [&](const char* when) {
     const QueryResult own = stack->query_layer(layer, cx, cy);
-    EXPECT_EQ(own.status, Status::kUnknown) << what << ": the flipped cell answered";
-    EXPECT_EQ(own.cell_class, CellClass::kUnknown) << what << ": the flipped cell has a class";
-  }
-  EXPECT_EQ(answers_around(*stack, cx, cy), without)
-      << what << ": an answer used the flipped cell (it differs from the map without it)";
+    EXPECT_EQ(own.status, Status::kUnknown) << what << " " << when << ": the distrusted cell answered";
+    EXPECT_TRUE(own.upset) << what << " " << when << ": the answer does not say why";
+    // The point query: a finer layer that knows the place answers it (the cell is not the
+    // answering one); else the place is unknown, upset. Layers 0 and 1 (the constant layer's
+    // hazards come from the first CCM layer) always answer upset.
+    const QueryResult q = stack->query(cx, cy);
+    if (layer <= 1 || q.status != Status::kOk || q.layer >= layer) {
+      EXPECT_TRUE(q.status == Status::kUnknown && q.upset) << what << " " << when << ": another layer answered";
+    }
+    if (layer > 1) {
+      return;  // finer layers know most of a coarse cell: no footprint stands on it alone
+    }
+    const FootprintResult f = query_footprint(*stack, Footprint{cx, cy, 1.0F, 0.0F, 0.3F, 0.3F});
+    EXPECT_EQ(f.status, Status::kOk);
+    EXPECT_GT(f.upset_share, 0.0F) << what << " " << when << ": the footprint does not count the upset part";
+    EXPECT_NE(footprint_class(f, 1.0F), CellClass::kTraversable)
+        << what << " " << when << ": a footprint with an upset part is traversable even at full tolerance";
+  };
+  expect_upset_place("before the scrub");
+  EXPECT_EQ(answers_around(*stack, cx, cy), reference)
+      << what << ": an answer differs from the map with the cell distrusted";
   // Reset and counted by the scrub within kScrubFrames frames (empty frames: nothing else writes).
   const std::uint32_t frames = detail::ConfigScrubFrames<CadreConfig>::value;
   std::uint32_t found_after = 0U;
@@ -456,21 +480,80 @@ void a_flipped_cell_contributes_nothing(int layer, std::size_t bit, const char* 
   }
   EXPECT_GT(found_after, 0U) << what << ": not reset within " << frames << " frames";
   EXPECT_EQ(stack->total_counters().corrupted_cells, 1U);
-  const Cell empty{};
-  EXPECT_EQ(std::memcmp(cell, &empty, sizeof empty), 0) << what << ": the reset cell is not never-observed";
-  EXPECT_EQ(detail::check_of(layers, *cell), 0U);
+  EXPECT_EQ(std::memcmp(cell, &distrusted, sizeof distrusted), 0) << what << ": the reset cell is not the distrusted cell";
+  EXPECT_EQ(detail::check_of(layers, *cell), detail::cell_signature(distrusted));
   EXPECT_EQ(inconsistent_cells(*stack), 0U);
+  expect_upset_place("after the scrub");
+  EXPECT_EQ(answers_around(*stack, cx, cy), reference) << what << ": after the scrub, an answer differs";
+  // Later scrub passes leave it alone (it agrees with its check): still distrusted.
+  for (std::uint32_t f = 0; f < frames; ++f) {
+    ASSERT_EQ(stack->update_frame(nullptr, 0U, origin, nullptr), Status::kOk);
+  }
+  EXPECT_EQ(stack->total_counters().corrupted_cells, 1U);
+  expect_upset_place("a scrub pass later");
 }
 
-TEST(Integrity, AFlippedCellContributesNothingAndIsResetWithinTheScrubFrames) {
+TEST(Integrity, AFlippedCellIsDistrustedUntilTheScrubResetsItAndAfter) {
   // Kalman: a low mantissa bit of the height; the weight's exponent (a known cell forgotten).
-  a_flipped_cell_contributes_nothing<KalmanCell>(0, 0U * 32U + 2U, "Kalman height mantissa");
-  a_flipped_cell_contributes_nothing<KalmanCell>(0, 2U * 32U + 28U, "Kalman weight exponent");
+  a_flipped_cell_is_distrusted<KalmanCell>(0, 0U * 32U + 2U, "Kalman height mantissa");
+  a_flipped_cell_is_distrusted<KalmanCell>(0, 2U * 32U + 28U, "Kalman weight exponent");
   // CCM: s_zz's sign (a negative normal variance), a low mantissa bit of s_xz, the weight.
-  a_flipped_cell_contributes_nothing<CcmCell>(1, 6U * 32U + 31U, "CCM s_zz sign");
-  a_flipped_cell_contributes_nothing<CcmCell>(1, 7U * 32U + 1U, "CCM s_xz mantissa");
-  a_flipped_cell_contributes_nothing<CcmCell>(2, 0U * 32U + 23U, "CCM weight exponent");
-  a_flipped_cell_contributes_nothing<CcmCell>(4, 9U * 32U + 30U, "CCM s_xy exponent, coarsest layer");
+  a_flipped_cell_is_distrusted<CcmCell>(1, 6U * 32U + 31U, "CCM s_zz sign");
+  a_flipped_cell_is_distrusted<CcmCell>(1, 7U * 32U + 1U, "CCM s_xz mantissa");
+  a_flipped_cell_is_distrusted<CcmCell>(2, 0U * 32U + 23U, "CCM weight exponent");
+  a_flipped_cell_is_distrusted<CcmCell>(4, 9U * 32U + 30U, "CCM s_xy exponent, coarsest layer");
+}
+
+TEST(Integrity, APointFoldedIntoADistrustedCellClearsTheMark) {
+  // The cell functions: every update of a distrusted cell gives a positive weight and the
+  // statistics of an empty cell's first point (the mark is the weight's sign, nothing else).
+  {
+    CcmCell d = detail::distrusted_cell<CcmCell>();
+    CcmCell e{};
+    detail::ccm_update_unchecked(d, 0.01F, -0.02F, 0.3F, 1.0F, 1000.0F);
+    detail::ccm_update_unchecked(e, 0.01F, -0.02F, 0.3F, 1.0F, 1000.0F);
+    EXPECT_FALSE(detail::distrust_mark(d));
+    EXPECT_EQ(d.weight, 1.0F);
+    EXPECT_TRUE(d.mean_x == e.mean_x && d.mean_y == e.mean_y && d.mean_z == e.mean_z && d.s_zz == e.s_zz);
+    CcmCell m = detail::distrusted_cell<CcmCell>();
+    const CcmCell one{1.0F, 0.0F, 0.0F, 0.2F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F};
+    ASSERT_EQ(ccm_merge(m, one, 1000.0F), Status::kOk);
+    EXPECT_FALSE(detail::distrust_mark(m));
+    EXPECT_EQ(m.weight, 1.0F);
+    KalmanCell k = detail::distrusted_cell<KalmanCell>();
+    detail::kalman_fuse(k, 0.3F, 1.0e-4F, 1.0F, 1.0e-6F);
+    EXPECT_FALSE(detail::distrust_mark(k));
+    EXPECT_EQ(k.weight, 1.0F);
+    OmgCell o = detail::distrusted_cell<OmgCell>();
+    detail::omg_update_unchecked(o, 0.3F, 1.0e-4F, 1.0F, 1000.0F);
+    EXPECT_FALSE(detail::distrust_mark(o));
+    EXPECT_EQ(o.weight, 1.0F);
+  }
+  // The stack: a finest cell the scrub reset answers upset until a frame's points land in it.
+  auto stack = mapped_cadre();
+  float cx = 0.0F;
+  float cy = 0.0F;
+  KalmanCell* cell = known_cell<KalmanCell>(*stack, 0, &cx, &cy);
+  ASSERT_NE(cell, nullptr);
+  *cell = flipped(*cell, 40U);
+  const PointXYZ origin{cx - 0.3F, cy, 0.175F};
+  for (std::uint32_t f = 0; f < detail::ConfigScrubFrames<CadreConfig>::value; ++f) {
+    ASSERT_EQ(stack->update_frame(nullptr, 0U, origin, nullptr), Status::kOk);
+  }
+  ASSERT_EQ(stack->total_counters().corrupted_cells, 1U);
+  EXPECT_TRUE(stack->query(cx, cy).upset);
+  const float z = stack->query(cx + 0.04F, cy).height_m;
+  std::vector<PointXYZ> points;
+  for (int i = 0; i < 5; ++i) {
+    points.push_back(PointXYZ{cx - 0.01F + 0.004F * static_cast<float>(i), cy + 0.005F, z});
+  }
+  FrameCounters counters{};
+  ASSERT_EQ(stack->update_frame(points.data(), points.size(), origin, &counters), Status::kOk);
+  EXPECT_EQ(counters.used, points.size());
+  EXPECT_GT(cell->weight, 0.0F) << "the points did not land in the distrusted cell";
+  EXPECT_FALSE(detail::distrust_mark(*cell));
+  EXPECT_FALSE(stack->query(cx, cy).upset) << "new points observed the cell: the mark must be gone";
+  EXPECT_EQ(inconsistent_cells(*stack), 0U);
 }
 
 TEST(Integrity, TheScrubChecksEveryCellWithinTheStatedFrames) {
@@ -513,8 +596,8 @@ TEST(Integrity, MotionPassResetsAndCountsCorruptedCells) {
   *ccm = flipped(*ccm, 200U);
   ASSERT_EQ(stack->move_to(0.0F, 0.0F, 0.02F), Status::kOk);
   EXPECT_EQ(stack->total_counters().corrupted_cells, 2U) << "the motion pass reads every cell: it must reset both";
-  EXPECT_EQ(fine->weight, 0.0F);
-  EXPECT_EQ(ccm->weight, 0.0F);
+  EXPECT_TRUE(detail::distrust_mark(*fine) && fine->weight == 0.0F) << "not reset to the distrusted cell";
+  EXPECT_TRUE(detail::distrust_mark(*ccm) && ccm->weight == 0.0F) << "not reset to the distrusted cell";
   EXPECT_EQ(inconsistent_cells(*stack), 0U);
   (void)layers;
 }

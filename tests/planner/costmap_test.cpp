@@ -220,6 +220,62 @@ TEST(Costmap, OffTheMapIsUnknown) {
   }
 }
 
+TEST(Costmap, ARowBudgetFillsTheCentralBandAndLeavesTheRestUnknownAndCounted) {
+  // The reference is the same raster without a budget (the tests above hold it to the point
+  // answers): inside the band every pixel farther than the inflation radius from the band's edge
+  // equals it (a lethal pixel outside the band, unknown there, inflates nothing inside), every
+  // pixel outside the band is 255 and counted, never free.
+  const Cadre& map = terrain_map();
+  constexpr std::uint32_t kSide = 100U;
+  constexpr float kRadiusM = 0.12F;  // 3 pixels of 4 cm
+  constexpr std::uint32_t kRadiusPx = 3U;
+  std::vector<std::uint8_t> full(kSide * kSide);
+  CostmapStats full_stats{};
+  ASSERT_EQ(fill_costmap(map, CostmapSpec{0.5F, 0.2F, 0.04F, kSide, kRadiusM}, full.data(), full.size(), &full_stats),
+            Status::kOk);
+  EXPECT_EQ(full_stats.rows_skipped, 0U);
+  for (const std::uint32_t rows : {1U, 17U, 40U, 99U}) {
+    std::vector<std::uint8_t> band(kSide * kSide, 7U);
+    CostmapSpec spec{0.5F, 0.2F, 0.04F, kSide, kRadiusM};
+    spec.max_rows = rows;
+    CostmapStats stats{};
+    ASSERT_EQ(fill_costmap(map, spec, band.data(), band.size(), &stats), Status::kOk);
+    const std::uint32_t first = (kSide - rows) / 2U;
+    EXPECT_EQ(stats.rows_skipped, kSide - rows);
+    std::uint32_t unknown_outside = 0U;
+    for (std::uint32_t iy = 0; iy < kSide; ++iy) {
+      const bool inside = iy >= first && iy < first + rows;
+      const bool clear_of_edges = iy >= first + kRadiusPx && iy + kRadiusPx < first + rows;
+      for (std::uint32_t ix = 0; ix < kSide; ++ix) {
+        const std::size_t at = ix + kSide * iy;
+        if (!inside) {
+          EXPECT_EQ(band[at], kCostUnknown) << "budget " << rows << ": pixel (" << ix << ", " << iy << ") outside the band";
+          unknown_outside += band[at] == kCostUnknown ? 1U : 0U;
+        } else if (clear_of_edges) {
+          EXPECT_EQ(band[at], full[at]) << "budget " << rows << ": pixel (" << ix << ", " << iy << ") differs";
+        } else {
+          // Near the band's edge only inflation may differ: never a lethal or unknown pixel.
+          EXPECT_TRUE(band[at] == full[at] || (full[at] == kCostInscribed && band[at] <= kCostMaxTraversable))
+              << "budget " << rows << ": pixel (" << ix << ", " << iy << ")";
+        }
+      }
+    }
+    EXPECT_EQ(unknown_outside, (kSide - rows) * kSide);
+    EXPECT_EQ(stats.free + stats.cost + stats.inscribed + stats.lethal + stats.unknown, kSide * kSide);
+    EXPECT_GE(stats.unknown, (kSide - rows) * kSide);
+  }
+  // A budget of 0 or of the side and above is no budget.
+  for (const std::uint32_t rows : {0U, kSide, kSide + 5U}) {
+    std::vector<std::uint8_t> all(kSide * kSide);
+    CostmapSpec spec{0.5F, 0.2F, 0.04F, kSide, kRadiusM};
+    spec.max_rows = rows;
+    CostmapStats stats{};
+    ASSERT_EQ(fill_costmap(map, spec, all.data(), all.size(), &stats), Status::kOk);
+    EXPECT_EQ(all, full) << "budget " << rows;
+    EXPECT_EQ(stats.rows_skipped, 0U);
+  }
+}
+
 TEST(Costmap, RefusesBadInputAndLeavesTheBufferAlone) {
   const Cadre& map = terrain_map();
   std::vector<std::uint8_t> cost(100U * 100U, 42U);

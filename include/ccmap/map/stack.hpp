@@ -415,7 +415,9 @@ class Stack {
   /// sight"), unobserved and with no finer point below it, answers in that order like a known
   /// cell: kOk with class kDropOff, weight 0 and height_m the upper bound of the terrain there.
   /// kOutsideMap if no layer holds (x, y); kUnknown if none knows it; kNotInitialised; kCorrupt.
-  /// A cell whose bits disagree with its check is read as never observed (map/detail/integrity.hpp).
+  /// A distrusted cell on the way (its bits disagree with its check, or the scrub reset it, and
+  /// no point has landed in it since; for a CCM cell, also one pooled into it) answers kUnknown
+  /// with upset set, and no coarser layer is asked (map/detail/integrity.hpp, "distrust").
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
     const Status state = query_status();
     if (state != Status::kOk) {
@@ -443,7 +445,8 @@ class Stack {
 
   /// The CCM statistics of a CCM layer's cell as a query sees them: the cell's own points
   /// merged with the pooled finer layers (Section IV-F), recursively. The zero cell for a bad
-  /// layer, an index outside the layer's window, or before init.
+  /// layer, an index outside the layer's window, or before init; the distrusted cell (weight
+  /// -0.0F: std::signbit) if it or a cell pooled into it is distrusted (map/detail/integrity.hpp).
   [[nodiscard]] CcmCellType pooled_cell(int layer, CellIndex index) const noexcept {
     // Outside the window: the zero cell, before pooled() forms the child index 2 * index (an
     // arbitrary index would overflow int32 and alias cells near the origin).
@@ -566,9 +569,9 @@ class Stack {
   [[nodiscard]] const RingGrid<FineCell>& fine_layer() const noexcept { return layers_.fine; }
   /// For readers of the raw layers (registration, tools): true if `cell`, a cell of this stack's
   /// layers (a reference from ccm_layer() or fine_layer(), never a copy), agrees with its check
-  /// (map/detail/integrity.hpp). A cell that does not was changed by an upset: read it as never
-  /// observed, as every query does. A reference outside the layers is reported to the assert
-  /// hook and answered false.
+  /// (map/detail/integrity.hpp). A cell that does not was changed by an upset: it is unknown, as
+  /// every query answers it (a cell the scrub reset agrees with its check and has weight -0.0F:
+  /// unknown too). A reference outside the layers is reported to the assert hook and answered false.
   [[nodiscard]] bool cell_intact(const CcmCellType& cell) const noexcept {
     const std::size_t at = storage_index(&cell, layers_.ccm_storage, Layers::kCcmCellCount);
     CCMAP_ASSERT_OR_RETURN(at < Layers::kCcmCellCount, false);

@@ -69,6 +69,10 @@ struct QueryResult {
   float elevation_variance;    ///< m^2, variance of the height at the point
   float weight;                ///< accumulated weight of the answering (pooled) cell
   CellClass cell_class;
+  /// True with status kUnknown when the answering cell, or a cell pooled into it, failed its
+  /// check or was reset by the scrub (a single-event upset: docs/integration.md section 12): the
+  /// place is unknown until new points observe that cell again, and no other layer answers it.
+  bool upset;
 };
 
 /// One cell of an exported layer (cells with weight > 0, and unobserved drop-off cells: weight 0,

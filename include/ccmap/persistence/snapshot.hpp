@@ -277,14 +277,14 @@ struct SnapshotAccess {
       if (StackType::layer_is_ccm(layer)) {
         const RingGrid<CcmCellType>& grid = stack.layers_.ccm_grid(layer);
         snapshot_write_centre(w, grid.centre());
-        // Integrity: a cell an upset changed is saved as never observed (map/detail/integrity.hpp).
+        // Integrity: a cell an upset changed is saved as the distrusted cell (map/detail/integrity.hpp).
         grid.for_each([&w, &stack](CellIndex, const CcmCellType& cell) {
-          snapshot_write_cell(w, intact_or_empty(stack.layers_, cell));
+          snapshot_write_cell(w, intact_or_distrusted(stack.layers_, cell));
         });
       } else {
         snapshot_write_centre(w, stack.layers_.fine.centre());
         stack.layers_.fine.for_each([&w, &stack](CellIndex, const typename StackType::FineCell& cell) {
-          snapshot_write_cell(w, intact_or_empty(stack.layers_, cell));
+          snapshot_write_cell(w, intact_or_distrusted(stack.layers_, cell));
         });
       }
     }

@@ -12,7 +12,8 @@
 // Values (costmap_2d's): 0 free .. 252 cost, 253 inscribed, 254 lethal, 255 unknown. A pixel takes
 // the worst of the map's answers over its whole square (each part answered by the finest layer
 // that knows it, as Stack::query would: planner/detail/region_walk.hpp), in the order
-//   lethal (a part is obstacle, steep or a drop-off) > unknown (a part is not known, or off the map) > cost,
+//   lethal (a part is obstacle, steep or a drop-off) > unknown (a part is not known, or off the map,
+//   or distrusted after a single-event upset: map/detail/integrity.hpp) > cost,
 // so a pixel is free only if all of it is known and traversable. The cost of a traversable part:
 //   cost = min(252, round(252 * max(inclination / max_inclination,
 //                                   sqrt(normal_variance / threshold))))
@@ -22,6 +23,13 @@
 // 0 .. 252 whose centre lies within that distance of a lethal pixel's centre becomes 253
 // (inscribed); unknown pixels stay 255 (Nav2's inflate_unknown = false). The radius in pixels is
 // inflation_radius_m / resolution_m in float; a centre on the circle (within 1e-4 pixel) is inside.
+//
+// Budget: max_rows > 0 (and below side) fills only the band of max_rows rows about the raster's
+// centre (rows (side - max_rows) / 2 onwards), as the frame budget bounds a frame update: the work
+// below then scales with max_rows instead of side, and every pixel outside the band is 255
+// (unknown, never free) and counted (CostmapStats::unknown, and its rows in rows_skipped).
+// Inflation runs inside the band (a lethal pixel outside it, being unknown, inflates nothing).
+// docs/performance.md section 14 gives the cost of the largest raster with and without it.
 //
 // Bounded: side <= kMaxCostmapSide, inflation radius <= kMaxInflationPixels pixels. Work: the
 // region walk over the raster's part of the map windows (each map cell there once as a leaf, its
@@ -58,6 +66,9 @@ struct CostmapSpec {
   float resolution_m;        ///< pixel side (m), > 0
   std::uint32_t side;        ///< pixels per axis, 1 .. kMaxCostmapSide
   float inflation_radius_m;  ///< 0: no inflation; at most kMaxInflationPixels * resolution_m
+  /// Row budget: 0 (or side and above) fills every row; else only the central band of max_rows
+  /// rows, every other pixel unknown (see the header comment).
+  std::uint32_t max_rows = 0U;
 };
 
 /// Pixel counts of a filled raster and the map cells read.
@@ -68,6 +79,7 @@ struct CostmapStats {
   std::uint32_t lethal;
   std::uint32_t unknown;
   std::uint32_t cells_visited;
+  std::uint32_t rows_skipped;  ///< rows left unknown by the row budget (CostmapSpec::max_rows)
 };
 
 /// The cost of a traversable part (formula in the header comment): 0 .. 252.
@@ -218,14 +230,19 @@ template <typename Config>
   const float extent = static_cast<float>(spec.side) * spec.resolution_m;
   const float x0 = spec.centre_x - 0.5F * extent;
   const float y0 = spec.centre_y - 0.5F * extent;
+  // The row budget: the band [first_row, first_row + rows) about the centre.
+  const std::uint32_t rows = spec.max_rows > 0U && spec.max_rows < spec.side ? spec.max_rows : spec.side;
+  const std::uint32_t first_row = (spec.side - rows) / 2U;
+  const float band_y0 = y0 + static_cast<float>(first_row) * spec.resolution_m;
+  const float band_y1 = rows == spec.side ? y0 + extent : y0 + static_cast<float>(first_row + rows) * spec.resolution_m;
   const detail::QueryView<Config> view = detail::PlannerAccess<Config>::view(stack);
   float wx0 = 0.0F, wy0 = 0.0F, wx1 = 0.0F, wy1 = 0.0F;
   detail::windows_bounds(view.layers(), &wx0, &wy0, &wx1, &wy1);
-  // The walk covers the raster's part of the windows' bounding box; the rest is off the map.
+  // The walk covers the band's part of the windows' bounding box; the rest is off the map.
   const float dx0 = x0 > wx0 ? x0 : wx0;
-  const float dy0 = y0 > wy0 ? y0 : wy0;
+  const float dy0 = band_y0 > wy0 ? band_y0 : wy0;
   const float dx1 = x0 + extent < wx1 ? x0 + extent : wx1;
-  const float dy1 = y0 + extent < wy1 ? y0 + extent : wy1;
+  const float dy1 = band_y1 < wy1 ? band_y1 : wy1;
   // Pixels wholly inside the walked domain start as cost 0 (the walk raises them); the others
   // have a part off the map: unknown.
   const float inv = 1.0F / spec.resolution_m;
@@ -237,7 +254,8 @@ template <typename Config>
   const float in_y1 = walk ? std::floor((dy1 - y0) * inv + 1.0e-3F) : 0.0F;
   for (std::int32_t iy = 0; iy < side; ++iy) {
     const auto fy = static_cast<float>(iy);
-    const bool row_in = fy >= in_y0 && fy + 1.0F <= in_y1;
+    const auto row = static_cast<std::uint32_t>(iy);
+    const bool row_in = fy >= in_y0 && fy + 1.0F <= in_y1 && row >= first_row && row < first_row + rows;
     for (std::int32_t ix = 0; ix < side; ++ix) {
       const auto fx = static_cast<float>(ix);
       const bool in = row_in && fx >= in_x0 && fx + 1.0F <= in_x1;
@@ -256,11 +274,13 @@ template <typename Config>
   }
   detail::ranks_to_costs(pixels, cost);
   if (spec.inflation_radius_m > 0.0F) {
-    detail::inflate_lethal(spec.side, spec.side, spec.inflation_radius_m / spec.resolution_m, cost);
+    detail::inflate_lethal(spec.side, rows, spec.inflation_radius_m / spec.resolution_m,
+                           cost + static_cast<std::size_t>(first_row) * spec.side);
   }
   if (stats != nullptr) {
     detail::count_costs(pixels, cost, stats);
     stats->cells_visited = reads;
+    stats->rows_skipped = spec.side - rows;
   }
   return Status::kOk;
 }

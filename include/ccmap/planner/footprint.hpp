@@ -14,6 +14,9 @@
 //    bound the rays proved, with no slope. How much unknown area a caller tolerates is its own threshold
 //    (footprint_class).
 //  - unknown_share: the share of the area no layer knows (or none holds: off the map).
+//  - upset_share: the part of unknown_share answered unknown because its cell is distrusted (a
+//    single-event upset: map/detail/integrity.hpp, "distrust"). footprint_class() answers
+//    kUnknown for any upset area that no lethal part outranks, whatever the tolerated share.
 //  - max_step_m: the larger of (a) max - min of the sub-cell height (eq. 10; a constant cell's
 //    height) over the known parts, each plane evaluated over its exact part of the rectangle,
 //    and (b) the largest relief read from a known part's normal variance, 4 sigma_s: the step
@@ -79,10 +82,12 @@ struct FootprintResult {
   float worst_x;              ///< that cell's centre (m)
   float worst_y;
   std::uint32_t cells_visited;  ///< map cells read
+  float upset_share;          ///< [0, unknown_share]: share of the area unknown because of an upset
 };
 
 /// The footprint's verdict: drop-off, obstacle or steep if any known part is (in that order); else
-/// unknown if unknown_share > max_unknown_share or no part is known; else traversable.
+/// unknown if unknown_share > max_unknown_share, upset_share > 0 or no part is known; else
+/// traversable.
 /// kUnknown for a result whose status is neither kOk nor kOutsideMap.
 [[nodiscard]] CellClass footprint_class(const FootprintResult& result, float max_unknown_share) noexcept;
 
@@ -121,6 +126,9 @@ class FootprintSink {
     held_ = held_ || a.layer >= 0;
     if (!a.known) {
       unknown_area_ += piece.area;
+      if (a.upset) {
+        upset_area_ += piece.area;
+      }
       return;
     }
     const float ox = rect_.cx - a.centre_x;
@@ -178,6 +186,8 @@ class FootprintSink {
     r.area_m2 = area_;
     r.unknown_share = area_ > 0.0F ? unknown_area_ / area_ : 1.0F;
     r.unknown_share = r.unknown_share > 1.0F ? 1.0F : r.unknown_share;
+    r.upset_share = area_ > 0.0F ? upset_area_ / area_ : 0.0F;
+    r.upset_share = r.upset_share > r.unknown_share ? r.unknown_share : r.upset_share;
     if (!known_) {
       return r;
     }
@@ -200,6 +210,7 @@ class FootprintSink {
   const QueryView<Config>& view_;
   float area_ = 0.0F;
   float unknown_area_ = 0.0F;
+  float upset_area_ = 0.0F;
   bool held_ = false;
   bool known_ = false;
   float min_height_ = 0.0F;

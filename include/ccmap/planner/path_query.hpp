@@ -10,7 +10,8 @@
 // poses every step_m along the path, from its start (distance 0) to its end (the end is always
 // a pose), and each pose is a footprint query (planner/footprint.hpp). Answer: the distance along
 // the path of the first pose whose footprint is a drop-off, obstacle or steep (footprint_class), and of the
-// first whose unknown share exceeds max_unknown_share (a hazardous footprint may be both), with
+// first whose unknown share exceeds max_unknown_share or that has any upset part (upset_share > 0:
+// a single-event upset, map/detail/integrity.hpp; a hazardous footprint may be both), with
 // the poses there and their footprint results. The walk stops once both are found. Between poses
 // the body is not checked: choose step_m below the size of the smallest hazard that matters
 // (a cell of the finest layer is a safe choice).
@@ -165,7 +166,9 @@ class HullSink {
       : rect_(rect), along_(along), count_(count), half_length_(half_length), flags_(flags) {}
 
   void operator()(const RegionPiece& piece, const RegionAnswer& a) noexcept {
-    const bool lethal = a.known && is_lethal(a.cell_class);
+    // An upset piece flags its poses as a lethal one does: each is judged on its own footprint
+    // (footprint_class: unknown), never let through on the unknown-area bound.
+    const bool lethal = (a.known && is_lethal(a.cell_class)) || a.upset;
     if (a.known && !lethal) {
       return;
     }
@@ -230,7 +233,8 @@ template <typename Config>
     result->hazard_pose = pose;
     result->hazard = f;
   }
-  if (!result->unknown_found && (f.worst_class == CellClass::kUnknown || f.unknown_share > sweep.max_unknown_share)) {
+  if (!result->unknown_found && (f.worst_class == CellClass::kUnknown || f.unknown_share > sweep.max_unknown_share ||
+                                 f.upset_share > 0.0F)) {
     result->unknown_found = true;
     result->first_unknown_m = t;
     result->unknown_pose = pose;

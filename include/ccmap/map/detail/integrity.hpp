@@ -24,9 +24,10 @@
 //   check ^= fold(wide(old) ^ wide(new))
 // (no compare on the update path), which keeps D = check ^ check(cell) constant over writes: an
 // upset between two writes (D != 0) stays visible after the cell is written again. Readers (the
-// queries, pooling, exports, snapshots) use a cell only when D = 0, else as never observed; the
-// scrub (scrub_slice) checks a slice of the cells each frame and resets a cell with D != 0 to
-// never observed, its check to 0, counting it (FrameCounters::corrupted_cells).
+// queries, pooling, planner queries, snapshots) use a cell only when D = 0; a cell with D != 0
+// is distrusted (below: the place answers unknown, reason upset); the scrub (scrub_slice) checks
+// a slice of the cells each frame and resets a cell with D != 0 to the distrusted cell, its
+// check consistent, counting it (FrameCounters::corrupted_cells); the next point clears it.
 //
 // What the check sees (tests/map/integrity_test.cpp proves each against a brute-force
 // recomputation): every single-bit upset of a cell or of its check; every odd number of upsets in
@@ -49,6 +50,7 @@
 // No heap, no exceptions.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -170,12 +172,6 @@ template <typename Layers, typename Cell>
   return cell_signature(cell) == check_of(layers, cell);
 }
 
-/// The cell as a reader may use it: itself if intact, else the never-observed cell.
-template <typename Layers, typename Cell>
-[[nodiscard]] inline Cell intact_or_empty(const Layers& layers, const Cell& cell) noexcept {
-  return cell_intact(layers, cell) ? cell : Cell{};
-}
-
 /// Writer hook, second half: after a write of `cell` whose wide signature before the write was
 /// `before`, carries the change into the cell's check (check ^= fold(before ^ wide(now))).
 template <typename Layers, typename Cell>
@@ -231,11 +227,53 @@ struct CheckRuns {
   }
 };
 
-/// Sets a cell to never observed and its check to 0.
+// ---- distrust: what the scrub leaves in a cell it reset --------------------------------------
+// A cell whose check failed lost what it knew: the place it covers may hold a hazard. The scrub
+// (and the motion pass) therefore do not reset it to never observed but to the *distrusted* cell:
+// every field 0 and the weight -0.0F (its sign bit: no extra memory, no heap; the mark lives in
+// the cell's own bits and so in its check, which stays consistent). Readers treat a distrusted
+// cell (cell_distrusted: a failed check, or the mark) as unknown and stop there: the place
+// answers unknown with the reason "upset" (QueryResult::upset), never another layer's answer,
+// and a pooled cell with a distrusted cell below it is distrusted too (map/query/pooling.hpp).
+// The next point folded into the cell clears the mark with no extra work: every update adds to
+// the weight (-0 + w = w > 0; Kalman: an empty cell takes the point's weight), and every test of
+// "observed" on the update path reads weight > 0, false for -0 as for 0. No writer produces -0
+// otherwise (weights only grow, or scale by a positive factor, from +0), so a map without upsets
+// holds no mark and its answers and bits are those of a map without this rule.
+
+/// True if `cell` (a value) is the distrusted cell's mark: its weight's sign bit.
+template <typename Cell>
+[[nodiscard]] inline bool distrust_mark(const Cell& cell) noexcept {
+  return std::signbit(cell.weight);
+}
+
+/// The distrusted cell: all zero but the weight, -0.0F.
+template <typename Cell>
+[[nodiscard]] inline Cell distrusted_cell() noexcept {
+  Cell cell{};
+  cell.weight = -0.0F;
+  return cell;
+}
+
+/// True if a cell of the layers' storage must not be used: its bits disagree with its check, or
+/// the scrub left it distrusted.
+template <typename Layers, typename Cell>
+[[nodiscard]] inline bool cell_distrusted(const Layers& layers, const Cell& cell) noexcept {
+  return distrust_mark(cell) || !cell_intact(layers, cell);
+}
+
+/// The cell as a reader that keeps the distrust may use it: itself if intact, else the
+/// distrusted cell (a snapshot saves that, so the distrust survives save and load).
+template <typename Layers, typename Cell>
+[[nodiscard]] inline Cell intact_or_distrusted(const Layers& layers, const Cell& cell) noexcept {
+  return cell_intact(layers, cell) ? cell : distrusted_cell<Cell>();
+}
+
+/// Sets a cell whose check failed to the distrusted cell, its check consistent with it.
 template <typename Layers, typename Cell>
 inline void reset_cell(Layers& layers, Cell& cell) noexcept {
-  cell = Cell{};
-  check_of(layers, cell) = 0U;
+  cell = distrusted_cell<Cell>();
+  check_of(layers, cell) = cell_signature(cell);
 }
 
 /// Recomputes every check from its cell (after a snapshot load wrote the cells).
@@ -294,8 +332,8 @@ template <typename Config, typename Layers>
 }
 
 /// Checks `count` cells from *cursor on (wrapping; *cursor is clamped first, so an upset in it
-/// cannot index outside the storage), resets every corrupted one to never observed and returns
-/// how many it reset.
+/// cannot index outside the storage), resets every corrupted one to the distrusted cell and
+/// returns how many it reset.
 template <typename Layers>
 [[nodiscard]] inline std::uint32_t scrub_slice(Layers& layers, std::uint32_t* cursor, std::uint32_t count) noexcept {
   constexpr std::uint32_t kTotal = scrubbed_cells<Layers>();

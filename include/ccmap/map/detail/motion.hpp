@@ -52,7 +52,7 @@ void ccm_forget_for_motion(CcmPaperCell& cell, float sigma_sq, float min_weight)
 /// Applies the rule to every observed cell of every layer. Precondition: sigma_sq > 0, finite; a
 /// violation is reported to the assert hook and changes no cell (returns 0).
 /// Integrity (map/detail/integrity.hpp): the pass reads every cell, so it checks each one first:
-/// a cell an upset changed is reset to never observed (and neither changed nor read as a
+/// a cell an upset changed is reset to the distrusted cell (and neither changed nor read as a
 /// neighbour); returns how many it reset. The cells it changes keep their checks.
 template <typename Config>
 [[nodiscard]] std::uint32_t forget_for_motion(LayerSet<Config>& layers, const StackParams& params,

@@ -26,7 +26,15 @@ struct DropRecords {
 };
 
 [[nodiscard]] inline QueryResult empty_result(Status status, int layer) noexcept {
-  return QueryResult{status, layer, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, CellClass::kUnknown};
+  return QueryResult{status, layer, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F, CellClass::kUnknown, false};
+}
+
+/// The answer of a place whose answering cell is distrusted (map/detail/integrity.hpp,
+/// "distrust"): kUnknown at `layer`, upset set.
+[[nodiscard]] inline QueryResult upset_result(int layer) noexcept {
+  QueryResult r = empty_result(Status::kUnknown, layer);
+  r.upset = true;
+  return r;
 }
 
 template <typename Config>
@@ -41,7 +49,9 @@ class QueryView {
 
   /// Answer from the finest layer that knows (x, y), a drop-off counting as known at its layer (an
   /// unobserved cell, no finer point below it, that lines of sight proved a drop-off: finer
-  /// knowledge than a coarser cell that holds the ground beside it); see Stack::query.
+  /// knowledge than a coarser cell that holds the ground beside it); see Stack::query. A
+  /// distrusted answer (upset) ends the search: no coarser layer answers for a place whose cell
+  /// lost what it knew.
   [[nodiscard]] QueryResult query(float x, float y) const noexcept {
     QueryResult result = empty_result(Status::kOutsideMap, -1);
     for (int layer = 0; layer < Layers::kLayerCount; ++layer) {
@@ -54,6 +64,9 @@ class QueryView {
       }
       QueryResult answer = answer_at(layer, index, x, y, true);
       if (answer.status != Status::kOk) {
+        if (answer.upset) {
+          return answer;
+        }
         continue;
       }
       if (!Layers::is_ccm(layer) && Layers::kCcmLayerCount > 0 && answer.cell_class != CellClass::kDropOff) {
@@ -87,7 +100,9 @@ class QueryView {
   }
 
   /// The answer of `layer` at `index` for the point (x, y) inside that cell. With
-  /// require_known, a cell that is not known gives kUnknown. Precondition: the layer's window
+  /// require_known, a cell that is not known gives kUnknown. A distrusted cell (or, for a CCM
+  /// layer, a distrusted cell pooled into it; for the constant layer, a distrusted neighbour of
+  /// the roughness filter) gives kUnknown with upset set, whatever require_known. Precondition: the layer's window
   /// contains `index`; a violation (a bad layer included) is reported to the assert hook and
   /// answered kOutsideMap.
   [[nodiscard]] QueryResult answer_at(int layer, CellIndex index, float x, float y, bool require_known) const noexcept {
@@ -97,6 +112,9 @@ class QueryView {
     out.cell_width_m = width;
     if (Layers::is_ccm(layer)) {
       const typename Layers::CcmCellType cell = pooled(layers_, params_.weight_limit, layer, index);
+      if (distrust_mark(cell)) {
+        return upset_result(layer);  // integrity: a distrusted cell in the pool
+      }
       if (!(cell.weight > 0.0F) && unobserved_drop(layer, index)) {
         return drop_answer(layer, index);  // nothing observed here or below, the rays proved a drop
       }
@@ -119,12 +137,13 @@ class QueryView {
       return out;
     }
     if constexpr (Layers::kHasFine) {
-      // Integrity: a cell an upset changed answers as never observed (map/detail/integrity.hpp),
-      // and never as a drop-off either (unknown: what its records say cannot be trusted beside it).
-      const FineCell& raw = layers_.fine.cell_unchecked(index);
-      const bool intact = cell_intact(layers_, raw);
-      const FineCell cell = intact ? raw : FineCell{};
-      if (intact && !(cell.weight > 0.0F) && unobserved_drop(layer, index)) {
+      // Integrity: a distrusted cell answers unknown, upset (map/detail/integrity.hpp), never as
+      // a drop-off either (what its records say cannot be trusted beside it).
+      const FineCell& cell = layers_.fine.cell_unchecked(index);
+      if (cell_distrusted(layers_, cell)) {
+        return upset_result(layer);
+      }
+      if (!(cell.weight > 0.0F) && unobserved_drop(layer, index)) {
         return drop_answer(layer, index);
       }
       const bool known = cell.weight >= params_.min_weight && cell.weight > 0.0F;
@@ -135,7 +154,13 @@ class QueryView {
       out.height_m = cell.height;
       out.normal_variance = fine_variance(cell);
       out.elevation_variance = out.normal_variance;
-      out.cell_class = known ? roughness_class(index) : CellClass::kUnknown;
+      out.cell_class = CellClass::kUnknown;
+      if (known) {
+        out.cell_class = roughness_class(index);
+        if (out.cell_class == CellClass::kUnknown) {
+          return upset_result(layer);  // a distrusted neighbour: the filter cannot judge the cell
+        }
+      }
     }
     return out;
   }
@@ -157,10 +182,10 @@ class QueryView {
     return a;
   }
 
-  /// A piece-wise constant cell (of the layers' storage) is known with at least min_weight (and
-  /// some weight) and its bits agree with its check (map/detail/integrity.hpp).
+  /// A piece-wise constant cell (of the layers' storage, not distrusted: map/detail/integrity.hpp)
+  /// is known with at least min_weight (and some weight).
   [[nodiscard]] bool fine_known(const FineCell& cell) const noexcept {
-    return cell.weight >= params_.min_weight && cell.weight > 0.0F && cell_intact(layers_, cell);
+    return cell.weight >= params_.min_weight && cell.weight > 0.0F;
   }
 
   [[nodiscard]] const Layers& layers() const noexcept { return layers_; }
@@ -176,16 +201,24 @@ class QueryView {
 
   /// Roughness filter of the piece-wise constant layer (the baseline of Section V-B): the
   /// cell is an obstacle if any known neighbour differs in height by more than the maximum
-  /// inclination times their distance. It cannot tell slopes from steps.
+  /// inclination times their distance. It cannot tell slopes from steps. kUnknown if no step is
+  /// found and a neighbour is distrusted (map/detail/integrity.hpp): it might have held one.
   [[nodiscard]] CellClass roughness_class(CellIndex index) const noexcept {
     if constexpr (Layers::kHasFine) {
       const FineCell& centre = layers_.fine.cell_unchecked(index);
       const float step = params_.max_inclination * layers_.widths[0];
+      bool distrusted = false;
       for (std::int32_t dy = -1; dy <= 1; ++dy) {
         for (std::int32_t dx = -1; dx <= 1; ++dx) {
           const FineCell* n = layers_.fine.cell(CellIndex{index.x + dx, index.y + dy});
-          // Integrity: a neighbour an upset changed counts as unobserved.
-          if (n == nullptr || (dx == 0 && dy == 0) || !(n->weight >= params_.min_weight) || !cell_intact(layers_, *n)) {
+          if (n == nullptr || (dx == 0 && dy == 0)) {
+            continue;
+          }
+          if (cell_distrusted(layers_, *n)) {
+            distrusted = true;  // integrity: it cannot count as level ground
+            continue;
+          }
+          if (!(n->weight >= params_.min_weight)) {
             continue;
           }
           const float limit = (dx != 0 && dy != 0) ? step * 1.41421356F : step;
@@ -194,7 +227,7 @@ class QueryView {
           }
         }
       }
-      return CellClass::kTraversable;
+      return distrusted ? CellClass::kUnknown : CellClass::kTraversable;
     } else {
       (void)index;
       return CellClass::kUnknown;
@@ -203,7 +236,8 @@ class QueryView {
 
  private:
   /// Replaces slope, normal variance and class of a constant-layer answer with those of the
-  /// first CCM layer's pooled cell at (x, y), when that cell is known.
+  /// first CCM layer's pooled cell at (x, y), when that cell is known; with the upset answer
+  /// when that cell is distrusted (hazards are a CCM matter: its class is lost).
   void refine_with_ccm(float x, float y, QueryResult& answer) const noexcept {
     const int layer = Layers::kFineLayerCount;
     CellIndex index{};
@@ -212,6 +246,9 @@ class QueryView {
     }
     const QueryResult ccm = answer_at(layer, index, x, y, true);
     if (ccm.status != Status::kOk) {
+      if (ccm.upset) {
+        answer = upset_result(answer.layer);
+      }
       return;
     }
     answer.slope_x = ccm.slope_x;

@@ -35,8 +35,9 @@ struct ReadCount {
   void add(std::uint32_t n) noexcept { reads += n; }
 };
 
-/// The statistics of CCM stack layer `layer`'s cell `index` as a query sees them.
-/// Preconditions: LayerSet<Config>::is_ccm(layer) and the layer's window contains `index`
+/// The statistics of CCM stack layer `layer`'s cell `index` as a query sees them; the
+/// distrusted cell (detail::distrust_mark) if that cell or any cell pooled into it is distrusted
+/// (map/detail/integrity.hpp). Preconditions: LayerSet<Config>::is_ccm(layer) and the layer's window contains `index`
 /// (so 2 * index fits int32: windows stay within +-2^30); a violation is reported to the assert
 /// hook and answered with the empty cell (unknown). `count` is told every cell read.
 template <typename Config, typename Count>
@@ -47,8 +48,13 @@ template <typename Config, typename Count>
   CCMAP_ASSERT_OR_RETURN(Layers::is_ccm(layer) && layers.contains(layer, index), Cell{});
   const Cell* own = layers.ccm_grid(layer).cell(index);
   count.add(1U);
-  // Integrity: a cell an upset changed is read as never observed (map/detail/integrity.hpp).
-  Cell result = own != nullptr ? intact_or_empty(layers, *own) : Cell{};
+  // Integrity: a distrusted cell (an upset changed it, or the scrub reset it) makes the pool
+  // distrusted: what it held is lost, and the pool without it could hide a hazard
+  // (map/detail/integrity.hpp, "distrust").
+  if (own != nullptr && cell_distrusted(layers, *own)) {
+    return distrusted_cell<Cell>();
+  }
+  Cell result = own != nullptr ? *own : Cell{};
   if (layer == 0) {
     return result;
   }
@@ -65,10 +71,16 @@ template <typename Config, typename Count>
     const CellIndex child{first.x + (i & 1), first.y + (i >> 1)};
     if (Layers::is_ccm(child_layer)) {
       children[i] = pooled(layers, weight_limit, child_layer, child, count);
+      if (distrust_mark(children[i])) {
+        return children[i];  // integrity: a distrusted cell below
+      }
     } else {
       if constexpr (Layers::kHasFine) {
-        const typename Layers::FineCell c = intact_or_empty(layers, layers.fine.cell_unchecked(child));  // integrity
+        const typename Layers::FineCell& c = layers.fine.cell_unchecked(child);
         count.add(1U);
+        if (cell_distrusted(layers, c)) {
+          return distrusted_cell<Cell>();  // integrity: a distrusted cell below
+        }
         children[i] = ccm_from_constant<Cell>(fine_height(c), fine_variance(c), c.weight, layers.widths[child_layer]);
       }
     }

@@ -50,6 +50,9 @@ struct RegionAnswer {
   std::int16_t class_layer;  ///< layer whose cell gave class, slopes and normal variance
   bool known;                ///< false: no layer knows the piece (or none holds it)
   CellClass cell_class;      ///< kUnknown iff !known
+  /// With !known: the answering cell (or one pooled into it, or a roughness neighbour) is
+  /// distrusted (map/detail/integrity.hpp, "distrust"): no coarser layer was asked.
+  bool upset;
   CellIndex index;           ///< answering cell (global index in `layer`)
   float slope_x;             ///< as QueryResult
   float slope_y;
@@ -218,7 +221,8 @@ class RegionWalk {
 
   /// The answer of the leaf at layer k: the first cell on its path up that is known or, as
   /// Stack::query, an unobserved drop-off (map/visibility/free_space.hpp); else the unknown answer
-  /// of the finest layer holding it (layer -1: none does).
+  /// of the finest layer holding it (layer -1: none does). A distrusted cell on the way ends the
+  /// search with its upset answer, as Stack::query.
   [[nodiscard]] const RegionAnswer& resolve(int k) noexcept {
     const RegionAnswer* unknown = nullptr;
     for (int j = k; j < kLayers; ++j) {
@@ -226,7 +230,7 @@ class RegionWalk {
         continue;
       }
       const RegionAnswer& a = answer(j);
-      if (a.known) {
+      if (a.known || a.upset) {
         return a;
       }
       if (view_.unobserved_drop(j, path_[j]) && drop_below_is_empty(j)) {
@@ -262,6 +266,7 @@ class RegionWalk {
   [[nodiscard]] static RegionAnswer unknown_answer(int layer) noexcept {
     RegionAnswer a{};
     a.known = false;
+    a.upset = false;
     a.layer = static_cast<std::int16_t>(layer);
     a.class_layer = static_cast<std::int16_t>(layer);
     a.cell_class = CellClass::kUnknown;
@@ -269,10 +274,16 @@ class RegionWalk {
   }
 
   /// The answer of path_[j] (inside layer j's window), computed once per visit of that cell.
+  /// The kept answer is returned inline; the computation is a call of its own (its register
+  /// saves then stay off the kept answer's path).
   const RegionAnswer& answer(int j) noexcept {
     if (answered_[j]) {
       return answers_[j];
     }
+    return compute_answer(j);
+  }
+
+  [[gnu::noinline]] const RegionAnswer& compute_answer(int j) noexcept {
     answered_[j] = true;
     RegionAnswer& a = answers_[j];
     a = unknown_answer(j);
@@ -282,6 +293,10 @@ class RegionWalk {
     a.centre_y = grid::cell_centre(c.y, layers_.widths[j]);
     if (Layers::is_ccm(j)) {
       const typename Layers::CcmCellType cell = pooled(layers_, view_.params().weight_limit, j, c, reads_);
+      if (distrust_mark(cell)) {
+        a.upset = true;  // integrity: a distrusted cell in the pool
+        return a;
+      }
       const typename View::CcmAnswer ccm = view_.ccm_answer(j, cell);
       if (ccm.cell_class == CellClass::kUnknown) {
         return a;
@@ -302,7 +317,21 @@ class RegionWalk {
     if constexpr (Layers::kHasFine) {
       const FineCell& cell = layers_.fine.cell_unchecked(c);
       reads_.add(1U);
+      // Integrity: a distrusted cell is upset. Its check is read only when it would answer (with
+      // CCM layers, a cell that looks unknown is checked by the first CCM layer's pooling, which
+      // the walk asks next: the piece is upset there), so an unknown cell costs no signature.
+      if (distrust_mark(cell)) {
+        a.upset = true;
+        return a;
+      }
       if (!view_.fine_known(cell)) {
+        if constexpr (Layers::kCcmLayerCount == 0) {
+          a.upset = !cell_intact(layers_, cell);
+        }
+        return a;
+      }
+      if (!cell_intact(layers_, cell)) {
+        a.upset = true;
         return a;
       }
       a.known = true;
@@ -312,6 +341,13 @@ class RegionWalk {
       constexpr int first_ccm = Layers::kFineLayerCount;
       if (Layers::kCcmLayerCount > 0 && layers_.contains(first_ccm, path_[first_ccm])) {
         const RegionAnswer& ccm = answer(first_ccm);
+        if (ccm.upset) {
+          a.known = false;  // hazards are a CCM matter: its class is lost
+          a.upset = true;
+          a.mean_z = 0.0F;
+          a.normal_variance = 0.0F;
+          return a;
+        }
         if (ccm.known) {
           a.class_layer = static_cast<std::int16_t>(first_ccm);
           a.cell_class = ccm.cell_class;
@@ -324,6 +360,10 @@ class RegionWalk {
       }
       reads_.add(9U);  // the cell and its 8 neighbours
       a.cell_class = view_.roughness_class(c);
+      if (a.cell_class == CellClass::kUnknown) {
+        a.known = false;  // a distrusted neighbour (QueryView::roughness_class)
+        a.upset = true;
+      }
     }
     return a;
   }
