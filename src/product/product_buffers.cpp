@@ -58,13 +58,12 @@ Status product_commit(ProductBuffers& buffers, std::uint32_t bytes) noexcept {
   std::uint32_t* sequence = &buffers.slot_sequence[s];
   const std::uint32_t v = load_relaxed(sequence);
   store_relaxed(sequence, v + 1U);  // odd: being written
-  __atomic_thread_fence(__ATOMIC_RELEASE);
   std::uint32_t* target = slot(buffers, s);
   const auto* staged = reinterpret_cast<const std::uint8_t*>(slot(buffers, 2U));
   for (std::uint32_t i = 0; i < bytes / 4U; ++i) {
     std::uint32_t word = 0U;
     std::memcpy(&word, staged + 4U * i, sizeof word);
-    store_relaxed(target + i, word);
+    store_release(target + i, word);  // release: the odd sequence is visible before this word
   }
   store_release(sequence, v + 2U);  // even: whole
   store_release(&buffers.published, n + 1U);
@@ -92,7 +91,7 @@ Status product_read(const ProductBuffers& buffers, std::uint8_t* out, std::size_
     }
     const std::uint32_t* source = slot(buffers, s);
     // The size word (+8) first; clamped, since a torn copy may hold anything until v2 says.
-    std::uint32_t size_word = load_relaxed(source + 2U);
+    std::uint32_t size_word = load_acquire(source + 2U);
     std::uint8_t size_bytes[4];
     std::memcpy(size_bytes, &size_word, sizeof size_word);
     std::uint32_t total = product_detail::get_u32(size_bytes);
@@ -100,11 +99,10 @@ Status product_read(const ProductBuffers& buffers, std::uint8_t* out, std::size_
     const bool fits_out = total <= capacity;
     if (fits_slot && fits_out) {
       for (std::uint32_t i = 0; i < total / 4U; ++i) {
-        const std::uint32_t word = load_relaxed(source + i);
+        const std::uint32_t word = load_acquire(source + i);  // acquire: v2 is read after this word
         std::memcpy(out + 4U * i, &word, sizeof word);
       }
     }
-    __atomic_thread_fence(__ATOMIC_ACQUIRE);
     const std::uint32_t v2 = load_relaxed(sequence);
     if (v1 != v2) {
       continue;  // the writer came by during the copy

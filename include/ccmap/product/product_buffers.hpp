@@ -2,18 +2,21 @@
 // other threads, lock-free: the caller owns the memory (ccmap_product_buffers of ccmap/ccmap.h,
 // used as is from C++), the writer never waits, a reader gets a whole product or a refusal.
 //
-// Memory ordering (a sequence lock per slot, H.-J. Boehm's "Can seqlocks get along with
-// programming language memory models?"):
+// Memory ordering (a sequence lock per slot; H.-J. Boehm, "Can seqlocks get along with
+// programming language memory models?", the variant without stand-alone fences):
 //   writer (one thread): slot s = the one readers are not pointed at; seq[s] = odd (relaxed);
-//     release fence; the product's words stored relaxed; seq[s] = even (release);
-//     published = n + 1 (release): readers now start at slot s.
+//     each word of the product stored with release (so no reader can see a new word without
+//     then seeing the odd sequence); seq[s] = even (release); published = n + 1 (release):
+//     readers now start at slot s.
 //   reader (any thread): n = published (acquire); s = n & 1; v1 = seq[s] (acquire), odd: retry;
-//     the words loaded relaxed; acquire fence; v2 = seq[s] (relaxed); v1 != v2: retry; then
-//     the copy was taken while no writer wrote the slot: check its CRC and sizes.
+//     each word loaded with acquire (so the second sequence load cannot move before it);
+//     v2 = seq[s] (relaxed); v1 != v2: retry; else the copy was taken while no writer wrote the
+//     slot: check its CRC and sizes.
 // Every shared word is touched only through 32-bit atomics (GCC/Clang __atomic builtins on
-// plain uint32_t: lock-free on every target of this library, a single load or store on
-// Cortex-M7 and aarch64), so the exchange is race-free in the C++ memory model (ThreadSanitizer
-// checks it: tests/capi/CMakeLists.txt).
+// plain uint32_t: lock-free on every target of this library), so the exchange is race-free in
+// the C++ memory model, and ThreadSanitizer (which does not model stand-alone fences) checks the
+// very code that flies (tests/capi/CMakeLists.txt, ProductBuffers.ThreadSanitizer). On x86-64
+// release and acquire are plain moves; on aarch64 stlr/ldar; on Cortex-M7 a dmb beside each.
 #pragma once
 
 #include <cstddef>
