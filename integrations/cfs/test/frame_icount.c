@@ -6,8 +6,10 @@
  * message handled (frame taken, mapped by the stub, released, timed, counted), region 2 one
  * forged message refused. What is not the app's own is stubbed: cFE's message accessors and event
  * service, OSAL's clock and the library (ccmap_update_frame_sensor); the stubs' few instructions
- * each are inside the count (an upper bound of the app's own). */
+ * each are inside the count (an upper bound of the app's own). It also prints the aarch64 sizes
+ * of the packets the ground module decodes. */
 #include <stdarg.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "ccmap_app.h"
@@ -118,6 +120,9 @@ int main(void)
         CCMAP_APP_TaskPipe((const CFE_SB_Buffer_t *)(void *)&Msg);
         MARK_END(2);
     }
+    /* The payload sizes the ground module's formats must match (run_cfs_test.py compares). */
+    printf("sizes hk=%u product=%u table=%u\n", (unsigned)sizeof(CCMAP_APP_HkTlm_Payload_t),
+           (unsigned)sizeof(CCMAP_APP_ProductTlm_Payload_t), (unsigned)sizeof(CCMAP_APP_ParamTable_t));
     /* Every frame taken and released, every forged one dropped. */
     return (CCMAP_APP_Data.HkTlm.Payload.FramesDropped == 8u && CCMAP_APP_Data.HkTlm.Payload.BudgetOverruns == 0u)
                ? 0

@@ -18,11 +18,15 @@ runs rebuild incrementally). Checks, each against the app's own telemetry and ev
     is refused and changes nothing;
   - every frame's handling stays under the table's cycle budget (80 ms).
 cFE is stopped and only the SysV shared-memory segments this run created are removed, also on
-failure. Runs as the unprivileged user "nobody" (setpriv) when started as root.
+failure. Runs as the unprivileged user "nobody" (setpriv) when started as root. Before all that
+it runs the ground module's own tests (ground/test_ccmap_ground.py), and, where the aarch64 cross
+compiler and QEMU are installed, counts the app's own frame handling (frame_icount.c) and checks
+the ground module's packet formats against the aarch64 structs.
 """
 import os
 import shutil
 import signal
+import struct
 import subprocess
 import sys
 import tempfile
@@ -30,7 +34,9 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", "..", ".."))
-sys.path.insert(0, os.path.join(REPO, "integrations", "cfs", "ground"))
+GROUND = os.path.join(REPO, "integrations", "cfs", "ground")
+sys.path.insert(0, GROUND)
+sys.dont_write_bytecode = True  # nothing written into the source tree
 import ccmap_ground as g  # noqa: E402
 
 FRAMES = 6
@@ -184,8 +190,15 @@ def frame_icount(tree, work, results):
         out = os.path.join(work, f"frame_icount{opt}.txt")
         run(["aarch64-linux-gnu-gcc", "-std=c99", opt, "-Wall", "-Werror", "-D_LINUX_OS_", "-D_POSIX_OS_",
              "-D_XOPEN_SOURCE=600", f"-I{app}"] + includes + sources + ["-o", exe], work, logfile)
-        run(["qemu-aarch64", "-L", "/usr/aarch64-linux-gnu", "-plugin", f"{plugin},out={out}", exe], work,
-            logfile)
+        printed = subprocess.run(["qemu-aarch64", "-L", "/usr/aarch64-linux-gnu", "-plugin", f"{plugin},out={out}",
+                                  exe], cwd=work, capture_output=True, text=True)
+        if printed.returncode != 0:
+            raise Failure(f"{exe} failed ({printed.returncode}): {printed.stdout}{printed.stderr}")
+        sizes = dict(item.split("=") for item in printed.stdout.split()[1:])
+        expected = {"hk": struct.calcsize(g.HK_FORMAT), "product": struct.calcsize(g.PRODUCT_FORMAT),
+                    "table": struct.calcsize(g.TABLE_FORMAT)}
+        if {k: int(v) for k, v in sizes.items()} != expected:
+            raise Failure(f"aarch64 payload sizes {sizes} differ from the ground module's {expected}")
         regions = {}
         with open(out) as f:
             for line in f:
@@ -194,6 +207,7 @@ def frame_icount(tree, work, results):
                     regions[fields["region"]] = fields
         results[f"icount{opt}"] = (int(regions["1"]["max_interval_insns"]), int(regions["2"]["max_interval_insns"]))
     frame, refused = results["icount-O2"]
+    log(f"ok: the ground module's HK, product and table formats match the aarch64 structs ({expected})")
     log(f"icount: the app's own code per frame {frame} aarch64 instructions at -O2 "
         f"({results['icount-O0'][0]} at -O0, cFS's default debug build), a refused FRAME_READY {refused}")
     if frame > FRAME_ICOUNT_BOUND:
@@ -420,6 +434,10 @@ def boot_and_test(tree, work, results):
 
 
 def main():
+    # The ground module's own checks first: they need no cFS.
+    if subprocess.call([sys.executable, "-B", "-m", "unittest", "-q", "test_ccmap_ground"], cwd=GROUND) != 0:
+        log("FAILED: integrations/cfs/ground/test_ccmap_ground.py")
+        return 1
     kind, source = find_sources()
     if kind is None:
         if os.environ.get("CCMAP_CFS_DIR"):
