@@ -1,0 +1,395 @@
+// Every line of sight of a frame at once (docs/design.md, "Free space from lines of sight",
+// "Every line of sight"): the viewshed table. The rays of one frame share their origin, so
+// instead of walking each, every routed point writes one entry: the lowest height (relative to
+// the sensor) of the points that end in its (azimuth sector, range bin). One sweep per sector
+// then gives, for every bin, the lowest ray that reaches beyond it, and a map cell reads its
+// bound from the sectors that lie wholly inside its azimuth interval. Used by the free-space
+// stage (free_space.hpp) when StackParams::free_space_rays is kFreeSpaceEveryRay; the update path
+// feeds it chunk by chunk while the front's output is in L1 (map/update/update_path.hpp).
+//
+// Geometry (horizontal positions in finest cells from the sensor, heights in m from the sensor):
+//  - azimuth: the diamond angle a in [0, 4) of (dx, dy) (monotonic in the true angle, one
+//    division, no trigonometry); sector = floor(a * kSightSectors / 4). A sector is at most
+//    8 pi / kSightSectors rad wide (0.025 rad for 1024... halved by the diamond angle's slope
+//    bound: at most 2 * 2 pi / kSightSectors).
+//  - range: the ray's walked length, its horizontal length shortened as the sampled walk does
+//    (by kRangeSigmas range errors: d (1 - 3 sigma(r) / r)), binned on a square-root scale:
+//    bin = floor(sqrt(d_walked) * bin_scale), clamped to the last bin.
+//  - slope: t = (z - z0) / d of the point (d its horizontal distance, m), quantised UP to
+//    kSightSlopeUnit (an upper bound stays one); the line of sight is z0 + t s at distance s.
+// What a table entry (bin b, sector k) holds: the lowest slope of the rays of sector k whose
+// walked part reaches at least edge(b) = (b / bin_scale)^2 cells and less than edge(b + 1); the
+// sweep turns it into the lowest slope of those reaching edge(b) or beyond.
+// Soundness (tests/map/sight_table_test.cpp holds it to the exact integer walk on random
+// frames): a cell's bound comes only from sectors inside its azimuth interval (every such ray
+// crosses the cell) whose rays reach beyond the cell's farthest corner, evaluated at the cell's
+// nearest (descending ray) or farthest (rising ray) corner: never below the height at which a
+// ray that the walk also sees crosses the cell.
+//
+// Cost: one vectorisable pass over the front's chunk (key and height), one scattered minimum per
+// point, a vector sweep over the table (bins x sectors / 8 lanes), then the cells. No heap.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <type_traits>
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/map/types.hpp"
+#include "ccmap/map/update/front.hpp"
+
+namespace ccmap {
+
+/// A Config that carries the viewshed table (256 KB per stack, not in the presets: the C API's
+/// storage sizes and the presets' memory stay as they are): WithEveryLineOfSight<CadreConfig>.
+/// Its stack casts every line of sight when StackParams::free_space_rays is
+/// detail::kFreeSpaceEveryRay (65535), and samples rays at any other value, as the presets do.
+template <typename Base>
+struct WithEveryLineOfSight : Base {
+  static constexpr bool kEveryLineOfSight = true;
+};
+
+namespace detail {
+template <typename Config, typename = void>
+struct ConfigEveryLineOfSight {
+  static constexpr bool value = false;
+};
+template <typename Config>
+struct ConfigEveryLineOfSight<Config, std::void_t<decltype(Config::kEveryLineOfSight)>> {
+  static constexpr bool value = Config::kEveryLineOfSight;
+};
+}  // namespace detail
+
+template <typename Config>
+inline constexpr bool kConfigEveryLineOfSight = detail::ConfigEveryLineOfSight<Config>::value;
+
+}  // namespace ccmap
+
+namespace ccmap::detail {
+
+/// The free_space_rays value that selects every line of sight (the viewshed table) instead of a
+/// sample of walked rays.
+inline constexpr float kFreeSpaceEveryRay = 65535.0F;
+
+inline constexpr int kSightSectorBits = 10;
+inline constexpr int kSightSectors = 1 << kSightSectorBits;  ///< diamond-angle sectors
+inline constexpr int kSightBins = 64;                         ///< square-root range bins
+inline constexpr std::size_t kSightEntries = std::size_t{kSightSectors} * kSightBins;
+/// An entry no ray wrote: no bound.
+inline constexpr std::int16_t kSightEmpty = 32767;
+/// Slope unit of an entry: 2^-12 (2.4 mm of height at 10 m), entries span slopes of +-8.
+inline constexpr float kSightSlopeUnit = 0.000244140625F;
+inline constexpr float kSightSlopeUnitsInv = 4096.0F;
+
+/// The constants of a frame's table (derived per frame from the pose and the stage's init).
+struct SightFrameConstants {
+  float sensor_u[2];     ///< sensor position in finest cells from the anchor cell's corner
+  float z0;              ///< sensor height (m)
+  float bin_scale;       ///< bins per sqrt(cell)
+  float cell_width_m;    ///< w_0 (m)
+  float sigma_c[3];      ///< kRangeSigmas sigma(r) = c0 + c1 r + c2 r^2 (m)
+  float view_axis[3];    ///< sensor-frame viewing direction (all zero: not given)
+  bool view_axis_set;
+  std::int32_t layers;   ///< routed codes below this cast rays
+};
+
+/// What the table says about one cell (SightTable::read_cell).
+struct SightCell {
+  int lo, hi;            ///< sectors wholly inside the cell's azimuth interval: [lo, hi), modulo kSightSectors
+  int bin;               ///< first bin whose rays reach beyond the cell's farthest corner
+  float s_near, s_far;   ///< nearest and farthest distance of the cell (finest cells)
+  std::int32_t qmin;     ///< lowest slope over those sectors (kSightSlopeUnit)
+  std::int32_t qmax;     ///< highest slope over those sectors that hold one
+  int covered;           ///< sectors holding a slope
+  bool all;              ///< every sector holds one
+};
+
+class SightTable;
+/// What a stack without the table carries in its place.
+struct NoSightTable {};
+
+class SightTable {
+ public:
+  /// Empties the table for a new frame.
+  void begin(const SightFrameConstants& k) noexcept {
+    k_ = k;
+    for (std::size_t i = 0; i < kSightEntries + 1U; ++i) {
+      raw_[i] = kSightEmpty;
+    }
+    points_ = 0U;
+  }
+
+  [[nodiscard]] const SightFrameConstants& constants() const noexcept { return k_; }
+  /// Points that wrote an entry this frame.
+  [[nodiscard]] std::uint32_t points() const noexcept { return points_; }
+
+  /// Every point of the chunk (the front's output for count <= kFrontChunkPoints points):
+  /// sensor: the chunk's sensor-frame points (for the view axis) or nullptr; weights: the
+  /// chunk's map-frame weights or nullptr (a point with a bad weight casts no ray).
+  void add_chunk(const FrontChunk& chunk, std::size_t count, const PointXYZ* sensor, const float* weights,
+                 CellIndex anchor) noexcept {
+    const float sx = k_.sensor_u[0];
+    const float sy = k_.sensor_u[1];
+    const float c0 = k_.sigma_c[0];
+    const float c1 = k_.sigma_c[1];
+    const float c2 = k_.sigma_c[2];
+    const float scale = k_.bin_scale;
+    const float z0 = k_.z0;
+    const float w0 = k_.cell_width_m;
+    const std::int32_t layers = k_.layers;
+    const float sectors_per_unit = static_cast<float>(kSightSectors) * 0.25F;
+    constexpr std::uint32_t kDummy = static_cast<std::uint32_t>(kSightEntries);
+    // Pass 1 (vectorisable): key and quantised height of each point.
+    for (std::size_t i = 0; i < count; ++i) {
+      const float dx = static_cast<float>(chunk.ix0[i] - anchor.x) + (chunk.fx[i] - sx);
+      const float dy = static_cast<float>(chunk.iy0[i] - anchor.y) + (chunk.fy[i] - sy);
+      const float ax = dx < 0.0F ? -dx : dx;
+      const float ay = dy < 0.0F ? -dy : dy;
+      const float l1 = ax + ay;
+      const float p = dy / (l1 > 0.0F ? l1 : 1.0F);
+      const float a = dx >= 0.0F ? (dy >= 0.0F ? p : 4.0F + p) : 2.0F - p;
+      const std::uint32_t sector =
+          static_cast<std::uint32_t>(static_cast<std::int32_t>(a * sectors_per_unit)) & (kSightSectors - 1U);
+      const float rsq = chunk.range_sq[i];
+      const float r = std::sqrt(rsq);
+      const float margin = c0 + c1 * r + c2 * rsq;
+      const float f = 1.0F - margin / (r > 0.0F ? r : 1.0F);
+      const float d = std::sqrt(dx * dx + dy * dy);
+      const float walked = d * f;
+      float b = std::sqrt(walked > 0.0F ? walked : 0.0F) * scale;
+      b = b < static_cast<float>(kSightBins - 1) ? b : static_cast<float>(kSightBins - 1);
+      const std::uint32_t bin = static_cast<std::uint32_t>(static_cast<std::int32_t>(b));
+      const bool ok = chunk.code[i] >= 0 && chunk.code[i] < layers && l1 > 0.0F && f > 0.0F;
+      key_[i] = ok ? (bin << kSightSectorBits) | sector : kDummy;
+      // A slope of 8 or more bounds nothing: the entry's empty value; below -8: -8 (higher, safe).
+      const float t = (chunk.z[i] - z0) / (d > 0.0F ? d * w0 : 1.0F);
+      float q = std::ceil(t * kSightSlopeUnitsInv);
+      q = q < -32767.0F ? -32767.0F : (q > 32767.0F ? 32767.0F : q);
+      dz_[i] = static_cast<std::int32_t>(q);
+    }
+    // Refusals the vector pass does not see (scalar, only when given).
+    if (sensor != nullptr && k_.view_axis_set) {
+      for (std::size_t i = 0; i < count; ++i) {
+        const PointXYZ& s = sensor[i];
+        if (!(s.x * k_.view_axis[0] + s.y * k_.view_axis[1] + s.z * k_.view_axis[2] > 0.0F)) {
+          key_[i] = kDummy;
+        }
+      }
+    }
+    if (weights != nullptr) {
+      for (std::size_t i = 0; i < count; ++i) {
+        if (ccm_check_weight(weights[i]) != Status::kOk) {
+          key_[i] = kDummy;
+        }
+      }
+    }
+    // Pass 2: the scattered minimum (the dummy entry kSightEntries absorbs refused points).
+    std::uint32_t written = 0U;
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::uint32_t key = key_[i] <= kDummy ? key_[i] : kDummy;  // integrity: in the table
+      const auto q = static_cast<std::int16_t>(dz_[i]);
+      raw_[key] = q < raw_[key] ? q : raw_[key];
+      written += key != kDummy ? 1U : 0U;
+    }
+    points_ += written;
+  }
+
+  /// Lower edge of bin b (finest cells): (b / bin_scale)^2.
+  [[nodiscard]] float edge(int b) const noexcept {
+    const float e = static_cast<float>(b) / k_.bin_scale;
+    return e * e;
+  }
+
+  /// The sweep, far to near: swept(b, k) = the lowest slope of sector k's rays that reach
+  /// edge(b) or beyond (kSightEmpty: none). Vectorisable across sectors.
+  void sweep() noexcept {
+    std::int16_t* last = swept_ + static_cast<std::size_t>(kSightBins - 1) * kSightSectors;
+    std::memcpy(last, raw_ + static_cast<std::size_t>(kSightBins - 1) * kSightSectors, sizeof(std::int16_t) * kSightSectors);
+    for (int b = kSightBins - 2; b >= 0; --b) {
+      const std::int16_t* row = raw_ + static_cast<std::size_t>(b) * kSightSectors;
+      const std::int16_t* next = swept_ + static_cast<std::size_t>(b + 1) * kSightSectors;
+      std::int16_t* out = swept_ + static_cast<std::size_t>(b) * kSightSectors;
+      for (int k = 0; k < kSightSectors; ++k) {
+        out[k] = row[k] < next[k] ? row[k] : next[k];
+      }
+    }
+  }
+
+  /// After sweep(): the ground each sector's points showed before bin b, turning raw_ into it
+  /// (height above the sensor in kSightSlopeUnit m units... see ground()): near to far, the
+  /// lowest point of each bin that holds points is the ground there, unless it rose faster than
+  /// max_slope (per finest cell of distance) plus noise_m from the ground before (a rock, a
+  /// rover: the ground stays the level before it until a bin comes back within noise_m of it).
+  /// An approximation for the drop-off rule's reference (a point's height from its bin's middle
+  /// distance), not a bound.
+  void track_ground(float max_slope, float noise_m) noexcept {
+    float ground[kSightSectors];
+    float prev_h[kSightSectors];
+    float prev_s[kSightSectors];
+    std::int32_t state[kSightSectors];  // 0 no ground yet, 1 on ground, 2 on an obstacle
+    for (int k = 0; k < kSightSectors; ++k) {
+      ground[k] = 0.0F;
+      prev_h[k] = 0.0F;
+      prev_s[k] = 0.0F;
+      state[k] = 0;
+    }
+    const float unit_m = kSightSlopeUnit * k_.cell_width_m;
+    for (int b = 0; b < kSightBins; ++b) {
+      std::int16_t* row = raw_ + static_cast<std::size_t>(b) * kSightSectors;
+      const float mid = 0.5F * (edge(b) + edge(b + 1));
+      const float per_unit = unit_m * mid;  // height (m) of one slope unit at the bin's middle
+      for (int k = 0; k < kSightSectors; ++k) {
+        const std::int16_t q = row[k];
+        // Ground before this bin, in 2^-10 m from the sensor (kSightEmpty: none).
+        float g = ground[k] * 1024.0F;
+        g = g < -32767.0F ? -32767.0F : (g > 32766.0F ? 32766.0F : g);
+        row[k] = state[k] == 0 ? kSightEmpty : static_cast<std::int16_t>(g);
+        if (q == kSightEmpty) {
+          continue;
+        }
+        const float h = static_cast<float>(q) * per_unit;
+        if (state[k] == 0) {
+          ground[k] = h;
+          state[k] = 1;
+        } else if (state[k] == 1) {
+          if (h > prev_h[k] + max_slope * (mid - prev_s[k]) + noise_m) {
+            state[k] = 2;
+          } else {
+            ground[k] = h;
+          }
+        } else if (h <= ground[k] + noise_m) {
+          state[k] = 1;
+          ground[k] = h;
+        }
+        prev_h[k] = h;
+        prev_s[k] = mid;
+      }
+    }
+  }
+
+  /// After track_ground(): the ground of sector k before bin b (m from the sensor); false if
+  /// its points showed none.
+  [[nodiscard]] bool ground(int b, int k, float* height_m) const noexcept {
+    const std::int16_t g = raw_[static_cast<std::size_t>(b) * kSightSectors + static_cast<std::size_t>(k & (kSightSectors - 1))];
+    *height_m = static_cast<float>(g) * 0.0009765625F;
+    return g != kSightEmpty;
+  }
+
+  /// Lowest quantised slope of sector k for rays reaching bin b or beyond (kSightEmpty: none).
+  [[nodiscard]] std::int16_t slope(int b, int k) const noexcept {
+    return swept_[static_cast<std::size_t>(b) * kSightSectors + static_cast<std::size_t>(k & (kSightSectors - 1))];
+  }
+
+  /// The lowest quantised slope of the points whose walked rays end in entry (b, k);
+  /// kSightEmpty if none.
+  [[nodiscard]] std::int16_t raw(int b, int k) const noexcept {
+    return raw_[static_cast<std::size_t>(b) * kSightSectors + static_cast<std::size_t>(k & (kSightSectors - 1))];
+  }
+
+  /// The sectors wholly inside the azimuth interval of the cell [x0, x1] x [y0, y1] (finest
+  /// cells from the sensor, the sensor outside it): [lo, hi) (hi may exceed kSightSectors: taken
+  /// modulo). False if none.
+  [[nodiscard]] static bool sectors_inside(float x0, float x1, float y0, float y1, float per_unit, int* lo,
+                                           int* hi) noexcept {
+    float a[4] = {diamond(x0, y0), diamond(x1, y0), diamond(x0, y1),
+                  diamond(x1, y1)};
+    float amin = a[0], amax = a[0];
+    for (float v : a) {
+      amin = v < amin ? v : amin;
+      amax = v > amax ? v : amax;
+    }
+    if (amax - amin > 2.0F) {
+      // The interval wraps through 0: shift the small angles by a full turn.
+      amin = 4.0F;
+      amax = 0.0F;
+      for (float& v : a) {
+        v = v < 2.0F ? v + 4.0F : v;
+        amin = v < amin ? v : amin;
+        amax = v > amax ? v : amax;
+      }
+    }
+    // A margin of 1/64 sector each side against the rounding of the corners' and points' angles.
+    const float first = std::ceil(amin * per_unit + 0.015625F);
+    const float last = std::floor(amax * per_unit - 0.015625F);
+    if (!(last - first >= 1.0F)) {
+      return false;
+    }
+    *lo = static_cast<int>(first);
+    *hi = static_cast<int>(last);
+    return true;
+  }
+
+  /// The bound of the cell [x0, x1] x [y0, y1] (finest cells from the sensor): false if the
+  /// sensor lies in it, no sector lies wholly inside its azimuth interval, no bin reaches beyond
+  /// it or no ray of those sectors does. The terrain the rays of sector s crossed in the cell
+  /// lies below z0 + q(s) kSightSlopeUnit w_0 (q < 0 ? s_near : s_far) (m).
+  [[nodiscard]] bool read_cell(float x0, float x1, float y0, float y1, SightCell* out) const noexcept {
+    if (x0 <= 0.0F && x1 >= 0.0F && y0 <= 0.0F && y1 >= 0.0F) {
+      return false;
+    }
+    const float nx = x0 > 0.0F ? x0 : (x1 < 0.0F ? -x1 : 0.0F);
+    const float ny = y0 > 0.0F ? y0 : (y1 < 0.0F ? -y1 : 0.0F);
+    const float fx = x0 * x0 > x1 * x1 ? x0 * x0 : x1 * x1;
+    const float fy = y0 * y0 > y1 * y1 ? y0 * y0 : y1 * y1;
+    SightCell c{};
+    c.s_far = std::sqrt(fx + fy);
+    c.bin = first_bin_beyond(c.s_far);
+    if (c.bin >= kSightBins ||
+        !sectors_inside(x0, x1, y0, y1, static_cast<float>(kSightSectors) * 0.25F, &c.lo, &c.hi)) {
+      return false;
+    }
+    c.qmin = kSightEmpty;
+    c.qmax = -32768;
+    c.all = true;
+    for (int s = c.lo; s < c.hi; ++s) {
+      const std::int32_t q = slope(c.bin, s);
+      if (q == kSightEmpty) {
+        c.all = false;
+        continue;
+      }
+      c.qmin = q < c.qmin ? q : c.qmin;
+      c.qmax = q > c.qmax ? q : c.qmax;
+      ++c.covered;
+    }
+    if (c.covered == 0) {
+      return false;
+    }
+    c.s_near = std::sqrt(nx * nx + ny * ny);
+    *out = c;
+    return true;
+  }
+
+  /// Diamond angle in [0, 4) of a horizontal direction (0 for the zero vector).
+  [[nodiscard]] static float diamond(float dx, float dy) noexcept {
+    const float ax = dx < 0.0F ? -dx : dx;
+    const float ay = dy < 0.0F ? -dy : dy;
+    const float l1 = ax + ay;
+    const float p = dy / (l1 > 0.0F ? l1 : 1.0F);
+    return dx >= 0.0F ? (dy >= 0.0F ? p : 4.0F + p) : 2.0F - p;
+  }
+
+  /// The bin of a walked length of `cells` finest cells (the last bin beyond the table).
+  [[nodiscard]] int bin_of(float cells) const noexcept {
+    const float b = std::sqrt(cells > 0.0F ? cells : 0.0F) * k_.bin_scale;
+    return b < static_cast<float>(kSightBins - 1) ? static_cast<int>(b) : kSightBins - 1;
+  }
+
+  /// First bin whose rays reach `cells` finest cells (kSightBins if none can be trusted to).
+  [[nodiscard]] int first_bin_beyond(float cells) const noexcept {
+    // edge(b) >= cells  <=>  b >= sqrt(cells) * scale; one bin more against rounding.
+    const float b = std::ceil(std::sqrt(cells > 0.0F ? cells : 0.0F) * k_.bin_scale) + 1.0F;
+    return b < static_cast<float>(kSightBins) ? static_cast<int>(b) : kSightBins;
+  }
+
+ private:
+  SightFrameConstants k_{};
+  std::uint32_t points_ = 0U;
+  std::uint32_t key_[kFrontChunkPoints]{};
+  std::int32_t dz_[kFrontChunkPoints]{};
+  std::int16_t raw_[kSightEntries + 1U]{};  ///< [bin][sector], + the refused points' dummy
+  std::int16_t swept_[kSightEntries]{};
+};
+
+}  // namespace ccmap::detail
