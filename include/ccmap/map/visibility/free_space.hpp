@@ -163,19 +163,19 @@ class FreeSpace<Config, true> {
     rays_ = static_cast<std::uint32_t>(params.free_space_rays);
     every_ = kSight && params.free_space_rays >= kFreeSpaceEveryRay;
     // Square-root bins up to the farthest window corner (finest cells from the sensor, which
-    // lies inside the windows: twice the half diagonal is safe).
+    // lies near the windows' centre: the half diagonal, 0.71 of the side, and a margin).
     float reach = 1.0F;
     for (int layer = 0; layer < kLayerCount; ++layer) {
       const float extent = static_cast<float>(Layers::side(layer)) * static_cast<float>(std::int32_t{1} << layer);
-      reach = extent * 1.5F > reach ? extent * 1.5F : reach;
+      reach = extent * 0.75F > reach ? extent * 0.75F : reach;
     }
     bin_scale_ = static_cast<float>(kSightBins) / std::sqrt(reach);
     const sensor::NoiseModel& noise = params.noise;
-    // kRangeSigmas sigma(r) as c0 + c1 r + c2 r^2 from the model's values at 0, 1 and 2 m.
+    // kSightRangeSigmas sigma(r) as c0 + c1 r + c2 r^2 from the model's values at 0, 1 and 2 m.
     const float s0 = noise.sigma_at_range_sq(0.0F), s1 = noise.sigma_at_range_sq(1.0F), s2 = noise.sigma_at_range_sq(4.0F);
-    sigma_c_[0] = kRangeSigmas * s0;
-    sigma_c_[2] = kRangeSigmas * 0.5F * (s2 - 2.0F * s1 + s0);
-    sigma_c_[1] = kRangeSigmas * (s1 - s0) - sigma_c_[2];
+    sigma_c_[0] = kSightRangeSigmas * s0;
+    sigma_c_[2] = kSightRangeSigmas * 0.5F * (s2 - 2.0F * s1 + s0);
+    sigma_c_[1] = kSightRangeSigmas * (s1 - s0) - sigma_c_[2];
     clear_frames_ = static_cast<std::uint32_t>(params.free_space_clear_frames);
     view_axis_[0] = params.sensor_view_axis[0];
     view_axis_[1] = params.sensor_view_axis[1];
@@ -373,6 +373,7 @@ class FreeSpace<Config, true> {
     }
     if constexpr (kSight) {
       if (every_) {
+        frame.free_rays_refused += sight_.refused();
         if (!held) {
           frame.free_rays_refused += sight_.points();
           return;
@@ -442,13 +443,24 @@ class FreeSpace<Config, true> {
           }
           const int lo = sc.lo, hi = sc.hi, bin = sc.bin;
           const std::int32_t qmin = sc.qmin, qmax = sc.qmax;
-          bool all = sc.all;
+          bool all = true;  // every sector holding a ray agrees (sectors without one say nothing)
           const int covered = sc.covered;
           const float s_near = sc.s_near, s_far = sc.s_far;
           FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
           if (cell.weight > 0.0F) {
-            const float top_ray = k.z0 + static_cast<float>(qmax) * unit_m * (qmax < 0 ? s_near : s_far);
-            if (all && covered >= 2 && top_above(cell, layer, top_ray)) {
+            // The sectors whose lowest ray passes clearly below the cell's top: two at least, and
+            // more than half of those holding a ray (a rock over part of the cell stops the rays
+            // of the sectors it covers, which then pass over it or end on it).
+            int below = 0;
+            for (int s = lo; s < hi; ++s) {
+              const std::int32_t q = sight_.slope(bin, s);
+              if (q != kSightEmpty &&
+                  top_above(cell, layer, k.z0 + static_cast<float>(q) * unit_m * (q < 0 ? s_near : s_far))) {
+                ++below;
+              }
+            }
+            (void)qmax;
+            if (below >= 2 && 2 * below > covered) {
               (void)touch(rec, stamp_);
               if (frame_contradictions(rec) == 0U) {
                 remember(layer, index);
@@ -465,6 +477,9 @@ class FreeSpace<Config, true> {
           int proving = 0;
           for (int s = lo; s < hi && all; ++s) {
             const std::int32_t q = sight_.slope(bin, s);
+            if (q == kSightEmpty) {
+              continue;
+            }
             float ground = 0.0F;
             if (!sight_.ground(near_bin, s, &ground)) {
               all = false;
@@ -786,7 +801,7 @@ class FreeSpace<Config, true> {
   float cell_width_ = 0.0F;  ///< w_0 (m)
   bool every_ = false;       ///< every line of sight (free_space_rays = kFreeSpaceEveryRay)
   float bin_scale_ = 0.0F;   ///< the viewshed table's square-root bins per sqrt(cell)
-  float sigma_c_[3]{};       ///< kRangeSigmas sigma(r) = c0 + c1 r + c2 r^2 (m)
+  float sigma_c_[3]{};       ///< kSightRangeSigmas sigma(r) = c0 + c1 r + c2 r^2 (m)
   CellIndex sight_anchor_{0, 0};
   static constexpr bool kSight = kConfigEveryLineOfSight<Config>;
   std::conditional_t<kSight, SightTable, NoSightTable> sight_{};
