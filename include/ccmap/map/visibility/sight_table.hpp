@@ -1,33 +1,33 @@
 // Every line of sight of a frame at once (docs/design.md, "Free space from lines of sight",
 // "Every line of sight"): the viewshed table. The rays of one frame share their origin, so
-// instead of walking each, every routed point writes one entry: the lowest height (relative to
-// the sensor) of the points that end in its (azimuth sector, range bin). One sweep per sector
+// instead of walking each, every routed point writes one entry: the lowest line-of-sight slope of
+// the points whose rays end in its (azimuth sector, range bin). One sweep per sector
 // then gives, for every bin, the lowest ray that reaches beyond it, and a map cell reads its
 // bound from the sectors that lie wholly inside its azimuth interval. Used by the free-space
 // stage (free_space.hpp) when StackParams::free_space_rays is kFreeSpaceEveryRay; the update path
 // feeds it chunk by chunk while the front's output is in L1 (map/update/update_path.hpp).
 //
-// Geometry (horizontal positions in finest cells from the sensor, heights in m from the sensor):
+// Geometry (horizontal positions in finest cells from the sensor, heights in m):
 //  - azimuth: the diamond angle a in [0, 4) of (dx, dy) (monotonic in the true angle, one
-//    division, no trigonometry); sector = floor(a * kSightSectors / 4). A sector is at most
-//    8 pi / kSightSectors rad wide (0.025 rad for 1024... halved by the diamond angle's slope
-//    bound: at most 2 * 2 pi / kSightSectors).
-//  - range: the ray's walked length, its horizontal length shortened as the sampled walk does
-//    (by kRangeSigmas range errors: d (1 - 3 sigma(r) / r)), binned on a square-root scale:
-//    bin = floor(sqrt(d_walked) * bin_scale), clamped to the last bin.
+//    division, no trigonometry); sector = floor(a * kSightSectors / 4), at most 8 / kSightSectors
+//    rad wide (0.0078 rad: a CADRE window's narrowest cell, 0.022 rad at its corner, holds one);
+//  - range: the ray's walked length, its horizontal length shortened by kSightRangeSigmas range
+//    errors (d (1 - k sigma(r) / r)), on a square-root scale: bin = floor(sqrt(d_walked) *
+//    bin_scale), clamped to the last bin;
 //  - slope: t = (z - z0) / d of the point (d its horizontal distance, m), quantised UP to
 //    kSightSlopeUnit (an upper bound stays one); the line of sight is z0 + t s at distance s.
-// What a table entry (bin b, sector k) holds: the lowest slope of the rays of sector k whose
-// walked part reaches at least edge(b) = (b / bin_scale)^2 cells and less than edge(b + 1); the
-// sweep turns it into the lowest slope of those reaching edge(b) or beyond.
+// An entry (bin b, sector k) holds the lowest slope of the rays of sector k whose walked part
+// reaches at least edge(b) = (b / bin_scale)^2 cells and less than edge(b + 1); the sweep turns it
+// into the lowest slope of those reaching edge(b) or beyond.
 // Soundness (tests/map/sight_table_test.cpp holds it to the exact integer walk on random
 // frames): a cell's bound comes only from sectors inside its azimuth interval (every such ray
 // crosses the cell) whose rays reach beyond the cell's farthest corner, evaluated at the cell's
-// nearest (descending ray) or farthest (rising ray) corner: never below the height at which a
-// ray that the walk also sees crosses the cell.
+// nearest (descending ray) or farthest (rising ray) corner: never below the height at which such
+// a ray crosses the cell.
 //
-// Cost: one vectorisable pass over the front's chunk (key and height), one scattered minimum per
-// point, a vector sweep over the table (bins x sectors / 8 lanes), then the cells. No heap.
+// Cost (docs/performance.md 13): a key pass over the front's chunk (NEON on aarch64), one
+// scattered minimum per point, a sweep over the table, then the cells: 43 aarch64 instructions
+// per point of a CADRE frame, over the flight cycle's budget. No heap.
 #pragma once
 
 #include <cmath>
@@ -46,28 +46,18 @@
 
 namespace ccmap {
 
+/// The mark a Config carries when its stack holds the table.
+struct EveryLineOfSightTag {};
+
 /// A Config that carries the viewshed table (256 KB per stack, not in the presets: the C API's
 /// storage sizes and the presets' memory stay as they are): WithEveryLineOfSight<CadreConfig>.
 /// Its stack casts every line of sight when StackParams::free_space_rays is
 /// detail::kFreeSpaceEveryRay (65535), and samples rays at any other value, as the presets do.
 template <typename Base>
-struct WithEveryLineOfSight : Base {
-  static constexpr bool kEveryLineOfSight = true;
-};
-
-namespace detail {
-template <typename Config, typename = void>
-struct ConfigEveryLineOfSight {
-  static constexpr bool value = false;
-};
-template <typename Config>
-struct ConfigEveryLineOfSight<Config, std::void_t<decltype(Config::kEveryLineOfSight)>> {
-  static constexpr bool value = Config::kEveryLineOfSight;
-};
-}  // namespace detail
+struct WithEveryLineOfSight : Base, EveryLineOfSightTag {};
 
 template <typename Config>
-inline constexpr bool kConfigEveryLineOfSight = detail::ConfigEveryLineOfSight<Config>::value;
+inline constexpr bool kConfigEveryLineOfSight = std::is_base_of_v<EveryLineOfSightTag, Config>;
 
 }  // namespace ccmap
 
@@ -87,6 +77,7 @@ inline constexpr int kSightSectorBits = 10;
 inline constexpr int kSightSectors = 1 << kSightSectorBits;  ///< diamond-angle sectors
 inline constexpr int kSightBins = 64;                         ///< square-root range bins
 inline constexpr std::size_t kSightEntries = std::size_t{kSightSectors} * kSightBins;
+static_assert(kSightEntries == 65536U, "a key is 16 bits: every key names an entry");
 /// An entry no ray wrote: no bound.
 inline constexpr std::int16_t kSightEmpty = 32767;
 /// Slope unit of an entry: 2^-12 (2.4 mm of height at 10 m), entries span slopes of +-8.
@@ -125,7 +116,7 @@ class SightTable {
   /// Empties the table for a new frame.
   void begin(const SightFrameConstants& k) noexcept {
     k_ = k;
-    for (std::size_t i = 0; i < kSightEntries + 1U; ++i) {
+    for (std::size_t i = 0; i < kSightEntries; ++i) {
       raw_[i] = kSightEmpty;
     }
     points_ = 0U;
@@ -154,7 +145,9 @@ class SightTable {
     const float w0 = k_.cell_width_m;
     const std::int32_t layers = k_.layers;
     const float sectors_per_unit = static_cast<float>(kSightSectors) * 0.25F;
-    constexpr std::uint32_t kDummy = static_cast<std::uint32_t>(kSightEntries);
+    // A point that casts no ray writes kSightEmpty to entry 0: a minimum that changes nothing.
+    constexpr std::uint32_t kRefused = static_cast<std::uint16_t>(kSightEmpty);
+    std::uint32_t written = 0U;
     // Pass 1: key and quantised slope of each point. On aarch64 four points at a time in NEON
     // (GCC does not vectorise the plain loop there: -fmath-errno puts a branch after each sqrt);
     // the same IEEE operations in the same order as the scalar loop, which finishes the chunk.
@@ -173,8 +166,9 @@ class SightTable {
       const float32x4_t lo_q = vdupq_n_f32(-32767.0F);
       const float32x4_t hi_q = vdupq_n_f32(32767.0F);
       const uint32x4_t sector_mask = vdupq_n_u32(kSightSectors - 1U);
-      const uint32x4_t dummy = vdupq_n_u32(kDummy);
-      const int32x4_t empty = vdupq_n_s32(kSightEmpty);
+      const uint32x4_t refused = vdupq_n_u32(kRefused);
+      const uint32x4_t low16 = vdupq_n_u32(0xFFFFU);
+      uint32x4_t cast = vdupq_n_u32(0U);
       const uint32x4_t vlayers = vdupq_n_u32(static_cast<std::uint32_t>(layers));
       for (std::size_t i = 0; i + 4U <= count; i += 4U) {
         first = i + 4U;
@@ -202,14 +196,17 @@ class SightTable {
         const uint32x4_t bin = vreinterpretq_u32_s32(vcvtq_s32_f32(b));
         const uint32x4_t code = vreinterpretq_u32_s32(vld1q_s32(chunk.code + i));
         const uint32x4_t ok = vandq_u32(vandq_u32(vcltq_u32(code, vlayers), l1_pos), vcgtq_f32(f, zero));
-        vst1q_u32(key_ + i, vbslq_u32(ok, vorrq_u32(vshlq_n_u32(bin, kSightSectorBits), sector), dummy));
         const uint32x4_t d_pos = vcgtq_f32(d, zero);
         const float32x4_t t = vdivq_f32(vsubq_f32(vld1q_f32(chunk.z + i), vdupq_n_f32(z0)),
                                         vbslq_f32(d_pos, vmulq_n_f32(d, w0), one));
         float32x4_t q = vrndpq_f32(vmulq_n_f32(t, kSightSlopeUnitsInv));
         q = vbslq_f32(vcltq_f32(q, lo_q), lo_q, vbslq_f32(vcgtq_f32(q, hi_q), hi_q, q));
-        vst1q_s32(dz_ + i, vbslq_s32(ok, vcvtq_s32_f32(q), empty));
+        const uint32x4_t key = vorrq_u32(vshlq_n_u32(bin, kSightSectorBits), sector);
+        const uint32x4_t slope = vandq_u32(vreinterpretq_u32_s32(vcvtq_s32_f32(q)), low16);
+        vst1q_u32(packed_ + i, vbslq_u32(ok, vorrq_u32(vshlq_n_u32(key, 16), slope), refused));
+        cast = vsubq_u32(cast, ok);  // ok lanes are all ones: minus -1
       }
+      written += vaddvq_u32(cast);
     }
 #endif
     for (std::size_t i = first; i < count; ++i) {
@@ -235,38 +232,40 @@ class SightTable {
       float q = std::ceil(t * kSightSlopeUnitsInv);
       q = q < -32767.0F ? -32767.0F : (q > 32767.0F ? 32767.0F : q);
       if (!ok) {
-        key_[i] = kDummy;
-        dz_[i] = kSightEmpty;
+        packed_[i] = kRefused;
         continue;
       }
       const std::uint32_t sector =
           static_cast<std::uint32_t>(static_cast<std::int32_t>(a * sectors_per_unit)) & (kSightSectors - 1U);
-      key_[i] = (static_cast<std::uint32_t>(static_cast<std::int32_t>(b)) << kSightSectorBits) | sector;
-      dz_[i] = static_cast<std::int32_t>(q);
+      const std::uint32_t key = (static_cast<std::uint32_t>(static_cast<std::int32_t>(b)) << kSightSectorBits) | sector;
+      packed_[i] = (key << 16) | (static_cast<std::uint32_t>(static_cast<std::int32_t>(q)) & 0xFFFFU);
+      ++written;
     }
     // Refusals the vector pass does not see (scalar, only when given).
     if (sensor != nullptr && k_.view_axis_set) {
       for (std::size_t i = 0; i < count; ++i) {
         const PointXYZ& s = sensor[i];
-        if (!(s.x * k_.view_axis[0] + s.y * k_.view_axis[1] + s.z * k_.view_axis[2] > 0.0F)) {
-          key_[i] = kDummy;
+        if (!(s.x * k_.view_axis[0] + s.y * k_.view_axis[1] + s.z * k_.view_axis[2] > 0.0F) &&
+            packed_[i] != kRefused) {
+          packed_[i] = kRefused;
+          --written;
         }
       }
     }
     if (weights != nullptr) {
       for (std::size_t i = 0; i < count; ++i) {
-        if (ccm_check_weight(weights[i]) != Status::kOk) {
-          key_[i] = kDummy;
+        if (ccm_check_weight(weights[i]) != Status::kOk && packed_[i] != kRefused) {
+          packed_[i] = kRefused;
+          --written;
         }
       }
     }
-    // Pass 2: the scattered minimum (the dummy entry kSightEntries absorbs refused points).
-    std::uint32_t written = 0U;
+    // Pass 2: the scattered minimum. The key is the upper 16 bits: always inside the table.
     for (std::size_t i = 0; i < count; ++i) {
-      const std::uint32_t key = key_[i] <= kDummy ? key_[i] : kDummy;  // integrity: in the table
-      const auto q = static_cast<std::int16_t>(dz_[i]);
-      raw_[key] = q < raw_[key] ? q : raw_[key];
-      written += key != kDummy ? 1U : 0U;
+      const std::uint32_t w = packed_[i];
+      std::int16_t& entry = raw_[w >> 16];
+      const auto q = static_cast<std::int16_t>(static_cast<std::uint16_t>(w & 0xFFFFU));
+      entry = q < entry ? q : entry;
     }
     points_ += written;
     refused_ += static_cast<std::uint32_t>(count) - written;
@@ -294,7 +293,7 @@ class SightTable {
   }
 
   /// After sweep(): the ground each sector's points showed before bin b, turning raw_ into it
-  /// (height above the sensor in kSightSlopeUnit m units... see ground()): near to far, the
+  /// (height from the sensor in 2^-10 m; read it with ground()): near to far, the
   /// lowest point of each bin that holds points is the ground there, unless it rose faster than
   /// max_slope (per finest cell of distance) plus noise_m from the ground before (a rock, a
   /// rover: the ground stays the level before it until a bin comes back within noise_m of it).
@@ -464,9 +463,9 @@ class SightTable {
   SightFrameConstants k_{};
   std::uint32_t points_ = 0U;
   std::uint32_t refused_ = 0U;
-  std::uint32_t key_[kFrontChunkPoints]{};
-  std::int32_t dz_[kFrontChunkPoints]{};
-  std::int16_t raw_[kSightEntries + 1U]{};  ///< [bin][sector], + the refused points' dummy
+  /// Per point of a chunk: key (bin << kSightSectorBits | sector) << 16 | quantised slope.
+  std::uint32_t packed_[kFrontChunkPoints]{};
+  std::int16_t raw_[kSightEntries]{};  ///< [bin][sector]
   std::int16_t swept_[kSightEntries]{};
 };
 
