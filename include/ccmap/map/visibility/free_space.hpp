@@ -449,8 +449,8 @@ class FreeSpace<Config, true> {
           FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
           if (cell.weight > 0.0F) {
             // The sectors whose lowest ray passes clearly below the cell's top: two at least, and
-            // more than half of those holding a ray (a rock over part of the cell stops the rays
-            // of the sectors it covers, which then pass over it or end on it).
+            // every sector holding a ray (a rock over part of the cell stops the rays of the
+            // sectors it covers, which then pass over it or end on it).
             int below = 0;
             for (int s = lo; s < hi; ++s) {
               const std::int32_t q = sight_.slope(bin, s);
@@ -460,7 +460,7 @@ class FreeSpace<Config, true> {
               }
             }
             (void)qmax;
-            if (below >= 2 && 2 * below > covered) {
+            if (below >= 2 && below == covered) {
               (void)touch(rec, stamp_);
               if (frame_contradictions(rec) == 0U) {
                 remember(layer, index);
