@@ -12,7 +12,8 @@
 //
 //   icount_free_space_example [frames width_px height_px [rays]]   default: 2 80 50, the CADRE
 //   default's lines of sight (3 850 650: the figures of docs/performance.md; `rays` measures the
-//   stage at another free_space_rays, 1..65535)
+//   stage at another free_space_rays, 1..65535; 65535: every line of sight, the viewshed table,
+//   on the stack that carries it, WithEveryLineOfSight<CadreConfig>)
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -24,19 +25,8 @@
 
 namespace {
 
-using Map = ccmap::Stack<ccmap::CadreConfig>;
-
-}  // namespace
-
-int main(int argc, char** argv) {
-  int frames = 2, width_px = 80, height_px = 50, rays_per_frame = 0;
-  if (argc != 1 && ((argc != 4 && argc != 5) || !ccmap::test::parse_count(argv[1], 1000, &frames) ||
-                    !ccmap::test::parse_count(argv[2], 4000, &width_px) ||
-                    !ccmap::test::parse_count(argv[3], 4000, &height_px) ||
-                    (argc == 5 && !ccmap::test::parse_count(argv[4], 65535, &rays_per_frame)))) {
-    std::fprintf(stderr, "usage: icount_free_space_example [frames width_px height_px [rays]]\n");
-    return 2;
-  }
+template <typename Map>
+int run(int frames, int width_px, int height_px, int rays_per_frame) {
   // On the heap, as the timing test and icount_stack_example (the counts are of the same code).
   auto sensor_on = std::make_unique<Map>();
   auto sensor_off = std::make_unique<Map>();
@@ -102,4 +92,22 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(refused[1]), static_cast<unsigned long long>(cleared),
               static_cast<unsigned long long>(drops));
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int frames = 2, width_px = 80, height_px = 50, rays_per_frame = 0;
+  if (argc != 1 && ((argc != 4 && argc != 5) || !ccmap::test::parse_count(argv[1], 1000, &frames) ||
+                    !ccmap::test::parse_count(argv[2], 4000, &width_px) ||
+                    !ccmap::test::parse_count(argv[3], 4000, &height_px) ||
+                    (argc == 5 && !ccmap::test::parse_count(argv[4], 65535, &rays_per_frame)))) {
+    std::fprintf(stderr, "usage: icount_free_space_example [frames width_px height_px [rays]]\n");
+    return 2;
+  }
+  if (rays_per_frame == 65535) {
+    return run<ccmap::Stack<ccmap::WithEveryLineOfSight<ccmap::CadreConfig>>>(frames, width_px, height_px,
+                                                                              rays_per_frame);
+  }
+  return run<ccmap::Stack<ccmap::CadreConfig>>(frames, width_px, height_px, rays_per_frame);
 }

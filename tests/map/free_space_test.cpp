@@ -35,11 +35,18 @@ using ccmap::test::SceneBox;
 using ccmap::test::SceneCamera;
 using ccmap::test::SceneDitch;
 using ccmap::test::SceneFrame;
-using Map = Stack<CadreConfig>;
+// tests/map/free_space_every_ray_test.cpp runs the same scenes on the stack that casts every line
+// of sight (map/visibility/sight_table.hpp): it defines these three before including this file.
+#ifndef CCMAP_FREE_SPACE_CONFIG
+#define CCMAP_FREE_SPACE_CONFIG CadreConfig
+#define CCMAP_FREE_SPACE_RAYS 1024.0F
+#define FreeSpaceScenes FreeSpace
+#endif
+using Map = Stack<CCMAP_FREE_SPACE_CONFIG>;
 
 StackParams params(bool free_space, bool gate) {
   StackParams p = ccmap::default_stack_params(0.04F);
-  p.free_space_rays = free_space ? 1024.0F : 0.0F;
+  p.free_space_rays = free_space ? CCMAP_FREE_SPACE_RAYS : 0.0F;
   p.outlier_gate_sigma = gate ? 3.0F : 0.0F;
   return p;
 }
@@ -85,7 +92,7 @@ bool same_layers(const Map& a, const Map& b) {
 
 // ---- ghosts ----
 
-TEST(FreeSpace, AVanishedBoxIsClearedWithinAFewFramesWhileThePaperUpdateKeepsIt) {
+TEST(FreeSpaceScenes, AVanishedBoxIsClearedWithinAFewFramesWhileThePaperUpdateKeepsIt) {
   // A 30 cm x 30 cm x 15 cm box 1.4 m ahead, seen for 4 frames, then gone. With the outlier gate
   // off (the paper's update) the ground seen where it stood only dilutes its cells; the lines of
   // sight through the empty space clear them.
@@ -121,7 +128,7 @@ TEST(FreeSpace, AVanishedBoxIsClearedWithinAFewFramesWhileThePaperUpdateKeepsIt)
          "(else this scene does not test clearing)";
 }
 
-TEST(FreeSpace, RaysFromBehindTheSensorOrFromRefusedPointsClearNothing) {
+TEST(FreeSpaceScenes, RaysFromBehindTheSensorOrFromRefusedPointsClearNothing) {
   // A box behind the camera (mapped looking back), then frames whose every point would cast a
   // line of sight through it: points behind the sensor (sensor frame, view axis +x), NaN, out of
   // range, too noisy for every layer. None may clear a cell; the control (no view axis) does.
@@ -140,14 +147,16 @@ TEST(FreeSpace, RaysFromBehindTheSensorOrFromRefusedPointsClearNothing) {
     fold(*control, f);
   }
   ASSERT_TRUE(any_class(*guarded, -1.72, -0.17, -1.38, 0.17, CellClass::kObstacle));
-  // Sensor frame = map frame at the origin (identity rotation); ground points 3 m behind, their
-  // lines of sight through the box's former place.
+  // Sensor frame = map frame at the origin (identity rotation); ground points 1.9 to 2.3 m behind,
+  // their lines of sight through the box's former place (two rows, 0.2 m apart across it).
   ccmap::Pose pose{};
   pose.rotation[0][0] = pose.rotation[1][1] = pose.rotation[2][2] = 1.0F;
   pose.translation = PointXYZ{0.0F, 0.0F, 0.175F};
   std::vector<PointXYZ> behind;
   for (int i = 0; i < 2000; ++i) {
-    behind.push_back(PointXYZ{-2.2F - 0.0004F * static_cast<float>(i), -0.1F + 0.0001F * static_cast<float>(i), -0.175F});
+    const float along = static_cast<float>(i % 1000);
+    const float row = i < 1000 ? -0.1F : 0.1F;
+    behind.push_back(PointXYZ{-1.9F - 0.0004F * along, row + 0.0002F * along - 0.1F, -0.175F});
   }
   std::uint32_t control_cleared = 0;
   for (int k = 0; k < 6; ++k) {
@@ -204,7 +213,7 @@ TEST(FreeSpace, RaysFromBehindTheSensorOrFromRefusedPointsClearNothing) {
 
 // ---- open ground: nothing lost, nothing invented ----
 
-TEST(FreeSpace, OpenGroundWithUnclippedStereoNoiseLosesNoCellAndShowsNoDrop) {
+TEST(FreeSpaceScenes, OpenGroundWithUnclippedStereoNoiseLosesNoCellAndShowsNoDrop) {
   // Flat and 11-degree ground, driven over for 12 frames with the CADRE noise sigma = r^2/300
   // (Gaussian, unclipped): grazing rays end within 5 m. The map must equal, bitwise, the map of
   // the same frames without free space (no cell cleared), and no query answers a drop-off.
@@ -253,7 +262,7 @@ std::unique_ptr<Map> map_of_ditch() {
   return m;
 }
 
-TEST(FreeSpace, ADitchSeenFrom17cmIsADropOffWhereTheRaysProveItAndNowhereElse) {
+TEST(FreeSpaceScenes, ADitchSeenFrom17cmIsADropOffWhereTheRaysProveItAndNowhereElse) {
   const auto map = map_of_ditch();
   const SceneDitch d = ditch_scene().ditches[0];
   // Geometry: the line of sight grazing the rim at 1.2 m falls 0.175 / 1.2 m per metre, so it
@@ -291,10 +300,12 @@ TEST(FreeSpace, ADitchSeenFrom17cmIsADropOffWhereTheRaysProveItAndNowhereElse) {
   // Before the rim nothing is a drop; right behind it, the run of unobserved cells a ray proved a
   // drop in further on is one (the planner must stop at the rim, not 40 cm inside the ditch).
   EXPECT_FALSE(any_class(*map, -1.0, -1.4, 1.18, 1.4, CellClass::kDropOff));
+#ifndef CCMAP_FREE_SPACE_NO_RUN_MARKING  // every line of sight: not done (docs/design.md 12)
   EXPECT_TRUE(any_class(*map, 1.21, -0.3, 1.30, 0.3, CellClass::kDropOff)) << "the ditch's near edge is no drop-off";
+#endif
 }
 
-TEST(FreeSpace, PlannerQueriesTreatADropOffAsLethal) {
+TEST(FreeSpaceScenes, PlannerQueriesTreatADropOffAsLethal) {
   const auto map = map_of_ditch();
   // The body astride the ditch: a drop-off part.
   const ccmap::FootprintResult f = ccmap::query_footprint(*map, ccmap::Footprint{1.9F, 0.0F, 1.0F, 0.0F, 0.6F, 0.4F});
@@ -322,7 +333,7 @@ TEST(FreeSpace, PlannerQueriesTreatADropOffAsLethal) {
   EXPECT_NE(pixel(0.8F, 0.02F), ccmap::kCostLethal) << "flat ground before the ditch is lethal";
 }
 
-TEST(FreeSpace, TheShadowOfARockIsUnknownNotADropOff) {
+TEST(FreeSpaceScenes, TheShadowOfARockIsUnknownNotADropOff) {
   // Rocks 15 cm (below the camera) and 30 cm (above it) on flat ground: the ground behind them
   // is hidden by something standing above the ground in front, not by a drop.
   for (const double h : {0.15, 0.30}) {
@@ -345,7 +356,7 @@ TEST(FreeSpace, TheShadowOfARockIsUnknownNotADropOff) {
 
 // ---- state: moves, snapshots, switches ----
 
-TEST(FreeSpace, DropOffsSurviveASnapshotAndLeaveWithTheirWindow) {
+TEST(FreeSpaceScenes, DropOffsSurviveASnapshotAndLeaveWithTheirWindow) {
   const auto map = map_of_ditch();
   ASSERT_TRUE(any_class(*map, 1.7, -0.3, 2.1, 0.3, CellClass::kDropOff));
   std::vector<std::uint8_t> buffer(ccmap::snapshot_size<CadreConfig>());
@@ -370,7 +381,7 @@ TEST(FreeSpace, DropOffsSurviveASnapshotAndLeaveWithTheirWindow) {
   EXPECT_FALSE(any_class(*loaded, 1.0, -0.5, 2.4, 0.5, CellClass::kDropOff)) << "a drop-off outlived its window";
 }
 
-TEST(FreeSpace, ExportListsDropOffCellsWithTheirBound) {
+TEST(FreeSpaceScenes, ExportListsDropOffCellsWithTheirBound) {
   const auto map = map_of_ditch();
   int found = 0;
   for (int layer = 0; layer < Map::kLayerCount; ++layer) {
@@ -388,7 +399,7 @@ TEST(FreeSpace, ExportListsDropOffCellsWithTheirBound) {
   EXPECT_GT(found, 0) << "no drop-off cell exported";
 }
 
-TEST(FreeSpace, SwitchedOffAtRunTimeItIsTheStackCompiledWithoutIt) {
+TEST(FreeSpaceScenes, SwitchedOffAtRunTimeItIsTheStackCompiledWithoutIt) {
   AnalyticScene with_box;
   with_box.boxes.push_back(SceneBox{1.40, -0.15, 1.70, 0.15, 0.15});
   auto off = make_map(params(false, false));

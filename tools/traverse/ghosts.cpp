@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
+#include "ccmap/map/visibility/sight_table.hpp"
 #include "ccmap/planner/path_query.hpp"
 #include "experiments/canvas.hpp"
 #include "layer_images.hpp"
@@ -14,6 +15,10 @@
 #include "traverse/scene.hpp"
 
 namespace ccmap::traverse {
+
+/// The ghost experiment's maps carry the viewshed table, so that `--rays 65535` casts every line
+/// of sight (docs/design.md 12); at any other count they are the CADRE stack (the table unused).
+using GhostMap = Stack<WithEveryLineOfSight<CadreConfig>>;
 
 namespace {
 
@@ -82,8 +87,8 @@ StackParams map_params(const GhostConfig& config, bool free_space) {
   return p;
 }
 
-std::unique_ptr<Map> make_map(const StackParams& p, std::string* error) {
-  auto m = std::make_unique<Map>();
+std::unique_ptr<GhostMap> make_map(const StackParams& p, std::string* error) {
+  auto m = std::make_unique<GhostMap>();
   if (m->init(p) != Status::kOk) {
     *error = "the map refused its parameters";
     return nullptr;
@@ -112,26 +117,26 @@ CameraFrame capture(const sim::StereoCamera& camera, const sim::HeightRaster& ra
 }
 
 /// Every cell's weight, layer by layer in window order (to find the cells a frame emptied).
-std::vector<float> cell_weights(const Map& m) {
+std::vector<float> cell_weights(const GhostMap& m) {
   std::vector<float> w;
-  m.fine_layer().for_each([&w](CellIndex, const Map::FineCell& c) { w.push_back(c.weight); });
-  for (int k = 0; k < Map::kCcmLayerCount; ++k) {
-    m.ccm_layer(k).for_each([&w](CellIndex, const Map::CcmCellType& c) { w.push_back(c.weight); });
+  m.fine_layer().for_each([&w](CellIndex, const GhostMap::FineCell& c) { w.push_back(c.weight); });
+  for (int k = 0; k < GhostMap::kCcmLayerCount; ++k) {
+    m.ccm_layer(k).for_each([&w](CellIndex, const GhostMap::CcmCellType& c) { w.push_back(c.weight); });
   }
   return w;
 }
 
 /// Calls fn(layer, centre_x, centre_y, width) for every cell with weight > 0 in `before` and 0 now.
 template <typename Fn>
-void for_each_emptied(const Map& m, const std::vector<float>& before, Fn&& fn) {
+void for_each_emptied(const GhostMap& m, const std::vector<float>& before, Fn&& fn) {
   std::size_t i = 0;
   const float w0 = m.layer_cell_width(0);
-  m.fine_layer().for_each([&](CellIndex idx, const Map::FineCell& c) {
+  m.fine_layer().for_each([&](CellIndex idx, const GhostMap::FineCell& c) {
     if (before[i++] > 0.0F && !(c.weight > 0.0F)) fn(0, (idx.x + 0.5) * w0, (idx.y + 0.5) * w0, double{w0});
   });
-  for (int k = 0; k < Map::kCcmLayerCount; ++k) {
+  for (int k = 0; k < GhostMap::kCcmLayerCount; ++k) {
     const double w = m.layer_cell_width(k + 1);
-    m.ccm_layer(k).for_each([&](CellIndex idx, const Map::CcmCellType& c) {
+    m.ccm_layer(k).for_each([&](CellIndex idx, const GhostMap::CcmCellType& c) {
       if (before[i++] > 0.0F && !(c.weight > 0.0F)) fn(k + 1, (idx.x + 0.5) * w, (idx.y + 0.5) * w, w);
     });
   }
@@ -194,7 +199,7 @@ struct GhostTrack {
   std::vector<int> life;  ///< per point: the longest a ghost lived there after vacancy (-1: never a ghost)
 };
 
-void draw_class_panel(tools::RgbImage& img, int left, int top, int scale, const TeamRaster& r, const Map& map,
+void draw_class_panel(tools::RgbImage& img, int left, int top, int scale, const TeamRaster& r, const GhostMap& map,
                       const std::vector<Body>& bodies, const std::vector<std::vector<Body>>& tracks,
                       const std::string& title) {
   for (int j = 0; j < r.ny; ++j) {
@@ -260,7 +265,7 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
   sim::StereoParams sp;
   sp.pixel_stride = cfg.pixel_stride;
   const sim::StereoCamera camera(sp);
-  std::unique_ptr<Map> before[3], after[3];
+  std::unique_ptr<GhostMap> before[3], after[3];
   for (int r = 0; r < 3; ++r) {
     before[r] = make_map(map_params(cfg, false), error);
     after[r] = make_map(map_params(cfg, true), error);
@@ -311,7 +316,7 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
         const BodyStamp stamp(raster, others);
         frame = capture(camera, raster, bodies[static_cast<std::size_t>(r)], cfg.seed * 1000003ULL + static_cast<std::uint64_t>(f * 3 + r));
       }
-      for (Map* m : {before[r].get(), after[r].get()}) {
+      for (GhostMap* m : {before[r].get(), after[r].get()}) {
         if (m->move_to(static_cast<float>(frame.x), static_cast<float>(frame.y)) != Status::kOk) {
           *error = "move refused";
           return out;
@@ -350,7 +355,7 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
     }
     for (int r = 0; r < 3; ++r) {
       for (int pass = 0; pass < 2; ++pass) {
-        const Map& m = pass == 0 ? *before[r] : *after[r];
+        const GhostMap& m = pass == 0 ? *before[r] : *after[r];
         GhostStats& st = pass == 0 ? out.before[r] : out.after[r];
         GhostTrack& tr = pass == 0 ? life_before[r] : life_after[r];
         double area = 0.0;
@@ -465,7 +470,7 @@ void run_drop_case(const GhostConfig& cfg, DropCase* dc, bool crater, double wid
   sim::StereoParams sp;
   sp.pixel_stride = cfg.pixel_stride;
   const sim::StereoCamera camera(sp);
-  std::unique_ptr<Map> maps[2] = {make_map(map_params(cfg, false), error), make_map(map_params(cfg, true), error)};
+  std::unique_ptr<GhostMap> maps[2] = {make_map(map_params(cfg, false), error), make_map(map_params(cfg, true), error)};
   if (!maps[0] || !maps[1]) return;
   const double far_edge = crater ? dc->rim_x + 2.0 : dc->rim_x + width_m;
   int picture_frame = -1;
@@ -475,7 +480,7 @@ void run_drop_case(const GhostConfig& cfg, DropCase* dc, bool crater, double wid
     if (range < 0.2) break;
     const CameraFrame frame = capture(camera, raster, Body{x, y, 0.0}, cfg.seed * 7919ULL + static_cast<std::uint64_t>(f));
     for (int k = 0; k < 2; ++k) {
-      Map& m = *maps[k];
+      GhostMap& m = *maps[k];
       if (m.move_to(static_cast<float>(x), static_cast<float>(y)) != Status::kOk ||
           m.update_frame_sensor(frame.points.data(), frame.points.size(), frame.pose, nullptr) != Status::kOk) {
         *error = "drop-off case: a frame was refused";
@@ -555,7 +560,7 @@ ShadowResult run_shadows(const GhostConfig& cfg, std::string* error) {
   sim::StereoParams sp;
   sp.pixel_stride = cfg.pixel_stride;
   const sim::StereoCamera camera(sp);
-  std::unique_ptr<Map> maps[2] = {make_map(map_params(cfg, false), error), make_map(map_params(cfg, true), error)};
+  std::unique_ptr<GhostMap> maps[2] = {make_map(map_params(cfg, false), error), make_map(map_params(cfg, true), error)};
   if (!maps[0] || !maps[1]) return out;
   const double y = 15.0;
   double last_x = 6.0;

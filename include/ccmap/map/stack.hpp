@@ -352,7 +352,7 @@ class Stack {
     if (status != Status::kOk) {
       return status;
     }
-    update_.run_map(layers_, params_, points, weights, n, pose, frame);
+    update_.run_map(layers_, params_, points, weights, n, pose, frame, free_space_.begin_sight(pose));
     // [free-space hook 3/4] lines of sight over the updated layers.
     free_space_.run_map(layers_, params_, update_.front(), update_.scratch(), points, weights, n, pose, frame);
     finish_frame(frame, start, counters);
@@ -375,7 +375,7 @@ class Stack {
     if (status != Status::kOk) {
       return status;
     }
-    update_.run_sensor(layers_, params_, points, n, pose, frame);
+    update_.run_sensor(layers_, params_, points, n, pose, frame, free_space_.begin_sight(pose));
     // [free-space hook 4/4] lines of sight over the updated layers.
     free_space_.run_sensor(layers_, params_, update_.front(), update_.scratch(), points, n, pose, frame);
     finish_frame(frame, start, counters);

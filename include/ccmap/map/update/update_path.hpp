@@ -43,6 +43,7 @@
 #include "ccmap/map/types.hpp"
 #include "ccmap/map/update/change.hpp"
 #include "ccmap/map/update/front.hpp"
+#include "ccmap/map/visibility/sight_table.hpp"
 #include "ccmap/map/update/gate.hpp"
 #include "ccmap/map/update/kalman_batch.hpp"
 #include "ccmap/map/update/layer_walk.hpp"
@@ -126,20 +127,29 @@ class UpdatePath {
   }
 
   /// Folds map-frame points (weights may be nullptr: the noise model weighs them).
+  /// sight: the free-space stage's viewshed table to feed with every chunk's lines of sight
+  /// (map/visibility/sight_table.hpp), or nullptr.
   void run_map(Layers& layers, const StackParams& params, const PointXYZ* points, const float* weights, std::size_t n,
-               const FramePose& pose, FrameCounters& frame) noexcept {
+               const FramePose& pose, FrameCounters& frame, SightTable* sight = nullptr) noexcept {
     const bool unit_weights = weights == nullptr && constant_weight_;
     run(layers, params, n, pose, frame, [&](std::size_t begin, std::size_t count, const FineWindow& fine) {
       front_map_chunk(points + begin, count, pose, front_, fine, chunk_);
-      return weights != nullptr ? weights + begin : nullptr;
+      const float* chunk_weights = weights != nullptr ? weights + begin : nullptr;
+      if (sight != nullptr) {
+        sight->add_chunk(chunk_, count, nullptr, chunk_weights, pose.anchor);
+      }
+      return chunk_weights;
     }, unit_weights);
   }
 
   /// Folds sensor-frame points with the frame's pose (make_frame_pose with a rotation).
   void run_sensor(Layers& layers, const StackParams& params, const PointXYZ* points, std::size_t n,
-                  const FramePose& pose, FrameCounters& frame) noexcept {
+                  const FramePose& pose, FrameCounters& frame, SightTable* sight = nullptr) noexcept {
     run(layers, params, n, pose, frame, [&](std::size_t begin, std::size_t count, const FineWindow& fine) {
       front_sensor_chunk(points + begin, count, pose, front_, fine, chunk_);
+      if (sight != nullptr) {
+        sight->add_chunk(chunk_, count, points + begin, nullptr, pose.anchor);
+      }
       return static_cast<const float*>(nullptr);
     }, constant_weight_);
   }

@@ -57,6 +57,7 @@
 #include "ccmap/map/update/gate.hpp"
 #include "ccmap/map/visibility/free_space_cell.hpp"
 #include "ccmap/map/visibility/ray_walk.hpp"
+#include "ccmap/map/visibility/sight_table.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap::detail {
@@ -115,6 +116,7 @@ class FreeSpace<Config, false> {
   [[nodiscard]] Status init(const StackParams&, const float*, const Layers&) noexcept { return Status::kOk; }
   void set_constants(const StackParams&, const float*, const Layers&) noexcept {}
   void follow(int, CellIndex) noexcept {}
+  [[nodiscard]] SightTable* begin_sight(const FramePose&) noexcept { return nullptr; }
   void run_map(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, const float*,
                std::size_t, const FramePose&, FrameCounters&) noexcept {}
   void run_sensor(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, std::size_t,
@@ -171,12 +173,28 @@ class FreeSpace<Config, true> {
     }
     max_inclination_ = params.max_inclination;
     rays_ = static_cast<std::uint32_t>(params.free_space_rays);
+    every_ = kSight && params.free_space_rays >= kFreeSpaceEveryRay;
+    // Square-root bins up to the farthest window corner (finest cells from the sensor, which
+    // lies near the windows' centre: the half diagonal, 0.71 of the side, and a margin).
+    float reach = 1.0F;
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      const float extent = static_cast<float>(Layers::side(layer)) * static_cast<float>(std::int32_t{1} << layer);
+      reach = extent * 0.75F > reach ? extent * 0.75F : reach;
+    }
+    bin_scale_ = static_cast<float>(kSightBins) / std::sqrt(reach);
+    const sensor::NoiseModel& noise = params.noise;
+    // kSightRangeSigmas sigma(r) as c0 + c1 r + c2 r^2 from the model's values at 0, 1 and 2 m.
+    const float s0 = noise.sigma_at_range_sq(0.0F), s1 = noise.sigma_at_range_sq(1.0F), s2 = noise.sigma_at_range_sq(4.0F);
+    sigma_c_[0] = kSightRangeSigmas * s0;
+    sigma_c_[2] = kSightRangeSigmas * 0.5F * (s2 - 2.0F * s1 + s0);
+    sigma_c_[1] = kSightRangeSigmas * (s1 - s0) - sigma_c_[2];
     clear_frames_ = static_cast<std::uint32_t>(params.free_space_clear_frames);
     view_axis_[0] = params.sensor_view_axis[0];
     view_axis_[1] = params.sensor_view_axis[1];
     view_axis_[2] = params.sensor_view_axis[2];
     view_axis_set_ = !(view_axis_[0] >= 0.0F && view_axis_[0] <= 0.0F && view_axis_[1] >= 0.0F &&
                        view_axis_[1] <= 0.0F && view_axis_[2] >= 0.0F && view_axis_[2] <= 0.0F);
+    cell_width_ = layers.widths[0];
   }
 
   /// The record grid of `layer` follows the layer's window to `centre` (Stack::move_to calls it
@@ -186,6 +204,37 @@ class FreeSpace<Config, true> {
       (void)grids_[layer].move_to(centre);  // cannot fail: the layer accepted the same centre
     }
   }
+
+  /// Every-line-of-sight mode (free_space_rays = kFreeSpaceEveryRay): empties the viewshed table
+  /// for the frame and returns it for the update path to fill chunk by chunk; nullptr otherwise.
+  [[nodiscard]] SightTable* begin_sight(const FramePose& pose) noexcept {
+    if constexpr (!kSight) {
+      (void)pose;
+      return nullptr;
+    } else {
+    if (!every_) {
+      return nullptr;
+    }
+    SightFrameConstants k{};
+    k.sensor_u[0] = pose.anchor_fraction[0];
+    k.sensor_u[1] = pose.anchor_fraction[1];
+    k.z0 = pose.origin[2];
+    k.bin_scale = bin_scale_;
+    k.cell_width_m = cell_width_;
+    k.sigma_c[0] = sigma_c_[0];
+    k.sigma_c[1] = sigma_c_[1];
+    k.sigma_c[2] = sigma_c_[2];
+    k.view_axis[0] = view_axis_[0];
+    k.view_axis[1] = view_axis_[1];
+    k.view_axis[2] = view_axis_[2];
+    k.view_axis_set = view_axis_set_;
+    k.layers = kLayerCount;
+    sight_.begin(k);
+    sight_anchor_ = pose.anchor;
+    return &sight_;
+    }
+  }
+  [[nodiscard]] CellIndex sight_anchor() const noexcept { return sight_anchor_; }
 
   /// The stage of a map-frame frame (after its points were folded in). weights: as update_frame.
   /// chunk: the front's scratch for the rays' ends, lent by the update path, whose frame is over
@@ -228,6 +277,9 @@ class FreeSpace<Config, true> {
     h.add(view_axis_set_);
     h.add(rays_);
     h.add(clear_frames_);
+    hash_bool_bytes(h, every_);
+    h.add(bin_scale_);
+    h.add(sigma_c_);
   }
 
  private:
@@ -328,6 +380,18 @@ class FreeSpace<Config, true> {
       held = windows_.contains(layer, CellIndex{static_cast<std::int32_t>(origin_u_[0] >> shift),
                                                 static_cast<std::int32_t>(origin_u_[1] >> shift)});
     }
+    if constexpr (kSight) {
+      if (every_) {
+        frame.free_rays_refused += sight_.refused();
+        if (!held) {
+          frame.free_rays_refused += sight_.points();
+          return;
+        }
+        run_every(layers, frame);
+        settle(layers, frame);
+        return;
+      }
+    }
     if (!held) {
       frame.free_rays_refused += static_cast<std::uint32_t>(sampled);
       return;
@@ -345,6 +409,123 @@ class FreeSpace<Config, true> {
       run_batch(layers, params, front, chunk, weights, count, pose, sensor_frame, frame);
     }
     settle(layers, frame);
+  }
+
+  /// Every line of sight (sight_table.hpp): the table is full (the update path fed it), swept
+  /// here; every cell of every window then reads its bound from the sectors wholly inside its
+  /// azimuth interval whose rays reach beyond its farthest corner.
+  ///  - a known cell is contradicted when every such sector (at least two) passes below its
+  ///    top by the clear margin (so a rock covering part of the cell, whose sectors end on it or
+  ///    pass over it, is not), and counts the frame as kContradictionsPerFrame rays did;
+  ///  - an unobserved cell of its walk layer (no finer window holds it) takes the lowest bound;
+  ///    it is a drop-off when every such sector (at least kDropRays) passes more than the
+  ///    layer's step below the ground that sector's points showed before the cell.
+  void run_every(Layers& layers, FrameCounters& frame) noexcept {
+    if constexpr (kSight) {
+    sight_.sweep();
+    sight_.track_ground(max_inclination_ * cell_width_, consts_[0].rise_margin_m);
+    const SightFrameConstants& k = sight_.constants();
+    const float unit_m = kSightSlopeUnit * cell_width_;  // height per slope unit per finest cell
+    frame.free_rays += sight_.points();
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      const CellIndex min = windows_.min[layer];
+      const std::int32_t side = windows_.side[layer];
+      const float cw = static_cast<float>(std::int32_t{1} << layer);
+      const float step = consts_[layer].step_m;
+      for (std::int32_t j = 0; j < side; ++j) {
+        const std::int32_t gy = min.y + j;
+        const float y0 = static_cast<float>((std::int64_t{gy} << layer) - sight_anchor_.y) - k.sensor_u[1];
+        const float y1 = y0 + cw;
+        for (std::int32_t i = 0; i < side; ++i) {
+          const std::int32_t gx = min.x + i;
+          const float x0 = static_cast<float>((std::int64_t{gx} << layer) - sight_anchor_.x) - k.sensor_u[0];
+          const float x1 = x0 + cw;
+          SightCell sc{};
+          if (!sight_.read_cell(x0, x1, y0, y1, &sc)) {
+            continue;
+          }
+          const CellIndex index{gx, gy};
+          const CellView cell = view_of(layers, layer, index);
+          const bool walk_layer = !finer_holds(layer, index);
+          if (!(cell.weight > 0.0F) && !walk_layer) {
+            continue;  // a coarser layer's empty cell under a finer window: the finer record speaks
+          }
+          const int lo = sc.lo, hi = sc.hi, bin = sc.bin;
+          const std::int32_t qmin = sc.qmin, qmax = sc.qmax;
+          bool all = true;  // every sector holding a ray agrees (sectors without one say nothing)
+          const int covered = sc.covered;
+          const float s_near = sc.s_near, s_far = sc.s_far;
+          FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
+          if (cell.weight > 0.0F) {
+            // The sectors whose lowest ray passes clearly below the cell's top: two at least, and
+            // every sector holding a ray (a rock over part of the cell stops the rays of the
+            // sectors it covers, which then pass over it or end on it).
+            int below = 0;
+            for (int s = lo; s < hi; ++s) {
+              const std::int32_t q = sight_.slope(bin, s);
+              if (q != kSightEmpty &&
+                  top_above(cell, layer, k.z0 + static_cast<float>(q) * unit_m * (q < 0 ? s_near : s_far))) {
+                ++below;
+              }
+            }
+            (void)qmax;
+            if (below >= 2 && below == covered) {
+              (void)touch(rec, stamp_);
+              if (frame_contradictions(rec) == 0U) {
+                remember(layer, index);
+              }
+              for (std::uint32_t c = 0; c < kContradictionsPerFrame; ++c) {
+                add_contradiction(rec);
+              }
+            }
+            continue;
+          }
+          lower_bound(rec, k.z0 + static_cast<float>(qmin) * unit_m * (qmin < 0 ? s_near : s_far));
+          // Drop-off: every covered sector below its own ground by more than the step.
+          const int near_bin = sight_.bin_of(s_near);
+          int proving = 0;
+          for (int s = lo; s < hi && all; ++s) {
+            const std::int32_t q = sight_.slope(bin, s);
+            if (q == kSightEmpty) {
+              continue;
+            }
+            float ground = 0.0F;
+            if (!sight_.ground(near_bin, s, &ground)) {
+              all = false;
+              break;
+            }
+            const float ray = static_cast<float>(q) * unit_m * (q < 0 ? s_near : s_far);  // from the sensor
+            if (!(ray < ground - step)) {
+              all = false;
+              break;
+            }
+            ++proving;
+          }
+          if (all && proving >= static_cast<int>(kDropRays)) {
+            bool now = false;
+            for (std::uint32_t c = 0; c < kDropRays; ++c) {
+              now = add_drop_ray(rec) || now;
+            }
+            frame.drop_cells += now ? 1U : 0U;
+          }
+        }
+      }
+    }
+    } else {
+      (void)layers;
+      (void)frame;
+    }
+  }
+
+  /// True if a finer layer's window holds the cell `index` of `layer`.
+  [[nodiscard]] bool finer_holds(int layer, CellIndex index) const noexcept {
+    for (int j = 0; j < layer; ++j) {
+      const int d = layer - j;
+      if (windows_.contains(j, CellIndex{index.x * (1 << d), index.y * (1 << d)})) {
+        return true;
+      }
+    }
+    return false;
   }
 
   void run_batch(Layers& layers, const StackParams& params, const FrontConfig& front, FrontChunk& chunk,
@@ -627,6 +808,12 @@ class FreeSpace<Config, true> {
   std::int64_t origin_u_[2]{};
   float origin_z_ = 0.0F;
   float cell_width_ = 0.0F;  ///< w_0 (m)
+  bool every_ = false;       ///< every line of sight (free_space_rays = kFreeSpaceEveryRay)
+  float bin_scale_ = 0.0F;   ///< the viewshed table's square-root bins per sqrt(cell)
+  float sigma_c_[3]{};       ///< kSightRangeSigmas sigma(r) = c0 + c1 r + c2 r^2 (m)
+  CellIndex sight_anchor_{0, 0};
+  static constexpr bool kSight = kConfigEveryLineOfSight<Config>;
+  std::conditional_t<kSight, SightTable, NoSightTable> sight_{};
   std::uint32_t contradicted_[kMaxContradictedCells]{};
   RunCell run_[kMaxRunCells]{};
   std::uint32_t contradicted_count_ = 0U;

@@ -1,0 +1,472 @@
+// Every line of sight of a frame at once (docs/design.md, "Free space from lines of sight",
+// "Every line of sight"): the viewshed table. The rays of one frame share their origin, so
+// instead of walking each, every routed point writes one entry: the lowest line-of-sight slope of
+// the points whose rays end in its (azimuth sector, range bin). One sweep per sector
+// then gives, for every bin, the lowest ray that reaches beyond it, and a map cell reads its
+// bound from the sectors that lie wholly inside its azimuth interval. Used by the free-space
+// stage (free_space.hpp) when StackParams::free_space_rays is kFreeSpaceEveryRay; the update path
+// feeds it chunk by chunk while the front's output is in L1 (map/update/update_path.hpp).
+//
+// Geometry (horizontal positions in finest cells from the sensor, heights in m):
+//  - azimuth: the diamond angle a in [0, 4) of (dx, dy) (monotonic in the true angle, one
+//    division, no trigonometry); sector = floor(a * kSightSectors / 4), at most 8 / kSightSectors
+//    rad wide (0.0078 rad: a CADRE window's narrowest cell, 0.022 rad at its corner, holds one);
+//  - range: the ray's walked length, its horizontal length shortened by kSightRangeSigmas range
+//    errors (d (1 - k sigma(r) / r)), on a square-root scale: bin = floor(sqrt(d_walked) *
+//    bin_scale), clamped to the last bin;
+//  - slope: t = (z - z0) / d of the point (d its horizontal distance, m), quantised UP to
+//    kSightSlopeUnit (an upper bound stays one); the line of sight is z0 + t s at distance s.
+// An entry (bin b, sector k) holds the lowest slope of the rays of sector k whose walked part
+// reaches at least edge(b) = (b / bin_scale)^2 cells and less than edge(b + 1); the sweep turns it
+// into the lowest slope of those reaching edge(b) or beyond.
+// Soundness (tests/map/sight_table_test.cpp holds it to the exact integer walk on random
+// frames): a cell's bound comes only from sectors inside its azimuth interval (every such ray
+// crosses the cell) whose rays reach beyond the cell's farthest corner, evaluated at the cell's
+// nearest (descending ray) or farthest (rising ray) corner: never below the height at which such
+// a ray crosses the cell.
+//
+// Cost (docs/performance.md 13): a key pass over the front's chunk (NEON on aarch64), one
+// scattered minimum per point, a sweep over the table, then the cells: 43 aarch64 instructions
+// per point of a CADRE frame, over the flight cycle's budget. No heap.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <type_traits>
+
+#if defined(__aarch64__)
+#include <arm_neon.h>
+#endif
+
+#include "ccmap/cell/ccm_cell.hpp"
+#include "ccmap/map/types.hpp"
+#include "ccmap/map/update/front.hpp"
+
+namespace ccmap {
+
+/// The mark a Config carries when its stack holds the table.
+struct EveryLineOfSightTag {};
+
+/// A Config that carries the viewshed table (256 KB per stack, not in the presets: the C API's
+/// storage sizes and the presets' memory stay as they are): WithEveryLineOfSight<CadreConfig>.
+/// Its stack casts every line of sight when StackParams::free_space_rays is
+/// detail::kFreeSpaceEveryRay (65535), and samples rays at any other value, as the presets do.
+template <typename Base>
+struct WithEveryLineOfSight : Base, EveryLineOfSightTag {};
+
+template <typename Config>
+inline constexpr bool kConfigEveryLineOfSight = std::is_base_of_v<EveryLineOfSightTag, Config>;
+
+}  // namespace ccmap
+
+namespace ccmap::detail {
+
+/// The free_space_rays value that selects every line of sight (the viewshed table) instead of a
+/// sample of walked rays.
+inline constexpr float kFreeSpaceEveryRay = 65535.0F;
+
+/// Range errors by which every line of sight is shortened before its point. The sampled walk's
+/// 3 (free_space.hpp) leaves 0.27 % of the rays reaching past their true point: harmless for 128
+/// rays, ~1,500 of a CADRE frame's 552,500, each a ray under real ground, and the table keeps
+/// minima. At 5 about 0.3 rays a frame.
+inline constexpr float kSightRangeSigmas = 5.0F;
+
+inline constexpr int kSightSectorBits = 10;
+inline constexpr int kSightSectors = 1 << kSightSectorBits;  ///< diamond-angle sectors
+inline constexpr int kSightBins = 64;                         ///< square-root range bins
+inline constexpr std::size_t kSightEntries = std::size_t{kSightSectors} * kSightBins;
+static_assert(kSightEntries == 65536U, "a key is 16 bits: every key names an entry");
+/// An entry no ray wrote: no bound.
+inline constexpr std::int16_t kSightEmpty = 32767;
+/// Slope unit of an entry: 2^-12 (2.4 mm of height at 10 m), entries span slopes of +-8.
+inline constexpr float kSightSlopeUnit = 0.000244140625F;
+inline constexpr float kSightSlopeUnitsInv = 4096.0F;
+
+/// The constants of a frame's table (derived per frame from the pose and the stage's init).
+struct SightFrameConstants {
+  float sensor_u[2];     ///< sensor position in finest cells from the anchor cell's corner
+  float z0;              ///< sensor height (m)
+  float bin_scale;       ///< bins per sqrt(cell)
+  float cell_width_m;    ///< w_0 (m)
+  float sigma_c[3];      ///< kSightRangeSigmas sigma(r) = c0 + c1 r + c2 r^2 (m)
+  float view_axis[3];    ///< sensor-frame viewing direction (all zero: not given)
+  bool view_axis_set;
+  std::int32_t layers;   ///< routed codes below this cast rays
+};
+
+/// What the table says about one cell (SightTable::read_cell).
+struct SightCell {
+  int lo, hi;            ///< sectors wholly inside the cell's azimuth interval: [lo, hi), modulo kSightSectors
+  int bin;               ///< first bin whose rays reach beyond the cell's farthest corner
+  float s_near, s_far;   ///< nearest and farthest distance of the cell (finest cells)
+  std::int32_t qmin;     ///< lowest slope over those sectors (kSightSlopeUnit)
+  std::int32_t qmax;     ///< highest slope over those sectors that hold one
+  int covered;           ///< sectors holding a slope
+  bool all;              ///< every sector holds one
+};
+
+class SightTable;
+/// What a stack without the table carries in its place.
+struct NoSightTable {};
+
+class SightTable {
+ public:
+  /// Empties the table for a new frame.
+  void begin(const SightFrameConstants& k) noexcept {
+    k_ = k;
+    for (std::size_t i = 0; i < kSightEntries; ++i) {
+      raw_[i] = kSightEmpty;
+    }
+    points_ = 0U;
+    refused_ = 0U;
+  }
+
+  [[nodiscard]] const SightFrameConstants& constants() const noexcept { return k_; }
+  /// Points that wrote an entry this frame.
+  [[nodiscard]] std::uint32_t points() const noexcept { return points_; }
+  /// Points given this frame that cast no line of sight (not routed, a bad weight, behind the
+  /// sensor).
+  [[nodiscard]] std::uint32_t refused() const noexcept { return refused_; }
+
+  /// Every point of the chunk (the front's output for count <= kFrontChunkPoints points):
+  /// sensor: the chunk's sensor-frame points (for the view axis) or nullptr; weights: the
+  /// chunk's map-frame weights or nullptr (a point with a bad weight casts no ray).
+  void add_chunk(const FrontChunk& chunk, std::size_t count, const PointXYZ* sensor, const float* weights,
+                 CellIndex anchor) noexcept {
+    const float sx = k_.sensor_u[0];
+    const float sy = k_.sensor_u[1];
+    const float c0 = k_.sigma_c[0];
+    const float c1 = k_.sigma_c[1];
+    const float c2 = k_.sigma_c[2];
+    const float scale = k_.bin_scale;
+    const float z0 = k_.z0;
+    const float w0 = k_.cell_width_m;
+    const std::int32_t layers = k_.layers;
+    const float sectors_per_unit = static_cast<float>(kSightSectors) * 0.25F;
+    // A point that casts no ray writes kSightEmpty to entry 0: a minimum that changes nothing.
+    constexpr std::uint32_t kRefused = static_cast<std::uint16_t>(kSightEmpty);
+    std::uint32_t written = 0U;
+    // Pass 1: key and quantised slope of each point. On aarch64 four points at a time in NEON
+    // (GCC does not vectorise the plain loop there: -fmath-errno puts a branch after each sqrt);
+    // the same IEEE operations in the same order as the scalar loop, which finishes the chunk.
+    std::size_t first = 0;
+#if defined(__aarch64__)
+    {
+      const int32x4_t vax = vdupq_n_s32(anchor.x);
+      const int32x4_t vay = vdupq_n_s32(anchor.y);
+      const float32x4_t vsx = vdupq_n_f32(sx);
+      const float32x4_t vsy = vdupq_n_f32(sy);
+      const float32x4_t zero = vdupq_n_f32(0.0F);
+      const float32x4_t one = vdupq_n_f32(1.0F);
+      const float32x4_t two = vdupq_n_f32(2.0F);
+      const float32x4_t four = vdupq_n_f32(4.0F);
+      const float32x4_t last_bin = vdupq_n_f32(static_cast<float>(kSightBins - 1));
+      const float32x4_t lo_q = vdupq_n_f32(-32767.0F);
+      const float32x4_t hi_q = vdupq_n_f32(32767.0F);
+      const uint32x4_t sector_mask = vdupq_n_u32(kSightSectors - 1U);
+      const uint32x4_t refused = vdupq_n_u32(kRefused);
+      const uint32x4_t low16 = vdupq_n_u32(0xFFFFU);
+      uint32x4_t cast = vdupq_n_u32(0U);
+      const uint32x4_t vlayers = vdupq_n_u32(static_cast<std::uint32_t>(layers));
+      for (std::size_t i = 0; i + 4U <= count; i += 4U) {
+        first = i + 4U;
+        const float32x4_t dx = vaddq_f32(vcvtq_f32_s32(vsubq_s32(vld1q_s32(chunk.ix0 + i), vax)),
+                                         vsubq_f32(vld1q_f32(chunk.fx + i), vsx));
+        const float32x4_t dy = vaddq_f32(vcvtq_f32_s32(vsubq_s32(vld1q_s32(chunk.iy0 + i), vay)),
+                                         vsubq_f32(vld1q_f32(chunk.fy + i), vsy));
+        const float32x4_t l1 = vaddq_f32(vabsq_f32(dx), vabsq_f32(dy));
+        const uint32x4_t l1_pos = vcgtq_f32(l1, zero);
+        const float32x4_t p = vdivq_f32(dy, vbslq_f32(l1_pos, l1, one));
+        const float32x4_t right = vbslq_f32(vcgeq_f32(dy, zero), p, vaddq_f32(four, p));
+        const float32x4_t a = vbslq_f32(vcgeq_f32(dx, zero), right, vsubq_f32(two, p));
+        const uint32x4_t sector =
+            vandq_u32(vreinterpretq_u32_s32(vcvtq_s32_f32(vmulq_n_f32(a, sectors_per_unit))), sector_mask);
+        const float32x4_t rsq = vld1q_f32(chunk.range_sq + i);
+        const float32x4_t r = vsqrtq_f32(rsq);
+        const float32x4_t margin =
+            vaddq_f32(vaddq_f32(vdupq_n_f32(c0), vmulq_n_f32(r, c1)), vmulq_n_f32(rsq, c2));
+        const uint32x4_t r_pos = vcgtq_f32(r, zero);
+        const float32x4_t f = vsubq_f32(one, vdivq_f32(margin, vbslq_f32(r_pos, r, one)));
+        const float32x4_t d = vsqrtq_f32(vaddq_f32(vmulq_f32(dx, dx), vmulq_f32(dy, dy)));
+        const float32x4_t walked = vmulq_f32(d, f);
+        float32x4_t b = vmulq_n_f32(vsqrtq_f32(vbslq_f32(vcgtq_f32(walked, zero), walked, zero)), scale);
+        b = vbslq_f32(vcltq_f32(b, last_bin), b, last_bin);
+        const uint32x4_t bin = vreinterpretq_u32_s32(vcvtq_s32_f32(b));
+        const uint32x4_t code = vreinterpretq_u32_s32(vld1q_s32(chunk.code + i));
+        const uint32x4_t ok = vandq_u32(vandq_u32(vcltq_u32(code, vlayers), l1_pos), vcgtq_f32(f, zero));
+        const uint32x4_t d_pos = vcgtq_f32(d, zero);
+        const float32x4_t t = vdivq_f32(vsubq_f32(vld1q_f32(chunk.z + i), vdupq_n_f32(z0)),
+                                        vbslq_f32(d_pos, vmulq_n_f32(d, w0), one));
+        float32x4_t q = vrndpq_f32(vmulq_n_f32(t, kSightSlopeUnitsInv));
+        q = vbslq_f32(vcltq_f32(q, lo_q), lo_q, vbslq_f32(vcgtq_f32(q, hi_q), hi_q, q));
+        const uint32x4_t key = vorrq_u32(vshlq_n_u32(bin, kSightSectorBits), sector);
+        const uint32x4_t slope = vandq_u32(vreinterpretq_u32_s32(vcvtq_s32_f32(q)), low16);
+        vst1q_u32(packed_ + i, vbslq_u32(ok, vorrq_u32(vshlq_n_u32(key, 16), slope), refused));
+        cast = vsubq_u32(cast, ok);  // ok lanes are all ones: minus -1
+      }
+      written += vaddvq_u32(cast);
+    }
+#endif
+    for (std::size_t i = first; i < count; ++i) {
+      const float dx = static_cast<float>(chunk.ix0[i] - anchor.x) + (chunk.fx[i] - sx);
+      const float dy = static_cast<float>(chunk.iy0[i] - anchor.y) + (chunk.fy[i] - sy);
+      const float ax = dx < 0.0F ? -dx : dx;
+      const float ay = dy < 0.0F ? -dy : dy;
+      const float l1 = ax + ay;
+      const float p = dy / (l1 > 0.0F ? l1 : 1.0F);
+      const float a = dx >= 0.0F ? (dy >= 0.0F ? p : 4.0F + p) : 2.0F - p;
+      const float rsq = chunk.range_sq[i];
+      const float r = std::sqrt(rsq);
+      const float margin = c0 + c1 * r + c2 * rsq;
+      const float f = 1.0F - margin / (r > 0.0F ? r : 1.0F);
+      const float d = std::sqrt(dx * dx + dy * dy);
+      const float walked = d * f;
+      float b = std::sqrt(walked > 0.0F ? walked : 0.0F) * scale;
+      b = b < static_cast<float>(kSightBins - 1) ? b : static_cast<float>(kSightBins - 1);
+      const bool ok = static_cast<std::uint32_t>(chunk.code[i]) < static_cast<std::uint32_t>(layers) && l1 > 0.0F &&
+                      f > 0.0F;
+      // A slope of 8 or more bounds nothing: the entry's empty value; below -8: -8 (higher, safe).
+      const float t = (chunk.z[i] - z0) / (d > 0.0F ? d * w0 : 1.0F);
+      float q = std::ceil(t * kSightSlopeUnitsInv);
+      q = q < -32767.0F ? -32767.0F : (q > 32767.0F ? 32767.0F : q);
+      if (!ok) {
+        packed_[i] = kRefused;
+        continue;
+      }
+      const std::uint32_t sector =
+          static_cast<std::uint32_t>(static_cast<std::int32_t>(a * sectors_per_unit)) & (kSightSectors - 1U);
+      const std::uint32_t key = (static_cast<std::uint32_t>(static_cast<std::int32_t>(b)) << kSightSectorBits) | sector;
+      packed_[i] = (key << 16) | (static_cast<std::uint32_t>(static_cast<std::int32_t>(q)) & 0xFFFFU);
+      ++written;
+    }
+    // Refusals the vector pass does not see (scalar, only when given).
+    if (sensor != nullptr && k_.view_axis_set) {
+      for (std::size_t i = 0; i < count; ++i) {
+        const PointXYZ& s = sensor[i];
+        if (!(s.x * k_.view_axis[0] + s.y * k_.view_axis[1] + s.z * k_.view_axis[2] > 0.0F) &&
+            packed_[i] != kRefused) {
+          packed_[i] = kRefused;
+          --written;
+        }
+      }
+    }
+    if (weights != nullptr) {
+      for (std::size_t i = 0; i < count; ++i) {
+        if (ccm_check_weight(weights[i]) != Status::kOk && packed_[i] != kRefused) {
+          packed_[i] = kRefused;
+          --written;
+        }
+      }
+    }
+    // Pass 2: the scattered minimum. The key is the upper 16 bits: always inside the table.
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::uint32_t w = packed_[i];
+      std::int16_t& entry = raw_[w >> 16];
+      const auto q = static_cast<std::int16_t>(static_cast<std::uint16_t>(w & 0xFFFFU));
+      entry = q < entry ? q : entry;
+    }
+    points_ += written;
+    refused_ += static_cast<std::uint32_t>(count) - written;
+  }
+
+  /// Lower edge of bin b (finest cells): (b / bin_scale)^2.
+  [[nodiscard]] float edge(int b) const noexcept {
+    const float e = static_cast<float>(b) / k_.bin_scale;
+    return e * e;
+  }
+
+  /// The sweep, far to near: swept(b, k) = the lowest slope of sector k's rays that reach
+  /// edge(b) or beyond (kSightEmpty: none). Vectorisable across sectors.
+  void sweep() noexcept {
+    std::int16_t* last = swept_ + static_cast<std::size_t>(kSightBins - 1) * kSightSectors;
+    std::memcpy(last, raw_ + static_cast<std::size_t>(kSightBins - 1) * kSightSectors, sizeof(std::int16_t) * kSightSectors);
+    for (int b = kSightBins - 2; b >= 0; --b) {
+      const std::int16_t* row = raw_ + static_cast<std::size_t>(b) * kSightSectors;
+      const std::int16_t* next = swept_ + static_cast<std::size_t>(b + 1) * kSightSectors;
+      std::int16_t* out = swept_ + static_cast<std::size_t>(b) * kSightSectors;
+      for (int k = 0; k < kSightSectors; ++k) {
+        out[k] = row[k] < next[k] ? row[k] : next[k];
+      }
+    }
+  }
+
+  /// After sweep(): the ground each sector's points showed before bin b, turning raw_ into it
+  /// (height from the sensor in 2^-10 m; read it with ground()): near to far, the
+  /// lowest point of each bin that holds points is the ground there, unless it rose faster than
+  /// max_slope (per finest cell of distance) plus noise_m from the ground before (a rock, a
+  /// rover: the ground stays the level before it until a bin comes back within noise_m of it).
+  /// An approximation for the drop-off rule's reference (a point's height from its bin's middle
+  /// distance), not a bound.
+  void track_ground(float max_slope, float noise_m) noexcept {
+    float ground[kSightSectors];
+    float prev_h[kSightSectors];
+    float prev_s[kSightSectors];
+    std::int32_t state[kSightSectors];  // 0 no ground yet, 1 on ground, 2 on an obstacle
+    for (int k = 0; k < kSightSectors; ++k) {
+      ground[k] = 0.0F;
+      prev_h[k] = 0.0F;
+      prev_s[k] = 0.0F;
+      state[k] = 0;
+    }
+    const float unit_m = kSightSlopeUnit * k_.cell_width_m;
+    for (int b = 0; b < kSightBins; ++b) {
+      std::int16_t* row = raw_ + static_cast<std::size_t>(b) * kSightSectors;
+      const float mid = 0.5F * (edge(b) + edge(b + 1));
+      const float per_unit = unit_m * mid;  // height (m) of one slope unit at the bin's middle
+      for (int k = 0; k < kSightSectors; ++k) {
+        const std::int16_t q = row[k];
+        // Ground before this bin, in 2^-10 m from the sensor (kSightEmpty: none).
+        float g = ground[k] * 1024.0F;
+        g = g < -32767.0F ? -32767.0F : (g > 32766.0F ? 32766.0F : g);
+        row[k] = state[k] == 0 ? kSightEmpty : static_cast<std::int16_t>(g);
+        if (q == kSightEmpty) {
+          continue;
+        }
+        const float h = static_cast<float>(q) * per_unit;
+        if (state[k] == 0) {
+          ground[k] = h;
+          state[k] = 1;
+        } else if (state[k] == 1) {
+          if (h > prev_h[k] + max_slope * (mid - prev_s[k]) + noise_m) {
+            state[k] = 2;
+          } else {
+            ground[k] = h;
+          }
+        } else if (h <= ground[k] + noise_m) {
+          state[k] = 1;
+          ground[k] = h;
+        }
+        prev_h[k] = h;
+        prev_s[k] = mid;
+      }
+    }
+  }
+
+  /// After track_ground(): the ground of sector k before bin b (m from the sensor); false if
+  /// its points showed none.
+  [[nodiscard]] bool ground(int b, int k, float* height_m) const noexcept {
+    const std::int16_t g = raw_[static_cast<std::size_t>(b) * kSightSectors + static_cast<std::size_t>(k & (kSightSectors - 1))];
+    *height_m = static_cast<float>(g) * 0.0009765625F;
+    return g != kSightEmpty;
+  }
+
+  /// Lowest quantised slope of sector k for rays reaching bin b or beyond (kSightEmpty: none).
+  [[nodiscard]] std::int16_t slope(int b, int k) const noexcept {
+    return swept_[static_cast<std::size_t>(b) * kSightSectors + static_cast<std::size_t>(k & (kSightSectors - 1))];
+  }
+
+  /// The lowest quantised slope of the points whose walked rays end in entry (b, k);
+  /// kSightEmpty if none.
+  [[nodiscard]] std::int16_t raw(int b, int k) const noexcept {
+    return raw_[static_cast<std::size_t>(b) * kSightSectors + static_cast<std::size_t>(k & (kSightSectors - 1))];
+  }
+
+  /// The sectors wholly inside the azimuth interval of the cell [x0, x1] x [y0, y1] (finest
+  /// cells from the sensor, the sensor outside it): [lo, hi) (hi may exceed kSightSectors: taken
+  /// modulo). False if none.
+  [[nodiscard]] static bool sectors_inside(float x0, float x1, float y0, float y1, float per_unit, int* lo,
+                                           int* hi) noexcept {
+    float a[4] = {diamond(x0, y0), diamond(x1, y0), diamond(x0, y1),
+                  diamond(x1, y1)};
+    float amin = a[0], amax = a[0];
+    for (float v : a) {
+      amin = v < amin ? v : amin;
+      amax = v > amax ? v : amax;
+    }
+    if (amax - amin > 2.0F) {
+      // The interval wraps through 0: shift the small angles by a full turn.
+      amin = 4.0F;
+      amax = 0.0F;
+      for (float& v : a) {
+        v = v < 2.0F ? v + 4.0F : v;
+        amin = v < amin ? v : amin;
+        amax = v > amax ? v : amax;
+      }
+    }
+    // A margin of 1/64 sector each side against the rounding of the corners' and points' angles.
+    const float first = std::ceil(amin * per_unit + 0.015625F);
+    const float last = std::floor(amax * per_unit - 0.015625F);
+    if (!(last - first >= 1.0F)) {
+      return false;
+    }
+    *lo = static_cast<int>(first);
+    *hi = static_cast<int>(last);
+    return true;
+  }
+
+  /// The bound of the cell [x0, x1] x [y0, y1] (finest cells from the sensor): false if the
+  /// sensor lies in it, no sector lies wholly inside its azimuth interval, no bin reaches beyond
+  /// it or no ray of those sectors does. The terrain the rays of sector s crossed in the cell
+  /// lies below z0 + q(s) kSightSlopeUnit w_0 (q < 0 ? s_near : s_far) (m).
+  [[nodiscard]] bool read_cell(float x0, float x1, float y0, float y1, SightCell* out) const noexcept {
+    if (x0 <= 0.0F && x1 >= 0.0F && y0 <= 0.0F && y1 >= 0.0F) {
+      return false;
+    }
+    const float nx = x0 > 0.0F ? x0 : (x1 < 0.0F ? -x1 : 0.0F);
+    const float ny = y0 > 0.0F ? y0 : (y1 < 0.0F ? -y1 : 0.0F);
+    const float fx = x0 * x0 > x1 * x1 ? x0 * x0 : x1 * x1;
+    const float fy = y0 * y0 > y1 * y1 ? y0 * y0 : y1 * y1;
+    SightCell c{};
+    c.s_far = std::sqrt(fx + fy);
+    c.bin = first_bin_beyond(c.s_far);
+    if (c.bin >= kSightBins ||
+        !sectors_inside(x0, x1, y0, y1, static_cast<float>(kSightSectors) * 0.25F, &c.lo, &c.hi)) {
+      return false;
+    }
+    c.qmin = kSightEmpty;
+    c.qmax = -32768;
+    c.all = true;
+    for (int s = c.lo; s < c.hi; ++s) {
+      const std::int32_t q = slope(c.bin, s);
+      if (q == kSightEmpty) {
+        c.all = false;
+        continue;
+      }
+      c.qmin = q < c.qmin ? q : c.qmin;
+      c.qmax = q > c.qmax ? q : c.qmax;
+      ++c.covered;
+    }
+    if (c.covered == 0) {
+      return false;
+    }
+    c.s_near = std::sqrt(nx * nx + ny * ny);
+    *out = c;
+    return true;
+  }
+
+  /// Diamond angle in [0, 4) of a horizontal direction (0 for the zero vector).
+  [[nodiscard]] static float diamond(float dx, float dy) noexcept {
+    const float ax = dx < 0.0F ? -dx : dx;
+    const float ay = dy < 0.0F ? -dy : dy;
+    const float l1 = ax + ay;
+    const float p = dy / (l1 > 0.0F ? l1 : 1.0F);
+    return dx >= 0.0F ? (dy >= 0.0F ? p : 4.0F + p) : 2.0F - p;
+  }
+
+  /// The bin of a walked length of `cells` finest cells (the last bin beyond the table).
+  [[nodiscard]] int bin_of(float cells) const noexcept {
+    const float b = std::sqrt(cells > 0.0F ? cells : 0.0F) * k_.bin_scale;
+    return b < static_cast<float>(kSightBins - 1) ? static_cast<int>(b) : kSightBins - 1;
+  }
+
+  /// First bin whose rays reach `cells` finest cells (kSightBins if none can be trusted to).
+  [[nodiscard]] int first_bin_beyond(float cells) const noexcept {
+    // edge(b) >= cells  <=>  b >= sqrt(cells) * scale; raised by 2^-16 against the rounding of
+    // the square roots and products here and in the points' bins (a few ulps each).
+    const float b = std::ceil(std::sqrt(cells > 0.0F ? cells : 0.0F) * k_.bin_scale * 1.0000153F);
+    return b < static_cast<float>(kSightBins) ? static_cast<int>(b) : kSightBins;
+  }
+
+ private:
+  SightFrameConstants k_{};
+  std::uint32_t points_ = 0U;
+  std::uint32_t refused_ = 0U;
+  /// Per point of a chunk: key (bin << kSightSectorBits | sector) << 16 | quantised slope.
+  std::uint32_t packed_[kFrontChunkPoints]{};
+  std::int16_t raw_[kSightEntries]{};  ///< [bin][sector]
+  std::int16_t swept_[kSightEntries]{};
+};
+
+}  // namespace ccmap::detail
