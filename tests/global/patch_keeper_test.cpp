@@ -97,7 +97,8 @@ struct Region {
 
 constexpr std::size_t kSlotBytes = SmallKeeper::kMaxPatchBytes + platform::RegionPatchStorage::kSlotHeaderBytes;
 
-/// The drive: 8 m out (inside the wide map's +-10.24 m with the points' reach) along x (with a sideways wiggle) and back, 0.1 m per frame.
+/// The drive: 8 m out along x (inside the wide map's +-10.24 m with the points' reach), a
+/// sideways wiggle, and back, 0.1 m per frame.
 std::vector<std::pair<float, float>> drive() {
   std::vector<std::pair<float, float>> poses;
   for (int k = 0; k <= 80; ++k) {
