@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "ccmap/global/coarse_alignment.hpp"
+#include "support/terrain_data.hpp"
 
 #ifndef CCMAP_TEST_DATA_DIR
 #define CCMAP_TEST_DATA_DIR "../shared/data"
@@ -176,61 +177,10 @@ TEST(CoarseAlignment, RefusesWithoutOverlapAndBadParameters) {
             Status::kOutOfRange);
 }
 
-/// The Mars DTM (ESRI ASCII), heights about their mean, scaled by `scale` in x, y and z; false
-/// if absent.
-struct Dtm {
-  int cols = 0, rows = 0;
-  float cell = 0.0F;
-  std::vector<float> z;
-  float at(float x, float y) const {  // bilinear, (0, 0) the south-west corner
-    const float u = std::fmin(std::fmax(x / cell, 0.0F), static_cast<float>(cols - 1) - 0.001F);
-    const float v = std::fmin(std::fmax(y / cell, 0.0F), static_cast<float>(rows - 1) - 0.001F);
-    const int i = static_cast<int>(u);
-    const int j = static_cast<int>(v);
-    const float a = u - static_cast<float>(i);
-    const float b = v - static_cast<float>(j);
-    auto h = [&](int ii, int jj) { return z[static_cast<std::size_t>((rows - 1 - jj) * cols + ii)]; };
-    return (1 - a) * (1 - b) * h(i, j) + a * (1 - b) * h(i + 1, j) + (1 - a) * b * h(i, j + 1) +
-           a * b * h(i + 1, j + 1);
-  }
-};
-
-bool load_dtm(float scale, Dtm* out, std::string* path) {
-  const char* env = std::getenv("CCMAP_DATA_DIR");
-  *path = std::string(env != nullptr && env[0] != '\0' ? env : CCMAP_TEST_DATA_DIR) +
-          "/hirise_mars_dtm/mars_dtm_1.01m.asc";
-  std::ifstream in(*path);
-  if (!in.good()) {
-    return false;
-  }
-  std::string key;
-  double value = 0.0;
-  for (int k = 0; k < 6; ++k) {
-    in >> key >> value;
-    if (key == "ncols") out->cols = static_cast<int>(value);
-    if (key == "nrows") out->rows = static_cast<int>(value);
-    if (key == "cellsize") out->cell = static_cast<float>(value) * scale;
-  }
-  double sum = 0.0;
-  std::vector<double> raw(static_cast<std::size_t>(out->cols * out->rows));
-  for (double& v : raw) {
-    in >> v;
-    sum += v;
-  }
-  if (!in || out->cols < 2 || out->rows < 2) {
-    return false;
-  }
-  const double mean = sum / static_cast<double>(raw.size());
-  for (const double v : raw) {
-    out->z.push_back(static_cast<float>((v - mean) * scale));
-  }
-  return true;
-}
-
 TEST(CoarseAlignment, RecoversOneMetreAndTenDegreesOnTheMarsDtm) {
-  static Dtm dtm;
-  std::string path;
-  if (!load_dtm(1.0F / 20.0F, &dtm, &path)) {
+  static test::Dtm dtm;
+  const std::string path = test::mars_dtm_file(test::terrain_data_dir(CCMAP_TEST_DATA_DIR));
+  if (!test::load_dtm(path, 1.0F / 20.0F, &dtm)) {
     GTEST_SKIP() << "real-data file " << path << " is not available (set CCMAP_DATA_DIR)";
   }
   static Map ours;
