@@ -133,15 +133,26 @@ std::vector<PointXYZ> drive_both(Small& map, SmallKeeper& keeper, Wide& wide) {
   return all;
 }
 
+/// The small map with its keeper on a region, and the wide map, after drive_both.
+struct DrivenPair {
+  Small map;
+  Wide wide;
+  SmallKeeper keeper;
+  Region region{256, kSlotBytes};
+  std::vector<PointXYZ> points;
+  DrivenPair() {
+    EXPECT_EQ(map.init(exact_params(0.08F)), Status::kOk);
+    EXPECT_EQ(wide.init(exact_params(0.08F)), Status::kOk);
+    EXPECT_EQ(keeper.init(map, region.storage.table()), Status::kOk);
+    points = drive_both(map, keeper, wide);
+  }
+};
+
 TEST(PatchKeeper, DriveOutAndBackEqualsAMapThatNeverScrolledBitwise) {
-  static Small map;
-  static Wide wide;
-  static SmallKeeper keeper;
-  Region region(256, kSlotBytes);
-  ASSERT_EQ(map.init(exact_params(0.08F)), Status::kOk);
-  ASSERT_EQ(wide.init(exact_params(0.08F)), Status::kOk);
-  ASSERT_EQ(keeper.init(map, region.storage.table()), Status::kOk);
-  (void)drive_both(map, keeper, wide);
+  const auto pair = std::make_unique<DrivenPair>();
+  Small& map = pair->map;
+  Wide& wide = pair->wide;
+  SmallKeeper& keeper = pair->keeper;
   // Back home: the window's cells equal the wide map's.
   int observed = 0;
   map.ccm_layer(0).for_each([&](CellIndex, const CcmCell& c) { observed += c.weight > 0.0F ? 1 : 0; });
@@ -157,14 +168,9 @@ TEST(PatchKeeper, DriveOutAndBackEqualsAMapThatNeverScrolledBitwise) {
 }
 
 TEST(PatchKeeper, RestoredCellsEqualADoubleBatchOfTheirPoints) {
-  static Small map;
-  static Wide wide;
-  static SmallKeeper keeper;
-  Region region(256, kSlotBytes);
-  ASSERT_EQ(map.init(exact_params(0.08F)), Status::kOk);
-  ASSERT_EQ(wide.init(exact_params(0.08F)), Status::kOk);
-  ASSERT_EQ(keeper.init(map, region.storage.table()), Status::kOk);
-  const auto points = drive_both(map, keeper, wide);
+  const auto pair = std::make_unique<DrivenPair>();
+  const Small& map = pair->map;
+  const std::vector<PointXYZ>& points = pair->points;
   // The batch: per cell of 8 cm, the count, mean and height variance of its points, in double.
   struct Batch {
     double n = 0.0, sx = 0.0, sy = 0.0, sz = 0.0, szz = 0.0;

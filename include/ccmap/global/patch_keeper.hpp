@@ -439,61 +439,68 @@ class PatchKeeper {
     return !(out.contains(x0, y0) && out.contains(x1 - 1, y1 - 1));
   }
 
+  /// Calls fn(tx, ty) for every tile with a cell in `in` and not in `out`.
+  template <typename Fn>
+  static void for_each_tile(const detail::WindowRect& in, const detail::WindowRect& out, Fn&& fn) noexcept {
+    const std::int32_t tx0 = detail::floor_div(in.min.x, kTile);
+    const std::int32_t ty0 = detail::floor_div(in.min.y, kTile);
+    const std::int32_t tx1 = detail::floor_div(in.min.x + in.side - 1, kTile);
+    const std::int32_t ty1 = detail::floor_div(in.min.y + in.side - 1, kTile);
+    for (std::int32_t ty = ty0; ty <= ty1; ++ty) {
+      for (std::int32_t tx = tx0; tx <= tx1; ++tx) {
+        if (tile_differs(tx, ty, in, out)) {
+          fn(tx, ty);
+        }
+      }
+    }
+  }
+
   template <typename Grid>
   void save_layer(Grid& grid, int layer, const detail::WindowRect& before, const detail::WindowRect& after,
                   const PatchPose& stamp, PatchMoveReport& r) noexcept {
     using Cell = std::remove_reference_t<decltype(grid.cell_unchecked(CellIndex{}))>;
     constexpr std::size_t kCellBytes = detail::kPatchCellBytes<Cell>;
     const std::size_t size = patch_size(layer);
-    const std::int32_t tx0 = detail::floor_div(before.min.x, kTile);
-    const std::int32_t ty0 = detail::floor_div(before.min.y, kTile);
-    const std::int32_t tx1 = detail::floor_div(before.min.x + before.side - 1, kTile);
-    const std::int32_t ty1 = detail::floor_div(before.min.y + before.side - 1, kTile);
-    for (std::int32_t ty = ty0; ty <= ty1; ++ty) {
-      for (std::int32_t tx = tx0; tx <= tx1; ++tx) {
-        if (!tile_differs(tx, ty, before, after)) {
-          continue;
-        }
-        const platform::PatchKey key{layer, tx, ty};
-        const Status loaded = load(key, buffer_);
-        r.patches_read += loaded == Status::kOk ? 1U : 0U;
-        const bool existed = loaded == Status::kOk;
-        if (!existed) {
-          std::memset(buffer_, 0, size);
-        }
-        bool changed = false;
-        std::uint32_t observed = 0U;
-        for_each_cell(tx, ty, before, after, [&](std::int32_t x, std::int32_t y, std::size_t slot) {
-          const Cell cell = Access::intact_or_empty(*stack_, grid.cell_unchecked(CellIndex{x, y}));
-          std::uint8_t bytes[kCellBytes]{};
-          if (cell.weight > 0.0F) {
-            detail::SnapshotWriter w(bytes, kCellBytes);
-            detail::snapshot_write_cell(w, cell);
-            ++observed;
-          }
-          std::uint8_t* at = buffer_ + detail::kPatchHeaderBytes + slot * kCellBytes;
-          if (std::memcmp(at, bytes, kCellBytes) != 0) {
-            std::memcpy(at, bytes, kCellBytes);
-            changed = true;
-          }
-        });
-        if (!changed) {
-          continue;
-        }
-        const PatchHeader h{detail::patch_cell_kind<Cell>(), kTile, key, Access::width(*stack_, layer), stamp,
-                            sequence_ + 1U};
-        detail::patch_write_header(buffer_, size, h);
-        detail::patch_seal(buffer_, size);
-        if (storage_.write(storage_.context, key, buffer_, size) == platform::StorageResult::kOk) {
-          ++sequence_;
-          ++r.patches_written;
-          r.cells_saved += observed;
-        } else {
-          ++counters_.write_failures;
-          r.cells_lost += observed;
-        }
+    for_each_tile(before, after, [&](std::int32_t tx, std::int32_t ty) {
+      const platform::PatchKey key{layer, tx, ty};
+      const Status loaded = load(key, buffer_);
+      r.patches_read += loaded == Status::kOk ? 1U : 0U;
+      const bool existed = loaded == Status::kOk;
+      if (!existed) {
+        std::memset(buffer_, 0, size);
       }
-    }
+      bool changed = false;
+      std::uint32_t observed = 0U;
+      for_each_cell(tx, ty, before, after, [&](std::int32_t x, std::int32_t y, std::size_t slot) {
+        const Cell cell = Access::intact_or_empty(*stack_, grid.cell_unchecked(CellIndex{x, y}));
+        std::uint8_t bytes[kCellBytes]{};
+        if (cell.weight > 0.0F) {
+          detail::SnapshotWriter w(bytes, kCellBytes);
+          detail::snapshot_write_cell(w, cell);
+          ++observed;
+        }
+        std::uint8_t* at = buffer_ + detail::kPatchHeaderBytes + slot * kCellBytes;
+        if (std::memcmp(at, bytes, kCellBytes) != 0) {
+          std::memcpy(at, bytes, kCellBytes);
+          changed = true;
+        }
+      });
+      if (!changed) {
+        return;
+      }
+      const PatchHeader h{detail::patch_cell_kind<Cell>(), kTile, key,
+                          Access::width(*stack_, layer),   stamp, sequence_ + 1U};
+      detail::patch_write_header(buffer_, size, h);
+      detail::patch_seal(buffer_, size);
+      if (storage_.write(storage_.context, key, buffer_, size) == platform::StorageResult::kOk) {
+        ++sequence_;
+        ++r.patches_written;
+        r.cells_saved += observed;
+      } else {
+        ++counters_.write_failures;
+        r.cells_lost += observed;
+      }
+    });
   }
 
   template <typename Grid>
@@ -501,36 +508,30 @@ class PatchKeeper {
                      PatchMoveReport& r) noexcept {
     using Cell = std::remove_reference_t<decltype(grid.cell_unchecked(CellIndex{}))>;
     const float width = Access::width(*stack_, layer);
-    const std::int32_t tx0 = detail::floor_div(after.min.x, kTile);
-    const std::int32_t ty0 = detail::floor_div(after.min.y, kTile);
-    const std::int32_t tx1 = detail::floor_div(after.min.x + after.side - 1, kTile);
-    const std::int32_t ty1 = detail::floor_div(after.min.y + after.side - 1, kTile);
-    for (std::int32_t ty = ty0; ty <= ty1; ++ty) {
-      for (std::int32_t tx = tx0; tx <= tx1; ++tx) {
-        if (!tile_differs(tx, ty, after, before) || load(platform::PatchKey{layer, tx, ty}, buffer_) != Status::kOk) {
-          continue;
-        }
-        ++r.patches_read;
-        // Every stored cell of the patch must be one a save writes before any is restored.
-        bool valid = true;
-        for (std::size_t slot = 0; slot < static_cast<std::size_t>(kTile * kTile); ++slot) {
-          const Cell cell = stored_cell<Cell>(slot);
-          valid = valid && (cell.weight == 0.0F || detail::exchange_cell_valid(cell, width));
-        }
-        if (!valid) {
-          ++counters_.patches_refused;
-          continue;
-        }
-        for_each_cell(tx, ty, after, before, [&](std::int32_t x, std::int32_t y, std::size_t slot) {
-          const Cell stored = stored_cell<Cell>(slot);
-          if (stored.weight > 0.0F) {
-            // The move cleared the cell: the merge of the stored moments into it is the copy.
-            Access::write_cell(*stack_, grid.cell_unchecked(CellIndex{x, y}), stored);
-            ++r.cells_restored;
-          }
-        });
+    for_each_tile(after, before, [&](std::int32_t tx, std::int32_t ty) {
+      if (load(platform::PatchKey{layer, tx, ty}, buffer_) != Status::kOk) {
+        return;
       }
-    }
+      ++r.patches_read;
+      // Every stored cell of the patch must be one a save writes before any is restored.
+      bool valid = true;
+      for (std::size_t slot = 0; slot < static_cast<std::size_t>(kTile * kTile); ++slot) {
+        const Cell cell = stored_cell<Cell>(slot);
+        valid = valid && (cell.weight == 0.0F || detail::exchange_cell_valid(cell, width));
+      }
+      if (!valid) {
+        ++counters_.patches_refused;
+        return;
+      }
+      for_each_cell(tx, ty, after, before, [&](std::int32_t x, std::int32_t y, std::size_t slot) {
+        const Cell stored = stored_cell<Cell>(slot);
+        if (stored.weight > 0.0F) {
+          // The move cleared the cell: the merge of the stored moments into it is the copy.
+          Access::write_cell(*stack_, grid.cell_unchecked(CellIndex{x, y}), stored);
+          ++r.cells_restored;
+        }
+      });
+    });
   }
 
   template <typename Cell>
