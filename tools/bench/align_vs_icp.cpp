@@ -150,6 +150,7 @@ bool build_map(Map& map, const std::vector<P3>& points, double cx, double cy) {
 struct Options {
   int draws = 20;
   std::uint32_t seed = 1U;
+  bool verbose = false;
   ccmap::RegistrationParams registration = ccmap::default_registration_params();
   ccmap::CoarseSearchParams search = ccmap::default_coarse_search_params();
 };
@@ -200,6 +201,12 @@ void run(const Scene& s, const Options& o) {
         error = corner_error(m, truth, s);
       }
       cov.add(error, t);
+      if (o.verbose) {
+        std::printf("  draw %d: offset %.2f m %.1f deg: ccmap %s observable %d%d%d%d error %.1f mm sigma x %.1f mm yaw %.2f mrad\n", d, r,
+                    yaw * 180.0 / M_PI, ccmap::to_string(a.correction.status), a.correction.observable[0],
+                    a.correction.observable[1], a.correction.observable[2], a.correction.observable[3], 1e3 * error,
+                    1e3 * a.correction.sigma_dx, 1e3 * a.correction.sigma_dyaw);
+      }
     }
     const auto source = cloud_of(moved);
     pcl::PointCloud<pcl::PointXYZ> out;
@@ -297,6 +304,7 @@ int main(int argc, char** argv) {
     if (flag == "--range-m") o.search.range_xy_m = static_cast<float>(std::atof(v));
     if (flag == "--range-deg") o.search.range_yaw_rad = static_cast<float>(std::atof(v) * M_PI / 180.0);
     if (flag == "--iterations") o.registration.max_iterations = static_cast<std::uint32_t>(std::atoi(v));
+    if (flag == "--verbose") o.verbose = std::atoi(v) != 0;
     if (flag == "--points") o.registration.max_points = static_cast<std::uint32_t>(std::atoi(v));
   }
   std::printf("ccmap: search +-%.2f m, +-%.1f deg; registration %u points, %u iterations\n", o.search.range_xy_m,

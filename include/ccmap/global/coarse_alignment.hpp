@@ -4,19 +4,19 @@
 // Registration of one map against another converges within about a cell of its finest layers
 // (docs/design.md, "Team alignment"). A rover that returns after a long drive, or a patch
 // written under an uncertain pose, can be off by metres and tens of degrees. CoarseAligner:
-//  1. Level 1, the coarsest layer (CADRE: 64 cm cells): our pooled cells as Gaussians (mean,
-//     3 x 3 covariance of their points); the height each predicts at a horizontal position is
-//     the conditional Gaussian z | (x, y): mean mu_z + g . (p - mu), variance
-//     sigma_z|xy^2 + model_sigma^2 (g = Sigma_xy^-1 Sigma_xyz, the cell's plane). Their pooled
-//     cells of the same layer (means) are moved by every candidate (dx, dy, dyaw) of a grid
-//     over the search box (steps: half a cell; the yaw step moves the farthest sample by half a
-//     cell); the candidate's dz is the mean height residual of its matches, and its score the sum
-//     of the Gaussian likelihoods exp(-r^2 / 2 var) of the matched samples (NDT's score on the
-//     cells' own covariances). Ties (flat ground: every candidate scores alike) go to the
-//     candidate nearest the nominal offset.
-//  2. Level 2, the next finer layer (CADRE: 32 cm): the same around level 1's best, over +-1
-//     step of level 1, at half its steps.
-//  3. The registration (align_maps' solver) from level 2's best, with every layer.
+//  1. Level 0, the coarsest layer's pooled cells pooled once more, 2 x 2 (CADRE: 128 cm; exact
+//     moments, ccm_pool4): our cells as Gaussians (mean, 3 x 3 covariance of their points); the
+//     height each predicts at a horizontal position is the conditional Gaussian z | (x, y):
+//     mean mu_z + g . (p - mu), variance sigma_z|xy^2 + model_sigma^2 (g = Sigma_xy^-1
+//     Sigma_xyz, the cell's plane). Their cells of the same level (means) are moved by every
+//     candidate (dx, dy, dyaw) of a grid over the search box (steps: half a cell; the yaw step
+//     moves the farthest sample by half a cell); the candidate's dz is the mean height residual
+//     of its matches, and its score the sum of the Gaussian likelihoods exp(-r^2 / 2 var) of the
+//     matched samples (NDT's score on the cells' own covariances). Ties (flat ground: every
+//     candidate scores alike) go to the candidate nearest the nominal offset.
+//  2. Level 1, the coarsest layer (CADRE: 64 cm), then level 2, the next finer one (32 cm): the
+//     same around the level before's best, over +-1 of its steps, at half its steps.
+//  3. The registration (align_maps' solver) from the last level's best, with every layer.
 // The answer is registration's: its statuses and its observability claims. A direction the
 // registration does not claim keeps no coarse component either (flat ground: dz only, no x, y
 // or yaw; a ditch along x: no x), so the search invents nothing the terrain does not fix.
@@ -48,14 +48,14 @@ struct CoarseSearchParams {
 
 /// What the search found before the registration refined it (diagnostics).
 struct CoarseReport {
-  float dx_m;    ///< level 2's best, about the same centre as the result
+  float dx_m;    ///< the last level's best, about the same centre as the result
   float dy_m;
   float dyaw_rad;
   float dz_m;
   float score;   ///< its score (matched samples' likelihood sum)
   std::uint32_t matched;     ///< samples on known cells at the best candidate
-  std::uint32_t candidates;  ///< candidates scored, both levels
-  std::uint32_t samples;     ///< their samples at level 1
+  std::uint32_t candidates;  ///< candidates scored, all levels
+  std::uint32_t samples;     ///< their samples at level 0
 };
 
 namespace detail {
@@ -91,11 +91,11 @@ class CoarseAligner {
   using StackType = Stack<Config>;
   static_assert(StackType::kCcmLayerCount >= 1, "the coarse search needs a CCM layer");
   static constexpr int kTop = StackType::kLayerCount - 1;
-  static constexpr int kLevels = StackType::layer_is_ccm(kTop - 1) ? 2 : 1;
+  static constexpr int kLevels = StackType::layer_is_ccm(kTop - 1) ? 3 : 2;
   static constexpr std::size_t kTableCells =
-      StackType::layer_capacity(kTop) > StackType::layer_capacity(kTop - kLevels + 1)
+      StackType::layer_capacity(kTop) > StackType::layer_capacity(kTop - kLevels + 2)
           ? StackType::layer_capacity(kTop)
-          : StackType::layer_capacity(kTop - kLevels + 1);
+          : StackType::layer_capacity(kTop - kLevels + 2);
   static constexpr std::uint32_t kMaxCoarseSamples = 512U;
   static constexpr std::int32_t kMaxSteps = 16;
 
@@ -139,10 +139,12 @@ class CoarseAligner {
     float half_xy = search.range_xy_m;
     float half_yaw = search.range_yaw_rad;
     for (int level = 0; level < kLevels; ++level) {
-      const int layer = kTop - level;
-      const float width = ours.layer_cell_width(layer);
-      build_ours(ours, layer, search.model_sigma_m);
-      build_theirs(theirs, layer, offset, params);
+      // Level 0: the coarsest layer pooled once more; then the coarsest layer; then the next.
+      const int layer = level == 0 ? kTop : kTop - level + 1;
+      const bool pool2 = level == 0;
+      build_ours(ours, layer, pool2, search.model_sigma_m);
+      build_theirs(theirs, layer, pool2, offset);
+      const float width = width_;
       if (level == 0) {
         r.samples = samples_;
       }
@@ -219,94 +221,110 @@ class CoarseAligner {
     float mx, my, mz, gx, gy, inv_var;  ///< inv_var 0: unknown
   };
 
-  void build_ours(const StackType& ours, int layer, float model_sigma) noexcept {
-    const StackParams& p = ours.params();
-    const float width = ours.layer_cell_width(layer);
-    const std::int32_t side = StackType::layer_side(layer);
-    width_ = width;
-    side_ = side;
-    const CellIndex centre = ours.layer_centre(layer);
-    min_ = CellIndex{centre.x - side / 2, centre.y - side / 2};
-    for (std::int32_t j = 0; j < side; ++j) {
-      for (std::int32_t i = 0; i < side; ++i) {
-        const CellIndex index{min_.x + i, min_.y + j};
-        const auto cell = ours.pooled_cell(layer, index);
-        Predictor& out =
-            table_[static_cast<std::size_t>(j) * static_cast<std::size_t>(side) + static_cast<std::size_t>(i)];
-        out = Predictor{0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F};
-        if (!(cell.weight >= p.min_weight) || !(cell.weight > 0.0F) ||
-            !ccm_is_covered(cell, width, p.coverage_tau, p.min_weight)) {
-          continue;
+  /// Calls fn(index, cell) for every cell of a level: layer `layer`'s pooled cells (pool2 false) or
+  /// those pooled once more, 2 x 2 into cells twice as wide (pool2 true: exact moments, ccm_pool4).
+  /// Sets the level's cell width, window minimum and side.
+  template <typename Fn>
+  static void for_each_level_cell(const StackType& stack, int layer, bool pool2, float* width, CellIndex* min,
+                                  std::int32_t* side, Fn&& fn) noexcept {
+    const float w = stack.layer_cell_width(layer);
+    const std::int32_t s = StackType::layer_side(layer);
+    const CellIndex centre = stack.layer_centre(layer);
+    const CellIndex lo{centre.x - s / 2, centre.y - s / 2};
+    if (!pool2) {
+      *width = w;
+      *min = lo;
+      *side = s;
+      for (std::int32_t j = 0; j < s; ++j) {
+        for (std::int32_t i = 0; i < s; ++i) {
+          const CellIndex index{lo.x + i, lo.y + j};
+          fn(index, stack.pooled_cell(layer, index));
         }
-        // z | xy of the cell's Gaussian (covariance s / W).
-        const float w = cell.weight;
-        const float sxx = cell.s_xx / w;
-        const float syy = cell.s_yy / w;
-        float sxy = 0.0F;
-        if constexpr (StackType::kCcmCellKind == CcmCellKind::kFull) {
-          sxy = cell.s_xy / w;
+      }
+      return;
+    }
+    *width = 2.0F * w;
+    // Parent of child index c: c >> 1, floor(c / 2) (arithmetic shift, as map exchange's offsets).
+    *min = CellIndex{lo.x >> 1, lo.y >> 1};
+    *side = ((lo.x + s - 1) >> 1) - min->x + 1;
+    for (std::int32_t j = 0; j < *side; ++j) {
+      for (std::int32_t i = 0; i < *side; ++i) {
+        const CellIndex index{min->x + i, min->y + j};
+        typename StackType::CcmCellType children[4];
+        for (int k = 0; k < 4; ++k) {
+          children[k] = stack.pooled_cell(layer, CellIndex{2 * index.x + (k & 1), 2 * index.y + (k >> 1)});
         }
-        const float sxz = cell.s_xz / w;
-        const float syz = cell.s_yz / w;
-        const float szz = cell.s_zz / w;
-        const float det = sxx * syy - sxy * sxy;
-        if (!(det > 1e-12F)) {
-          continue;
-        }
-        const float gx = (syy * sxz - sxy * syz) / det;
-        const float gy = (sxx * syz - sxy * sxz) / det;
-        float conditional = szz - (gx * sxz + gy * syz);
-        conditional = conditional > 0.0F ? conditional : 0.0F;
-        const float var = conditional + model_sigma * model_sigma;
-        out = Predictor{grid::cell_centre(index.x, width) + cell.mean_x,
-                        grid::cell_centre(index.y, width) + cell.mean_y,
-                        cell.mean_z,
-                        gx,
-                        gy,
-                        1.0F / var};
+        fn(index, ccm_pool4(children, w, stack.params().weight_limit));
       }
     }
   }
 
-  void build_theirs(const StackType& theirs, int layer, const MapOffset& offset,
-                    const RegistrationParams& params) noexcept {
-    const StackParams& p = theirs.params();
-    const float width = theirs.layer_cell_width(layer);
-    std::uint32_t usable = 0U;
-    auto is_usable = [&](const auto& cell) {
-      return cell.weight >= p.min_weight && cell.weight > 0.0F &&
-             ccm_is_covered(cell, width, p.coverage_tau, p.min_weight);
-    };
-    const std::int32_t side = StackType::layer_side(layer);
-    const CellIndex centre = theirs.layer_centre(layer);
-    const CellIndex min{centre.x - side / 2, centre.y - side / 2};
-    for (std::int32_t j = 0; j < side; ++j) {
-      for (std::int32_t i = 0; i < side; ++i) {
-        usable += is_usable(theirs.pooled_cell(layer, CellIndex{min.x + i, min.y + j})) ? 1U : 0U;
+  template <typename Cell>
+  [[nodiscard]] static bool usable(const Cell& cell, const StackParams& p, float width) noexcept {
+    return cell.weight >= p.min_weight && cell.weight > 0.0F &&
+           ccm_is_covered(cell, width, p.coverage_tau, p.min_weight);
+  }
+
+  void build_ours(const StackType& ours, int layer, bool pool2, float model_sigma) noexcept {
+    const StackParams& p = ours.params();
+    for_each_level_cell(ours, layer, pool2, &width_, &min_, &side_, [&](CellIndex index, const auto& cell) {
+      Predictor& out = table_[static_cast<std::size_t>(index.y - min_.y) * static_cast<std::size_t>(side_) +
+                              static_cast<std::size_t>(index.x - min_.x)];
+      out = Predictor{0.0F, 0.0F, 0.0F, 0.0F, 0.0F, 0.0F};
+      if (!usable(cell, p, width_)) {
+        return;
       }
-    }
-    const std::uint32_t stride = (usable + kMaxCoarseSamples - 1U) / kMaxCoarseSamples > 0U
-                                     ? (usable + kMaxCoarseSamples - 1U) / kMaxCoarseSamples
-                                     : 1U;
-    (void)params;
+      // z | xy of the cell's Gaussian (covariance s / W).
+      const float w = cell.weight;
+      const float sxx = cell.s_xx / w;
+      const float syy = cell.s_yy / w;
+      float sxy = 0.0F;
+      if constexpr (StackType::kCcmCellKind == CcmCellKind::kFull) {
+        sxy = cell.s_xy / w;
+      }
+      const float sxz = cell.s_xz / w;
+      const float syz = cell.s_yz / w;
+      const float szz = cell.s_zz / w;
+      const float det = sxx * syy - sxy * sxy;
+      if (!(det > 1e-12F)) {
+        return;
+      }
+      const float gx = (syy * sxz - sxy * syz) / det;
+      const float gy = (sxx * syz - sxy * sxz) / det;
+      float conditional = szz - (gx * sxz + gy * syz);
+      conditional = conditional > 0.0F ? conditional : 0.0F;
+      const float var = conditional + model_sigma * model_sigma;
+      out = Predictor{grid::cell_centre(index.x, width_) + cell.mean_x, grid::cell_centre(index.y, width_) + cell.mean_y,
+                      cell.mean_z, gx, gy, 1.0F / var};
+    });
+  }
+
+  /// Their usable cells of the level, every k-th (at most kMaxCoarseSamples), relative to the
+  /// rotation centre, moved by the offset.
+  void build_theirs(const StackType& theirs, int layer, bool pool2, const MapOffset& offset) noexcept {
+    const StackParams& p = theirs.params();
+    std::uint32_t usable_cells = 0U;
+    float width = 0.0F;
+    CellIndex min{};
+    std::int32_t side = 0;
+    for_each_level_cell(theirs, layer, pool2, &width, &min, &side, [&](CellIndex index, const auto& cell) {
+      if (usable(cell, p, width)) {
+        sx_[usable_cells] = grid::cell_centre(index.x, width) + cell.mean_x + offset.x_m - cx_;
+        sy_[usable_cells] = grid::cell_centre(index.y, width) + cell.mean_y + offset.y_m - cy_;
+        sz_[usable_cells] = cell.mean_z + offset.z_m;
+        ++usable_cells;
+      }
+    });
+    const std::uint32_t stride = usable_cells > kMaxCoarseSamples ? (usable_cells + kMaxCoarseSamples - 1U) / kMaxCoarseSamples : 1U;
     samples_ = 0U;
     float lever_sq = 0.0F;
-    std::uint32_t k = 0U;
-    for (std::int32_t j = 0; j < side; ++j) {
-      for (std::int32_t i = 0; i < side; ++i) {
-        const CellIndex index{min.x + i, min.y + j};
-        const auto cell = theirs.pooled_cell(layer, index);
-        if (!is_usable(cell) || (k++ % stride) != 0U || samples_ >= kMaxCoarseSamples) {
-          continue;
-        }
-        const float x = grid::cell_centre(index.x, width) + cell.mean_x + offset.x_m - cx_;
-        const float y = grid::cell_centre(index.y, width) + cell.mean_y + offset.y_m - cy_;
-        sx_[samples_] = x;
-        sy_[samples_] = y;
-        sz_[samples_] = cell.mean_z + offset.z_m;
-        lever_sq = x * x + y * y > lever_sq ? x * x + y * y : lever_sq;
-        ++samples_;
-      }
+    for (std::uint32_t k = 0; k < usable_cells; k += stride) {
+      sx_[samples_] = sx_[k];
+      sy_[samples_] = sy_[k];
+      sz_[samples_] = sz_[k];
+      const float r2 = sx_[k] * sx_[k] + sy_[k] * sy_[k];
+      lever_sq = r2 > lever_sq ? r2 : lever_sq;
+      ++samples_;
     }
     lever_ = std::sqrt(lever_sq);
   }
@@ -393,9 +411,9 @@ class CoarseAligner {
   }
 
   Predictor table_[kTableCells]{};
-  float sx_[kMaxCoarseSamples]{};
-  float sy_[kMaxCoarseSamples]{};
-  float sz_[kMaxCoarseSamples]{};
+  float sx_[kTableCells]{};  ///< their usable cells, then the samples taken from them
+  float sy_[kTableCells]{};
+  float sz_[kTableCells]{};
   std::uint32_t samples_ = 0U;
   float lever_ = 0.0F;
   float width_ = 1.0F;
