@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "ccmap/global/coarse_alignment.hpp"
+#include "ccmap/global/patch_keeper.hpp"
 #include "support/terrain_data.hpp"
 
 #ifndef CCMAP_TEST_DATA_DIR
@@ -175,6 +176,43 @@ TEST(CoarseAlignment, RefusesWithoutOverlapAndBadParameters) {
                           nullptr)
                 .correction.status,
             Status::kOutOfRange);
+}
+
+// A revisit: a rover maps home, drives 40 m away (home leaves its windows into patches), and
+// comes back with its pose drifted by 1 m and 10 deg. Its new view of home, in the drifted
+// frame, is aligned against the old patches (read into a second stack bound to the same
+// storage): the correction found is the drift.
+TEST(CoarseAlignment, ARevisitFindsTheDriftAgainstOldPatches) {
+  using Keeper = PatchKeeper<AlignConfig, 16>;
+  static Map rover;
+  static Map old_map;
+  static Map view;
+  static Keeper keeper;
+  static Keeper reader;
+  static Aligner aligner;
+  const std::size_t slot = Keeper::kMaxPatchBytes + platform::RegionPatchStorage::kSlotHeaderBytes;
+  std::vector<std::uint8_t> region(160U * slot);
+  static platform::RegionPatchStorage storage;
+  ASSERT_TRUE(storage.init(region.data(), region.size(), slot));
+  build(rover, rolling, 0.0F, 0.0F, 4.5F, Motion{0.0F, 0.0F, 0.0F});
+  ASSERT_EQ(keeper.init(rover, storage.table()), Status::kOk);
+  for (int k = 1; k <= 200; ++k) {
+    const float x = 0.2F * static_cast<float>(k);
+    ASSERT_EQ(keeper.move_to(x, 0.0F, PatchPose{x, 0.0F, 0.0F, 0.003F * x, 0.0001F * x}, nullptr), Status::kOk);
+  }
+  EXPECT_GT(keeper.counters().cells_saved, 1000U);
+  EXPECT_EQ(keeper.counters().cells_lost, 0U);
+  const Motion drift{0.9F, -0.5F, 0.1745F};
+  build(view, rolling, 0.3F, -0.2F, 3.0F, drift);
+  ASSERT_EQ(old_map.init(params()), Status::kOk);
+  PatchMoveReport read{};
+  ASSERT_EQ(reader.init(old_map, storage.table(), &read), Status::kOk);
+  EXPECT_EQ(read.cells_restored, keeper.counters().cells_saved);  // every cell that left, each once
+  const AlignmentResult a =
+      aligner.align(old_map, view, MapOffset{0.0F, 0.0F, 0.0F}, registration(), default_coarse_search_params(), nullptr);
+  ASSERT_EQ(a.correction.status, Status::kOk) << to_string(a.correction.status);
+  EXPECT_NEAR(a.correction.dyaw, drift.yaw, 0.002F);
+  EXPECT_LT(max_error(a, drift, 0.3F, -0.2F, 2.5F), 0.01F);
 }
 
 TEST(CoarseAlignment, RecoversOneMetreAndTenDegreesOnTheMarsDtm) {

@@ -291,9 +291,15 @@ class PatchKeeper {
   PatchKeeper(const PatchKeeper&) = delete;
   PatchKeeper& operator=(const PatchKeeper&) = delete;
 
-  /// Binds the keeper to an initialised stack and a storage (both function pointers set).
-  /// kNotInitialised / kCorrupt: the stack's state; kInvalidArgument: a storage without functions.
-  [[nodiscard]] Status init(StackType& stack, const platform::PatchStorage& storage) noexcept {
+  /// Binds the keeper to an initialised stack and a storage (both function pointers set), and
+  /// reads back every patch under the stack's windows (merged into cells the stack observed
+  /// already): afterwards every stored cell in a window is in the stack, so that no eviction
+  /// overwrites a patch with a cell that was never restored (a restart over a kept directory, a
+  /// second stack over the same storage to align against old patches). kNotInitialised /
+  /// kCorrupt: the stack's state; kInvalidArgument: a storage without functions. report (may be
+  /// nullptr): what the read-back did.
+  [[nodiscard]] Status init(StackType& stack, const platform::PatchStorage& storage,
+                            PatchMoveReport* report = nullptr) noexcept {
     stack_ = nullptr;
     const Status state = stack.verify_state();
     if (state != Status::kOk) {
@@ -306,6 +312,18 @@ class PatchKeeper {
     storage_ = storage;
     sequence_ = 0U;
     counters_ = PatchCounters{};
+    PatchMoveReport r{};
+    for (int layer = 0; layer < kLayerCount; ++layer) {
+      const detail::WindowRect window = Access::window(stack, layer);
+      const detail::WindowRect none{window.min, 0};  // contains no cell: every cell "entered"
+      Access::with_grid(stack, layer, [&](auto& grid) { restore_layer(grid, layer, window, none, r); });
+    }
+    counters_.patches_read += r.patches_read;
+    counters_.cells_restored += r.cells_restored;
+    counters_.cells_lost += r.cells_lost;
+    if (report != nullptr) {
+      *report = r;
+    }
     return Status::kOk;
   }
 
@@ -525,11 +543,23 @@ class PatchKeeper {
       }
       for_each_cell(tx, ty, after, before, [&](std::int32_t x, std::int32_t y, std::size_t slot) {
         const Cell stored = stored_cell<Cell>(slot);
-        if (stored.weight > 0.0F) {
-          // The move cleared the cell: the merge of the stored moments into it is the copy.
-          Access::write_cell(*stack_, grid.cell_unchecked(CellIndex{x, y}), stored);
-          ++r.cells_restored;
+        if (!(stored.weight > 0.0F)) {
+          return;
         }
+        Cell& cell = grid.cell_unchecked(CellIndex{x, y});
+        // A move cleared the cell: the merge of the stored moments into it is their copy. Only
+        // init() finds observed cells under a patch (a stack fed before its keeper was bound).
+        Cell merged = Access::intact_or_empty(*stack_, cell);
+        if (merged.weight > 0.0F) {
+          if (!detail::exchange_merge(merged, stored, 0.0F, Access::params(*stack_), width)) {
+            ++r.cells_lost;
+            return;
+          }
+        } else {
+          merged = stored;
+        }
+        Access::write_cell(*stack_, cell, merged);
+        ++r.cells_restored;
       });
     });
   }
