@@ -263,6 +263,54 @@ TEST(PatchKeeper, EveryLayerOfAStackComesBackAsAStackThatNeverMovedHasIt) {
   EXPECT_EQ(keeper.counters().patches_refused, 0U);
 }
 
+// The paper's 9-float cell, with Kalman and OMG fine layers: each layer's cells after a drive
+// 20 m away and back are bitwise those before it (the state before leaving is the reference).
+template <typename Config>
+void check_round_trip(FineKind fine) {
+  using Keeper = PatchKeeper<Config, 16>;
+  const auto map = std::make_unique<Stack<Config>>();
+  const auto keeper = std::make_unique<Keeper>();
+  Region region(64, Keeper::kMaxPatchBytes + platform::RegionPatchStorage::kSlotHeaderBytes);
+  ASSERT_EQ(map->init(exact_params(0.04F)), Status::kOk);
+  ASSERT_EQ(keeper->init(*map, region.storage.table()), Status::kOk);
+  const auto points = frame_points(0.0F, 0.0F, 2.5F, 4000, 3U);
+  const std::vector<float> weights(points.size(), 1.0F);
+  ASSERT_EQ(map->update_frame(points.data(), weights.data(), points.size(), PointXYZ{0.0F, 0.0F, 0.8F}, nullptr),
+            Status::kOk);
+  auto cells = [&map]() {
+    std::vector<std::uint8_t> bytes;
+    auto add = [&bytes](CellIndex, const auto& c) {
+      const auto* b = reinterpret_cast<const std::uint8_t*>(&c);
+      bytes.insert(bytes.end(), b, b + sizeof c);
+    };
+    map->fine_layer().for_each(add);
+    for (int i = 0; i < Stack<Config>::kCcmLayerCount; ++i) {
+      map->ccm_layer(i).for_each(add);
+    }
+    return bytes;
+  };
+  const std::vector<std::uint8_t> before = cells();
+  for (const float x : {5.0F, 10.0F, 20.0F, 10.0F, 0.0F}) {
+    ASSERT_EQ(keeper->move_to(x, 0.0F, PatchPose{x, 0.0F, 0.0F, 0.0F, 0.0F}, nullptr), Status::kOk);
+  }
+  EXPECT_GT(keeper->counters().cells_restored, 1000U) << static_cast<int>(fine);
+  EXPECT_TRUE(cells() == before) << static_cast<int>(fine);
+}
+
+struct PaperKalmanConfig : SmallStackConfig {
+  // cppcheck-suppress duplInheritedMember ; the point of the derived configuration
+  static constexpr CcmCellKind kCcmCell = CcmCellKind::kPaper;
+};
+struct FullOmgConfig : SmallStackConfig {
+  // cppcheck-suppress duplInheritedMember ; the point of the derived configuration
+  static constexpr FineKind kFineKind = FineKind::kOmg;
+};
+
+TEST(PatchKeeper, EveryCellKindComesBackBitwise) {
+  check_round_trip<PaperKalmanConfig>(FineKind::kKalman);
+  check_round_trip<FullOmgConfig>(FineKind::kOmg);
+}
+
 TEST(PatchKeeper, AFullStorageLosesCellsCountedAndTheMoveStillHappens) {
   static Small map;
   static SmallKeeper keeper;
