@@ -295,6 +295,14 @@ void check_round_trip(FineKind fine) {
   }
   EXPECT_GT(keeper->counters().cells_restored, 1000U) << static_cast<int>(fine);
   EXPECT_TRUE(cells() == before) << static_cast<int>(fine);
+  // Every restored cell carries its integrity check (Stack::cell_intact, what the scrub verifies).
+  int broken = 0;
+  map->fine_layer().for_each([&](CellIndex, const auto& c) { broken += map->cell_intact(c) ? 0 : 1; });
+  for (int i = 0; i < Stack<Config>::kCcmLayerCount; ++i) {
+    map->ccm_layer(i).for_each([&](CellIndex, const auto& c) { broken += map->cell_intact(c) ? 0 : 1; });
+  }
+  EXPECT_EQ(broken, 0);
+  EXPECT_EQ(map->state_status(), Status::kOk);
 }
 
 struct PaperKalmanConfig : SmallStackConfig {
