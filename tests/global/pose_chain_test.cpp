@@ -60,7 +60,9 @@ TEST(PoseChain, ALoopClosureIsSharedAsTheLeastSquaresOfTheChain) {
       var_yaw.push_back(static_cast<double>(sigma_yaw) * sigma_yaw);
     }
     const float dx = 0.8F, dy = -0.45F, dyaw = 0.12F;
-    ASSERT_EQ(chain.close_loop(anchor, dx, dy, dyaw), Status::kOk);
+    PoseChain<64> turned = chain;  // the headings' shares, from their own closure
+    ASSERT_EQ(chain.close_loop(anchor, dx, dy, 0.0F), Status::kOk);
+    ASSERT_EQ(turned.close_loop(anchor, 0.0F, 0.0F, dyaw), Status::kOk);
     const auto rx = least_squares(var_xy, anchor, dx);
     const auto ry = least_squares(var_xy, anchor, dy);
     const auto ryaw = least_squares(var_yaw, anchor, dyaw);
@@ -68,10 +70,49 @@ TEST(PoseChain, ALoopClosureIsSharedAsTheLeastSquaresOfTheChain) {
       const ChainNode n = chain.node(k);
       EXPECT_NEAR(n.pose.x_m - 0.5F * static_cast<float>(k), rx[k], 2e-6) << k;
       EXPECT_NEAR(n.pose.y_m - 0.1F * static_cast<float>(k), ry[k], 2e-6) << k;
-      EXPECT_NEAR(n.pose.yaw_rad - 0.01F, ryaw[k], 2e-6) << k;
+      EXPECT_NEAR(turned.node(k).pose.yaw_rad - 0.01F, ryaw[k], 2e-6) << k;
     }
     EXPECT_NEAR(chain.node(kNodes - 1U).pose.x_m - 0.5F * (kNodes - 1U), dx, 1e-5);
   }
+}
+
+// A drive whose odometry heading drifts at a constant rate (variance growing with distance, as
+// the stamps say): closing the loop with the true correction of the last pose turns every step
+// back, and the whole corrected trajectory lies on the true one.
+TEST(PoseChain, AHeadingDriftIsUndoneAlongTheWholeDrive) {
+  PoseChain<256> chain;
+  std::vector<double> tx, ty;
+  double x = 0.0, y = 0.0, yaw = 0.0, bx = 0.0, by = 0.0, byaw = 0.0, d = 0.0;
+  for (int i = 0; i < 200; ++i) {
+    tx.push_back(x);
+    ty.push_back(y);
+    const float sigma = static_cast<float>(std::sqrt(d));  // variance proportional to distance
+    ASSERT_EQ(chain.append(PatchPose{static_cast<float>(bx), static_cast<float>(by), static_cast<float>(byaw),
+                                     0.03F * sigma, 0.005F * sigma},
+                           static_cast<std::uint32_t>(i)),
+              Status::kOk);
+    const double turn = (i % 50 == 49) ? M_PI / 2.0 : 0.0;
+    x += 0.5 * std::cos(yaw);
+    y += 0.5 * std::sin(yaw);
+    yaw += turn;
+    bx += 0.5 * std::cos(byaw);
+    by += 0.5 * std::sin(byaw);
+    byaw += turn + 0.0025;  // 0.005 rad/m
+    d += 0.5;
+  }
+  const ChainNode last = chain.node(199U);
+  const double drift = 0.0025 * 199.0;
+  const auto dx = static_cast<float>(tx[199] - last.pose.x_m);
+  const auto dy = static_cast<float>(ty[199] - last.pose.y_m);
+  ASSERT_EQ(chain.close_loop(0U, dx, dy, static_cast<float>(-drift)), Status::kOk);
+  double after = 0.0;
+  for (int i = 0; i < 200; ++i) {
+    const ChainNode n = chain.node(static_cast<std::size_t>(i));
+    const auto k = static_cast<std::size_t>(i);
+    after = std::fmax(after, std::hypot(n.pose.x_m - tx[k], n.pose.y_m - ty[k]));
+  }
+  EXPECT_LT(after, 0.01);  // the drift had moved the last pose by metres
+  EXPECT_GT(std::hypot(tx[199] - last.pose.x_m, ty[199] - last.pose.y_m), 5.0);
 }
 
 TEST(PoseChain, RefusesBadNodesAndCountsAFullChain) {

@@ -19,11 +19,11 @@
 #include <pcl/search/kdtree.h>
 
 #include <algorithm>
-#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <functional>
 #include <random>
 #include <string>
@@ -69,9 +69,9 @@ struct Motion {
 
 struct Scene {
   std::string name;
-  std::vector<P3> map;       ///< the 4 x 4 m map's points
-  std::vector<P3> frame;     ///< the 3 x 3 m frame's points (ground truth frame), noise added per draw
-  double fx, fy, half;       ///< the frame's centre and half side
+  std::vector<P3> map;    ///< the 4 x 4 m map's points
+  std::vector<P3> frame;  ///< the 3 x 3 m frame's points (ground truth frame), noise added per draw
+  double fx, fy, half;    ///< the frame's centre and half side
   double map_cx, map_cy;
 };
 
@@ -126,7 +126,8 @@ void print(const Scene& s, const Tally& t) {
 pcl::PointCloud<pcl::PointXYZ>::Ptr cloud_of(const std::vector<P3>& points) {
   pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>);
   c->reserve(points.size());
-  for (const P3& p : points) c->push_back(pcl::PointXYZ(static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)));
+  for (const P3& p : points)
+    c->push_back(pcl::PointXYZ(static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)));
   return c;
 }
 
@@ -137,14 +138,16 @@ ccmap::StackParams stack_params() {
 }
 
 bool build_map(Map& map, const std::vector<P3>& points, double cx, double cy) {
-  if (map.init(stack_params()) != ccmap::Status::kOk || map.move_to(static_cast<float>(cx), static_cast<float>(cy)) != ccmap::Status::kOk) {
+  if (map.init(stack_params()) != ccmap::Status::kOk ||
+      map.move_to(static_cast<float>(cx), static_cast<float>(cy)) != ccmap::Status::kOk) {
     return false;
   }
   std::vector<PointXYZ> pts;
   pts.reserve(points.size());
-  for (const P3& p : points) pts.push_back(PointXYZ{static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
-  return map.update_frame(pts.data(), pts.size(), PointXYZ{static_cast<float>(cx), static_cast<float>(cy), 1.5F}, nullptr) ==
-         ccmap::Status::kOk;
+  for (const P3& p : points)
+    pts.push_back(PointXYZ{static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)});
+  return map.update_frame(pts.data(), pts.size(), PointXYZ{static_cast<float>(cx), static_cast<float>(cy), 1.5F},
+                          nullptr) == ccmap::Status::kOk;
 }
 
 struct Options {
@@ -194,7 +197,10 @@ void run(const Scene& s, const Options& o) {
       if (built && a.correction.status == ccmap::Status::kOk) {
         const double c = std::cos(a.correction.dyaw), sn = std::sin(a.correction.dyaw);
         Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-        m(0, 0) = c; m(0, 1) = -sn; m(1, 0) = sn; m(1, 1) = c;
+        m(0, 0) = c;
+        m(0, 1) = -sn;
+        m(1, 0) = sn;
+        m(1, 1) = c;
         m(0, 3) = a.centre_x_m - (c * a.centre_x_m - sn * a.centre_y_m) + a.correction.dx;
         m(1, 3) = a.centre_y_m - (sn * a.centre_x_m + c * a.centre_y_m) + a.correction.dy;
         m(2, 3) = a.correction.dz;
@@ -202,10 +208,12 @@ void run(const Scene& s, const Options& o) {
       }
       cov.add(error, t);
       if (o.verbose) {
-        std::printf("  draw %d: offset %.2f m %.1f deg: ccmap %s observable %d%d%d%d error %.1f mm sigma x %.1f mm yaw %.2f mrad\n", d, r,
-                    yaw * 180.0 / M_PI, ccmap::to_string(a.correction.status), a.correction.observable[0],
-                    a.correction.observable[1], a.correction.observable[2], a.correction.observable[3], 1e3 * error,
-                    1e3 * a.correction.sigma_dx, 1e3 * a.correction.sigma_dyaw);
+        std::printf(
+            "  draw %d: offset %.2f m %.1f deg: ccmap %s observable %d%d%d%d error %.1f mm sigma x %.1f mm yaw %.2f "
+            "mrad\n",
+            d, r, yaw * 180.0 / M_PI, ccmap::to_string(a.correction.status), a.correction.observable[0],
+            a.correction.observable[1], a.correction.observable[2], a.correction.observable[3], 1e3 * error,
+            1e3 * a.correction.sigma_dx, 1e3 * a.correction.sigma_dyaw);
       }
     }
     const auto source = cloud_of(moved);

@@ -101,16 +101,18 @@ int main(int argc, char** argv) {
     for (int k = 0; k < per_side; ++k) {
       truth.push_back(t);
       believed.push_back(b);
-      const float sigma_xy = static_cast<float>(0.03 * travelled);
-      const float sigma_yaw = static_cast<float>(0.005 * travelled);
-      const ccmap::PatchPose stamp{static_cast<float>(b.x), static_cast<float>(b.y), static_cast<float>(b.yaw), sigma_xy,
-                                   sigma_yaw};
+      // Odometry sigmas whose variance grows with distance (a random walk per metre).
+      const float sigma_xy = static_cast<float>(0.03 * std::sqrt(travelled));
+      const float sigma_yaw = static_cast<float>(0.005 * std::sqrt(travelled));
+      const ccmap::PatchPose stamp{static_cast<float>(b.x), static_cast<float>(b.y), static_cast<float>(b.yaw),
+                                   sigma_xy, sigma_yaw};
       ccmap::PatchMoveReport report{};
       const double t0 = thread_seconds();
       const ccmap::Status moved = keeper->move_to(stamp.x_m, stamp.y_m, stamp, &report);
       const double t1 = thread_seconds();
       const auto points = frame(t, b, 2.5, static_cast<std::uint32_t>(truth.size()));
-      const ccmap::Status updated = map->update_frame(points.data(), points.size(), ccmap::PointXYZ{stamp.x_m, stamp.y_m, 1.2F}, nullptr);
+      const ccmap::Status updated =
+          map->update_frame(points.data(), points.size(), ccmap::PointXYZ{stamp.x_m, stamp.y_m, 1.2F}, nullptr);
       const double t2 = thread_seconds();
       if (moved != ccmap::Status::kOk || updated != ccmap::Status::kOk ||
           chain.append(stamp, static_cast<std::uint32_t>(truth.size() - 1U)) != ccmap::Status::kOk) {
@@ -135,9 +137,13 @@ int main(int argc, char** argv) {
   const auto aligner = std::make_unique<ccmap::CoarseAligner<LoopConfig>>();
   const auto points = frame(t, b, 3.0, 99999U);
   ccmap::PatchMoveReport read{};
-  if (view->init(params) != ccmap::Status::kOk || view->move_to(static_cast<float>(b.x), static_cast<float>(b.y)) != ccmap::Status::kOk ||
-      view->update_frame(points.data(), points.size(), ccmap::PointXYZ{static_cast<float>(b.x), static_cast<float>(b.y), 1.2F}, nullptr) != ccmap::Status::kOk ||
-      old_map->init(params) != ccmap::Status::kOk || reader->init(*old_map, storage.table(), &read) != ccmap::Status::kOk) {
+  if (view->init(params) != ccmap::Status::kOk ||
+      view->move_to(static_cast<float>(b.x), static_cast<float>(b.y)) != ccmap::Status::kOk ||
+      view->update_frame(points.data(), points.size(),
+                         ccmap::PointXYZ{static_cast<float>(b.x), static_cast<float>(b.y), 1.2F},
+                         nullptr) != ccmap::Status::kOk ||
+      old_map->init(params) != ccmap::Status::kOk ||
+      reader->init(*old_map, storage.table(), &read) != ccmap::Status::kOk) {
     std::fprintf(stderr, "loop_experiment: the revisit failed\n");
     return 1;
   }
@@ -152,9 +158,10 @@ int main(int argc, char** argv) {
   const ccmap::AlignmentResult a = aligner->align(*old_map, *view, offset, reg, search, &coarse);
   const double align_time = thread_seconds() - a0;
   const auto error = [&](const Pose& p) { return std::hypot(p.x - t.x, p.y - t.y); };
-  std::printf("loop: %.0f m square, %zu frames every %.2f m, odometry 3 %% + 0.005 rad/m; %u patches written, "
-              "%u cells read back for the revisit\n",
-              4.0 * side, truth.size(), step, keeper->counters().patches_written, read.cells_restored);
+  std::printf(
+      "loop: %.0f m square, %zu frames every %.2f m, odometry 3 %% + 0.005 rad/m; %u patches written, "
+      "%u cells read back for the revisit\n",
+      4.0 * side, truth.size(), step, keeper->counters().patches_written, read.cells_restored);
   std::printf("closure before: position error %.3f m, heading error %.2f deg\n", error(b),
               (b.yaw - t.yaw) * 180.0 / M_PI);
   if (a.correction.status != ccmap::Status::kOk) {
@@ -164,8 +171,8 @@ int main(int argc, char** argv) {
   // The corrected pose: the view's point at the believed position, moved by offset and correction.
   const double c = std::cos(a.correction.dyaw), s = std::sin(a.correction.dyaw);
   const double px = b.x + offset.x_m - a.centre_x_m, py = b.y + offset.y_m - a.centre_y_m;
-  const Pose corrected{c * px - s * py + a.centre_x_m + a.correction.dx, s * px + c * py + a.centre_y_m + a.correction.dy,
-                       b.yaw + a.correction.dyaw};
+  const Pose corrected{c * px - s * py + a.centre_x_m + a.correction.dx,
+                       s * px + c * py + a.centre_y_m + a.correction.dy, b.yaw + a.correction.dyaw};
   std::printf("closure after: position error %.3f m, heading error %.2f deg (alignment %s, %.1f ms, rank %u)\n",
               error(corrected), (corrected.yaw - t.yaw) * 180.0 / M_PI, ccmap::to_string(a.correction.status),
               1e3 * align_time, static_cast<unsigned>(a.correction.rank));
@@ -183,10 +190,12 @@ int main(int argc, char** argv) {
     after += std::pow(n.pose.x_m - truth[i].x, 2) + std::pow(n.pose.y_m - truth[i].y, 2);
   }
   std::printf("trajectory RMS position error: before %.3f m, after the chain's share %.3f m\n",
-              std::sqrt(before / static_cast<double>(truth.size())), std::sqrt(after / static_cast<double>(truth.size())));
-  std::printf("cost per frame (host thread CPU): keeper move %.3f ms mean, %.3f ms worst (%u patch writes), frame update "
-              "%.3f ms mean\n",
-              1e3 * keep_time / static_cast<double>(truth.size()), 1e3 * worst_keep, worst_writes,
-              1e3 * update_time / static_cast<double>(truth.size()));
+              std::sqrt(before / static_cast<double>(truth.size())),
+              std::sqrt(after / static_cast<double>(truth.size())));
+  std::printf(
+      "cost per frame (host thread CPU): keeper move %.3f ms mean, %.3f ms worst (%u patch writes), frame update "
+      "%.3f ms mean\n",
+      1e3 * keep_time / static_cast<double>(truth.size()), 1e3 * worst_keep, worst_writes,
+      1e3 * update_time / static_cast<double>(truth.size()));
   return 0;
 }

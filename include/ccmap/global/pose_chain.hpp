@@ -1,8 +1,8 @@
 // The poses of the patches written since a loop's anchor, and a loop closure's correction
 // distributed over them: the least-squares solution of a pose chain with one loop edge.
 //
-// Model (linearised: x, y and yaw each on its own, the yaw's effect on later positions left
-// out). Nodes 0..n-1 are patch stamps in write order (PatchPose: the rover's pose and its
+// Model (linearised: x, y and yaw each on its own; close_loop then turns the positions by
+// the heading corrections, below). Nodes 0..n-1 are patch stamps in write order (PatchPose: the rover's pose and its
 // odometry sigmas, which grow along the drive: the variance V_i = sigma_i^2 accumulated since
 // the start). Consecutive nodes are joined by odometry edges of variance q_i = V_i - V_(i-1).
 // A loop closure says the last node lies at its pose + c relative to node a (the anchor: the
@@ -60,24 +60,43 @@ class PoseChain {
   /// Moves the last node by (dx, dy, dyaw) (map frame, m and rad) relative to node `anchor`, the
   /// nodes in between by their least-squares shares (file comment), the nodes up to the anchor
   /// not at all. kInvalidArgument: anchor not before the last node, a non-finite correction.
+  ///
+  /// Headings first: node k's heading takes its share of dyaw, and every odometry step after
+  /// the anchor is turned by its start node's heading correction (the positions re-integrated:
+  /// a heading error moves everything after it); the translation that then remains at the last
+  /// node is shared by the position shares. With dyaw = 0 this is the linear chain exactly.
   [[nodiscard]] Status close_loop(std::size_t anchor, float dx, float dy, float dyaw) noexcept {
     if (size_ < 2U || anchor >= size_ - 1U || !std::isfinite(dx) || !std::isfinite(dy) || !std::isfinite(dyaw)) {
       return Status::kInvalidArgument;
     }
     const std::size_t last = size_ - 1U;
-    const float va_xy = variance(nodes_[anchor].pose.sigma_xy_m);
-    const float span_xy = variance(nodes_[last].pose.sigma_xy_m) - va_xy;
-    const float va_yaw = variance(nodes_[anchor].pose.sigma_yaw_rad);
-    const float span_yaw = variance(nodes_[last].pose.sigma_yaw_rad) - va_yaw;
-    const auto edges = static_cast<float>(last - anchor);
+    const float target_x = nodes_[last].pose.x_m + dx;
+    const float target_y = nodes_[last].pose.y_m + dy;
+    // Headings, and the positions re-integrated with the turned steps.
+    float previous_x = nodes_[anchor].pose.x_m;  // the uncorrected position of node k - 1
+    float previous_y = nodes_[anchor].pose.y_m;
+    float turn = 0.0F;  // heading correction of node k - 1
     for (std::size_t k = anchor + 1U; k <= last; ++k) {
-      const float even = static_cast<float>(k - anchor) / edges;
-      const float f_xy = span_xy > 0.0F ? (variance(nodes_[k].pose.sigma_xy_m) - va_xy) / span_xy : even;
-      const float f_yaw = span_yaw > 0.0F ? (variance(nodes_[k].pose.sigma_yaw_rad) - va_yaw) / span_yaw : even;
       PatchPose& p = nodes_[k].pose;
-      p.x_m += f_xy * dx;
-      p.y_m += f_xy * dy;
-      p.yaw_rad += f_yaw * dyaw;
+      const float step_x = p.x_m - previous_x;
+      const float step_y = p.y_m - previous_y;
+      previous_x = p.x_m;
+      previous_y = p.y_m;
+      const float c = std::cos(turn);
+      const float s = std::sin(turn);
+      const PatchPose& before = nodes_[k - 1U].pose;  // already corrected
+      p.x_m = before.x_m + c * step_x - s * step_y;
+      p.y_m = before.y_m + s * step_x + c * step_y;
+      turn = share(anchor, k, &PatchPose::sigma_yaw_rad) * dyaw;
+      p.yaw_rad += turn;
+    }
+    // The translation left at the last node, shared.
+    const float rest_x = target_x - nodes_[last].pose.x_m;
+    const float rest_y = target_y - nodes_[last].pose.y_m;
+    for (std::size_t k = anchor + 1U; k <= last; ++k) {
+      const float f = share(anchor, k, &PatchPose::sigma_xy_m);
+      nodes_[k].pose.x_m += f * rest_x;
+      nodes_[k].pose.y_m += f * rest_y;
     }
     return Status::kOk;
   }
@@ -94,6 +113,15 @@ class PoseChain {
 
  private:
   [[nodiscard]] static float variance(float sigma) noexcept { return sigma * sigma; }
+  /// Node k's share of a correction between the anchor and the last node, by the variance of the
+  /// sigma `field` (equal shares per edge where the chain holds none).
+  [[nodiscard]] float share(std::size_t anchor, std::size_t k, float PatchPose::*field) const noexcept {
+    const std::size_t last = size_ - 1U;
+    const float va = variance(nodes_[anchor].pose.*field);
+    const float span = variance(nodes_[last].pose.*field) - va;
+    return span > 0.0F ? (variance(nodes_[k].pose.*field) - va) / span
+                       : static_cast<float>(k - anchor) / static_cast<float>(last - anchor);
+  }
 
   ChainNode nodes_[kMaxNodes]{};
   std::size_t size_ = 0U;
