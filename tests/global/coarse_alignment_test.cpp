@@ -18,6 +18,7 @@
 
 #include "ccmap/global/coarse_alignment.hpp"
 #include "ccmap/global/patch_keeper.hpp"
+#include "support/global_configs.hpp"
 #include "support/terrain_data.hpp"
 
 #ifndef CCMAP_TEST_DATA_DIR
@@ -27,14 +28,7 @@
 namespace ccmap {
 namespace {
 
-// CCM layers of 4, 8 and 16 cm, 64 cells a side (+-1.28, +-2.56, +-5.12 m).
-struct AlignConfig {
-  static constexpr FineKind kFineKind = FineKind::kNone;
-  static constexpr CcmCellKind kCcmCell = CcmCellKind::kFull;
-  static constexpr std::int32_t kFineSide = 0;
-  static constexpr std::array<std::int32_t, 3> kCcmSides{{64, 64, 64}};
-  static constexpr float kDefaultFinestCellWidthM = 0.04F;
-};
+using AlignConfig = test::ThreeCcmConfig;
 using Map = Stack<AlignConfig>;
 using Aligner = CoarseAligner<AlignConfig>;
 using Ground = std::function<float(float, float)>;

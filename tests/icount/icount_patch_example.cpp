@@ -16,24 +16,14 @@
 
 #include "ccmap/global/patch_keeper.hpp"
 #include "support/cadre_frames.hpp"
+#include "support/count_arg.hpp"
 #include "support/icount_marker.hpp"
-
-namespace {
-bool parse(const char* text, int max, int* value) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < 1 || v > max) {
-    return false;
-  }
-  *value = static_cast<int>(v);
-  return true;
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   int frames = 8, width_px = 80, height_px = 50;
-  if (argc != 1 && (argc != 4 || !parse(argv[1], 1000, &frames) || !parse(argv[2], 4000, &width_px) ||
-                    !parse(argv[3], 4000, &height_px))) {
+  if (argc != 1 &&
+      (argc != 4 || !ccmap::test::parse_count(argv[1], 1000, &frames) ||
+       !ccmap::test::parse_count(argv[2], 4000, &width_px) || !ccmap::test::parse_count(argv[3], 4000, &height_px))) {
     std::fprintf(stderr, "usage: icount_patch_example [frames width_px height_px]\n");
     return 2;
   }

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "ccmap/global/coarse_alignment.hpp"
+#include "support/global_configs.hpp"
 #include "support/terrain_data.hpp"
 
 #ifndef CCMAP_DEFAULT_DATA_DIR
@@ -40,14 +41,7 @@ namespace {
 
 using ccmap::PointXYZ;
 
-// CCM layers of 4, 8 and 16 cm, 64 cells a side (+-1.28, +-2.56, +-5.12 m).
-struct BenchConfig {
-  static constexpr ccmap::FineKind kFineKind = ccmap::FineKind::kNone;
-  static constexpr ccmap::CcmCellKind kCcmCell = ccmap::CcmCellKind::kFull;
-  static constexpr std::int32_t kFineSide = 0;
-  static constexpr std::array<std::int32_t, 3> kCcmSides{{64, 64, 64}};
-  static constexpr float kDefaultFinestCellWidthM = 0.04F;
-};
+using BenchConfig = ccmap::test::ThreeCcmConfig;
 using Map = ccmap::Stack<BenchConfig>;
 
 struct P3 {

@@ -20,16 +20,11 @@
 #include "ccmap/global/coarse_alignment.hpp"
 #include "ccmap/global/patch_keeper.hpp"
 #include "ccmap/global/pose_chain.hpp"
+#include "support/global_configs.hpp"
 
 namespace {
 
-struct LoopConfig {  // CCM layers of 4, 8 and 16 cm, 64 cells a side (+-1.28, +-2.56, +-5.12 m)
-  static constexpr ccmap::FineKind kFineKind = ccmap::FineKind::kNone;
-  static constexpr ccmap::CcmCellKind kCcmCell = ccmap::CcmCellKind::kFull;
-  static constexpr std::int32_t kFineSide = 0;
-  static constexpr std::array<std::int32_t, 3> kCcmSides{{64, 64, 64}};
-  static constexpr float kDefaultFinestCellWidthM = 0.04F;
-};
+using LoopConfig = ccmap::test::ThreeCcmConfig;
 using Map = ccmap::Stack<LoopConfig>;
 using Keeper = ccmap::PatchKeeper<LoopConfig, 16>;
 
