@@ -66,7 +66,9 @@ class PoseChain {
   /// a heading error moves everything after it); the translation that then remains at the last
   /// node is shared by the position shares. With dyaw = 0 this is the linear chain exactly.
   [[nodiscard]] Status close_loop(std::size_t anchor, float dx, float dy, float dyaw) noexcept {
-    if (size_ < 2U || anchor >= size_ - 1U || !std::isfinite(dx) || !std::isfinite(dy) || !std::isfinite(dyaw)) {
+    // size_ <= kMaxNodes always; said here so that the compiler knows every index below is in range.
+    if (size_ < 2U || size_ > kMaxNodes || anchor >= size_ - 1U || !std::isfinite(dx) || !std::isfinite(dy) ||
+        !std::isfinite(dyaw)) {
       return Status::kInvalidArgument;
     }
     const std::size_t last = size_ - 1U;
