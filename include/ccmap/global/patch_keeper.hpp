@@ -290,6 +290,9 @@ class PatchKeeper {
   PatchKeeper() noexcept = default;
   PatchKeeper(const PatchKeeper&) = delete;
   PatchKeeper& operator=(const PatchKeeper&) = delete;
+  PatchKeeper(PatchKeeper&&) = delete;
+  PatchKeeper& operator=(PatchKeeper&&) = delete;
+  ~PatchKeeper() = default;
 
   /// Binds the keeper to an initialised stack and a storage (both function pointers set), and
   /// reads back every patch under the stack's windows (merged into cells the stack observed
@@ -438,7 +441,7 @@ class PatchKeeper {
         const std::int32_t x = tx * kTile + i;
         const std::int32_t y = ty * kTile + j;
         if (in.contains(x, y) && !out.contains(x, y)) {
-          fn(x, y, static_cast<std::size_t>(j * kTile + i));
+          fn(x, y, static_cast<std::size_t>(j) * static_cast<std::size_t>(kTile) + static_cast<std::size_t>(i));
         }
       }
     }
