@@ -6,6 +6,8 @@
 //   1  PatchKeeper::move_to of a drive step (patch reads and writes of the cells that left)
 //   2  update_frame_sensor (the frame's cost beside it)
 //   3  the jump back: the worst case of one move (max_writes_per_move patches)
+//   4  a loop closure's alignment: CoarseAligner::align of a second map of the same ground (the
+//      drive's frames moved by 0.5 m, 0.3 m) against the rover's, default search (+-2 m, +-20 deg)
 // On other targets the markers are empty and the program checks that every call succeeds.
 //
 //   icount_patch_example [frames width_px height_px]   default: 8 80 50
@@ -14,6 +16,7 @@
 #include <memory>
 #include <vector>
 
+#include "ccmap/global/coarse_alignment.hpp"
 #include "ccmap/global/patch_keeper.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/count_arg.hpp"
@@ -40,6 +43,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "icount_patch_example: init failed\n");
     return 1;
   }
+  const auto other = std::make_unique<Map>();
+  if (other->init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) {
+    return 1;
+  }
   std::uint32_t most_written = 0U;
   for (int k = 0; k < frames; ++k) {
     ccmap::test::CadreFrameSpec spec;
@@ -62,6 +69,17 @@ int main(int argc, char** argv) {
       return 1;
     }
     most_written = report.patches_written > most_written ? report.patches_written : most_written;
+    // The second map: the same ground, its frame 0.5 m, 0.3 m off (it drives the same path).
+    std::vector<ccmap::PointXYZ> shifted = f.map_points;
+    for (ccmap::PointXYZ& p : shifted) {
+      p.x += 0.5F;
+      p.y += 0.3F;
+    }
+    const ccmap::PointXYZ origin{f.sensor_origin.x + 0.5F, f.sensor_origin.y + 0.3F, f.sensor_origin.z};
+    if (other->move_to(origin.x, origin.y) != ccmap::Status::kOk ||
+        other->update_frame(shifted.data(), shifted.size(), origin, nullptr) != ccmap::Status::kOk) {
+      return 1;
+    }
   }
   ccmap::PatchMoveReport jump{};
   ccmap::test::icount_begin<3>();
@@ -72,6 +90,20 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "icount_patch_example: the jump back failed\n");
     return 1;
   }
+  const auto aligner = std::make_unique<ccmap::CoarseAligner<ccmap::CadreConfig>>();
+  ccmap::CoarseReport coarse{};
+  ccmap::test::icount_begin<4>();
+  const ccmap::AlignmentResult a =
+      aligner->align(*map, *other, ccmap::MapOffset{0.0F, 0.0F, 0.0F}, ccmap::default_registration_params(),
+                     ccmap::default_coarse_search_params(), &coarse);
+  ccmap::test::icount_end<4>();
+  std::printf("icount_patch_example: alignment %s, dx %.3f dy %.3f dyaw %.4f, rank %u (search: %u candidates, "
+              "%u samples, best %.3f %.3f %.4f, %u matched)\n",
+              ccmap::to_string(a.correction.status), static_cast<double>(a.correction.dx),
+              static_cast<double>(a.correction.dy), static_cast<double>(a.correction.dyaw),
+              static_cast<unsigned>(a.correction.rank), coarse.candidates, coarse.samples,
+              static_cast<double>(coarse.dx_m), static_cast<double>(coarse.dy_m), static_cast<double>(coarse.dyaw_rad),
+              coarse.matched);
   std::printf("icount_patch_example: %d frames, most patches written by a drive step %u (bound %u), jump: %u written, "
               "%u read, %u cells restored (bound %u writes); patch %zu bytes\n",
               frames, most_written, Keeper::max_writes_per_step(), jump.patches_written, jump.patches_read,

@@ -17,6 +17,8 @@
 //  2. Level 1, the coarsest layer (CADRE: 64 cm), then level 2, the next finer one (32 cm): the
 //     same around the level before's best, over +-1 of its steps, at half its steps.
 //  3. The registration (align_maps' solver) from the last level's best, with every layer.
+// A level with fewer usable cells than RegistrationParams::min_matches (a small view) is
+// skipped: the next, finer one searches the whole box (its steps capped at kMaxSteps a side).
 // The answer is registration's: its statuses and its observability claims. A direction the
 // registration does not claim keeps no coarse component either (flat ground: dz only, no x, y
 // or yaw; a ditch along x: no x), so the search invents nothing the terrain does not fix.
@@ -149,11 +151,11 @@ class CoarseAligner {
         r.samples = samples_;
       }
       if (samples_ < params.min_matches || samples_ == 0U) {
-        break;  // too few coarse cells: the registration decides from the nominal offset
+        continue;  // too few cells at this level (a small view): the next, finer level searches the box
       }
       step_xy = 0.5F * width;
       step_yaw = lever_ > 0.0F ? 0.5F * width / lever_ : half_yaw;
-      if (level > 0) {
+      if (best.score >= 0.0F) {
         // +-1 step of the level before, at this level's (half as large) steps.
         half_xy = 2.0F * step_xy;
         half_yaw = 2.0F * step_yaw;
