@@ -64,6 +64,8 @@ template <typename Config>
 struct ExchangeAccess;  // persistence/exchange.hpp: delta export and merge read and fold cells
 template <typename Config>
 struct RegistrationAccess;  // registration/registration.hpp: register_frame(_sensor), public reads only
+template <typename Config>
+struct GlobalAccess;  // global/patch_keeper.hpp: cells leaving a window saved as patches, restored on return
 }  // namespace detail
 
 template <typename Config>
@@ -593,6 +595,8 @@ class Stack {
   friend struct detail::PlannerAccess<Config>;
   // Map exchange reads and folds cells through this friend (persistence/exchange.hpp).
   friend struct detail::ExchangeAccess<Config>;
+  // The global map saves the cells a move clears and restores them on return, through this friend.
+  friend struct detail::GlobalAccess<Config>;
 
  private:
   /// Index of `cell` in `storage` (`count` cells), or `count` if it is not one of them (compared
