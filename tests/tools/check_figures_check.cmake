@@ -23,7 +23,8 @@ file(WRITE "${DIR}/include/ccmap/map/a.hpp"
   "// squared range): one line too many.\n"
   "int a();  // chunks of\n"
   "          // 512 points: a claim across comment lines\n")
-set(expected
+include(${CMAKE_CURRENT_LIST_DIR}/checker_fixture.cmake)
+ccmap_check_fixture(1 8
   "README.md:1: '128-point chunks' contradicts docs/figures.md `front.chunk_points` = 256"
   "README.md:2: 'docs/design.md"
   "section 6': docs/design.md has no section 6"
@@ -34,34 +35,11 @@ set(expected
   "include/ccmap/map/a.hpp:1: 'Q18 position' contradicts docs/figures.md `free_space.u_fraction_bits` = 8"
   "include/ccmap/map/a.hpp:3: 'chunks of 512 points' contradicts")
 
-execute_process(COMMAND "${PYTHON}" "${CHECKER}" --root "${DIR}" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-message("${out}${err}")
-if(NOT rc EQUAL 1)
-  message(FATAL_ERROR "check-figures on the stale fixture exited with '${rc}' (expected 1)")
-endif()
-# Findings counted as lines (a CMake list would join those with brackets): all but the summary.
-string(REGEX REPLACE "[^\n]" "" newlines "${out}")
-string(LENGTH "${newlines}" found)
-math(EXPR found "${found} - 1")
-set(wanted 8)
-if(NOT found EQUAL wanted)
-  message(FATAL_ERROR "check-figures reported ${found} findings, expected ${wanted}")
-endif()
-foreach(e IN LISTS expected)
-  string(FIND "${out}" "${e}" at)
-  if(at EQUAL -1)
-    message(FATAL_ERROR "check-figures did not report: ${e}")
-  endif()
-endforeach()
-
 # Fixed: the same tree with the claims made true passes.
 file(WRITE "${DIR}/README.md"
   "The front takes 256-point chunks. Map exchange: docs/design.md section 8; docs/design.md section 1.1.\n"
   "The overrun of a time budget is at most one chunk (256 points, ~8 us at the clock).\n"
   "Row [figures](docs/figures.md) `front.chunk_points`.\n")
 file(WRITE "${DIR}/include/ccmap/map/a.hpp" "// The fields a stage reads (routing code, position).\nint a();\n")
-execute_process(COMMAND "${PYTHON}" "${CHECKER}" --root "${DIR}" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "check-figures on the fixed fixture exited with '${rc}':\n${out}${err}")
-endif()
+ccmap_check_fixture(0 0)
 file(REMOVE_RECURSE "${DIR}")
