@@ -15,6 +15,9 @@ include(GoogleTest)
 # it in host-release too, not only in host-coverage and asan).
 function(ccmap_add_gtest name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  if(CCMAP_LIBRARY_TESTS STREQUAL "RELEASE" AND NOT "release" IN_LIST ARG_LABELS)
+    return()  # built and run by the coverage and sanitizer builds (CCMAP_LIBRARY_TESTS)
+  endif()
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ccmap::core ccmap_host_flags ccmap_test_support GTest::gtest_main ${ARG_LIBS})
   gtest_discover_tests(${name}
