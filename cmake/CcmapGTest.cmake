@@ -10,14 +10,27 @@ add_subdirectory(${CCMAP_GTEST_SOURCE_DIR} ${CMAKE_BINARY_DIR}/_deps/googletest 
 include(GoogleTest)
 
 # ccmap_add_gtest(<name> SOURCES <files...> [LIBS <targets...>] [LABELS <labels...>])
-# One executable per area; each TEST() becomes a ctest test, run under QEMU when cross-built.
+# One executable per area; each TEST() becomes a ctest test, run under QEMU when cross-built,
+# labelled `library` and LABELS (`release`: its subject is the optimised build, so tools/test runs
+# it in host-release too, not only in host-coverage and asan).
 function(ccmap_add_gtest name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LIBS;LABELS" ${ARGN})
+  if(CCMAP_LIBRARY_TESTS STREQUAL "RELEASE" AND NOT "release" IN_LIST ARG_LABELS)
+    return()  # built and run by the coverage and sanitizer builds (CCMAP_LIBRARY_TESTS)
+  endif()
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ccmap::core ccmap_host_flags ccmap_test_support GTest::gtest_main ${ARG_LIBS})
-  set(_labels library ${ARG_LABELS})
   gtest_discover_tests(${name}
     DISCOVERY_MODE PRE_TEST
     DISCOVERY_TIMEOUT 120
-    PROPERTIES LABELS "${_labels}" TIMEOUT 600)
+    TEST_LIST ${name}_TESTS
+    PROPERTIES TIMEOUT 600)
+  # The labels (`library` and ARG_LABELS) by a file ctest reads after the discovered tests:
+  # gtest_discover_tests passes PROPERTIES as a flat list, so a second label would become a
+  # property name instead of a label.
+  set(_labels library ${ARG_LABELS})
+  set(_labels_file "${CMAKE_CURRENT_BINARY_DIR}/${name}_labels.cmake")
+  file(WRITE "${_labels_file}"
+       "if(DEFINED ${name}_TESTS)\n  set_tests_properties(\${${name}_TESTS} PROPERTIES LABELS \"${_labels}\")\nendif()\n")
+  set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES "${_labels_file}")
 endfunction()

@@ -18,7 +18,8 @@ file(WRITE "${DIR}/docs/notes.md" "See `include/ccmap/map/nothere.hpp` and [the 
 file(WRITE "${DIR}/CMakeLists.txt" "add_subdirectory(src) # see tests/tools/io.cmake\n")
 file(WRITE "${DIR}/README.md" "Read docs/notes.md.\n")
 file(WRITE "${DIR}/tests/CMakeLists.txt" "include(\${CMAKE_CURRENT_LIST_DIR}/x.cmake OPTIONAL)\n")
-set(expected
+include(${CMAKE_CURRENT_LIST_DIR}/checker_fixture.cmake)
+ccmap_check_fixture(1 6
   "CMakeLists.txt:1: 'tests/tools/io.cmake'"
   "docs/notes.md:1: 'include/ccmap/map/nothere.hpp'"
   "src/map/a.cpp:5: 'tests/map/x_test.cpp'"
@@ -26,32 +27,10 @@ set(expected
   "src/map/a.cpp:7: 'tools/gone'"
   "tests/CMakeLists.txt:1: conditional pickup")
 
-execute_process(COMMAND "${PYTHON}" "${CHECKER}" --root "${DIR}" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-message("${out}${err}")
-if(NOT rc EQUAL 1)
-  message(FATAL_ERROR "check-paths on the stale fixture exited with '${rc}' (expected 1)")
-endif()
-string(REGEX MATCHALL "[^\n]+" lines "${out}")
-list(FILTER lines EXCLUDE REGEX "^ccmap lint: ")
-list(LENGTH lines found)
-list(LENGTH expected wanted)
-if(NOT found EQUAL wanted)
-  message(FATAL_ERROR "check-paths reported ${found} findings, expected ${wanted}")
-endif()
-foreach(e IN LISTS expected)
-  string(FIND "${out}" "${e}" at)
-  if(at EQUAL -1)
-    message(FATAL_ERROR "check-paths did not report: ${e}")
-  endif()
-endforeach()
-
 # Fixed: the same tree with the stale references gone passes.
 file(WRITE "${DIR}/src/map/a.cpp" "// Good: map/frame_chunk.hpp\nint f();\n")
 file(WRITE "${DIR}/docs/notes.md" "See `include/ccmap/map/frame_chunk.hpp`.\n")
 file(WRITE "${DIR}/CMakeLists.txt" "add_subdirectory(src) # see tests/map/CMakeLists.txt\n")
 file(WRITE "${DIR}/tests/CMakeLists.txt" "add_subdirectory(map)\n")
-execute_process(COMMAND "${PYTHON}" "${CHECKER}" --root "${DIR}" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "check-paths on the fixed fixture exited with '${rc}':\n${out}${err}")
-endif()
+ccmap_check_fixture(0 0)
 file(REMOVE_RECURSE "${DIR}")

@@ -1,4 +1,4 @@
-// The loop experiment of issue 32 (docs/design.md section 13.4): a rover drives a 100 m square
+// The loop experiment (docs/design.md section 13.5): a rover drives a 100 m square
 // loop over analytic terrain with drifting odometry (3 % of distance, 0.005 rad/m of heading),
 // maps it through a PatchKeeper (patches in a caller region), and back at the start aligns its
 // view against the patches of the start (CoarseAligner, nominal offset: "I am back where I

@@ -362,9 +362,9 @@ class Stack {
   }
 
   /// Same for points in the sensor frame: p_map = R p + t with the sensor pose (R, t), the
-  /// path a rover flies. The transform runs in fixed point (map/update/front.hpp): position
-  /// error against the double-precision transform below 8 um per axis within 10 m of the sensor
-  /// (docs/design.md). Sensor-frame coordinates of 2^11 m or more are refused as out of range.
+  /// path a rover flies. The transform runs in float (map/update/front.hpp): position error
+  /// against the double-precision transform below 3 um per axis within 10 m of the sensor
+  /// (docs/design.md section 4.4). Sensor-frame coordinates of 2^11 m or more are refused as out of range.
   /// Also refused as a whole: a non-finite rotation (kNonFiniteInput) or one that is not a
   /// rotation (|r_ij| > 1.001 or R^T R off the identity by more than 1e-3: kInvalidArgument).
   [[nodiscard]] Status update_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& sensor_pose,
@@ -616,7 +616,7 @@ class Stack {
   }
 
   /// Prologue of every frame update: a refused frame (bad arguments, bad origin or rotation) is
-  /// counted and answered; an accepted one gets its fixed-point pose, clock and counters.
+  /// counted and answered; an accepted one gets its frame pose (detail::FramePose), clock and counters.
   [[nodiscard]] Status begin_frame(const PointXYZ* points, std::size_t n, const PointXYZ& origin, const float* rotation,
                                    detail::FramePose* pose, FrameCounters& frame, FrameCounters* counters,
                                    std::uint64_t* start) noexcept {

@@ -196,9 +196,9 @@ struct RoutingTable {
 
   /// First layer k with range_sq <= max_range_sq[k]; -1 if the point is too noisy for every
   /// layer, or if range_sq is not > 0 (NaN, negative, or the sensor origin itself) or +inf.
-  /// No sqrt, no division: at most kLayers + 1 compares. This is the routing rule in float; the
-  /// stack routes in fixed point (map/update/front.hpp, the bounds of this table as keys), and
-  /// tests/map/front_test.cpp holds that against this function on double-precision ranges.
+  /// No sqrt, no division: at most kLayers + 1 compares. This is the routing rule; the stack's
+  /// front routes a chunk of points at a time on the same squared bounds (map/update/front.hpp),
+  /// and tests/map/front_test.cpp holds that against this function on double-precision ranges.
   [[nodiscard]] int select(float range_sq) const noexcept {
     if (!(range_sq > 0.0F)) {
       return -1;

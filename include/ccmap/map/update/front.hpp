@@ -4,8 +4,8 @@
 // (map/update/update_path.hpp); integrators need not read it.
 //
 // Float, in plain loops over structure-of-arrays that the compiler vectorises (four lanes of
-// NEON on aarch64; SSE2, or the AVX2+FMA clone on x86-64 CPUs that have it): about 20 aarch64
-// instructions per point for a sensor-frame chunk (docs/performance.md, "The update path").
+// NEON on aarch64; SSE2, or the AVX2+FMA clone on x86-64 CPUs that have it); its aarch64
+// instructions per point are counted in docs/performance.md section 2.
 // Every operation is a single IEEE-754 float operation in a fixed order (the build forbids FMA
 // contraction and fast-math; the one fused multiply-add is written out, std::fma, and rounds
 // once on every target), so x86-64, aarch64 and the Cortex-M7 compute the same bits.

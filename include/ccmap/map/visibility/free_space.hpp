@@ -37,7 +37,8 @@
 //    no more than kRangeSigmas sigma_k below the cell's mean.
 //
 // The coupling to the front is one adapter, ray_end_of(): the fields of a FrontChunk entry this
-// stage reads (routing code, Q18 position, squared range).
+// stage reads (routing code, finest cell and float position inside it, squared range), the
+// position made U units (8 fraction bits, map/visibility/ray_walk.hpp) by ray_u().
 #pragma once
 
 #include <cmath>
