@@ -371,6 +371,50 @@ TEST(PatchKeeper, ADamagedPatchIsRefusedAndNothingOfItRestored) {
   EXPECT_EQ(unbound.move_to(0.0F, 0.0F, PatchPose{}, nullptr), Status::kNotInitialised);
 }
 
+TEST(PatchKeeper, AnUpsetCellComesBackDistrusted) {
+  // A cell an upset damaged answers unknown with the reason upset; leaving the window and coming
+  // back through a patch must not turn that into "never observed" (which another layer, or the
+  // planner's tolerance of unknown area, could answer for), until points observe it again.
+  static Small map;
+  static SmallKeeper keeper;
+  Region region(16, kSlotBytes);
+  ASSERT_EQ(map.init(exact_params(0.08F)), Status::kOk);
+  ASSERT_EQ(keeper.init(map, region.storage.table()), Status::kOk);
+  const auto points = frame_points(0.0F, 0.0F, 1.2F, 4000, 11U);
+  ASSERT_EQ(map.update_frame(points.data(), points.size(), PointXYZ{0.0F, 0.0F, 1.0F}, nullptr), Status::kOk);
+  // A known place, and a known place beside it in another patch tile.
+  float px = 0.0F, py = 0.0F, qx = 0.0F, qy = 0.0F;
+  for (int i = 0; i < 100 && !(map.query(px, py).status == Status::kOk); ++i) {
+    px = 0.04F + 0.08F * static_cast<float>(i % 10);
+    py = 0.04F + 0.08F * static_cast<float>(i / 10);
+  }
+  for (int i = 0; i < 100 && !(map.query(qx, qy).status == Status::kOk); ++i) {
+    qx = -0.04F - 0.08F * static_cast<float>(i % 10);
+    qy = -0.04F - 0.08F * static_cast<float>(i / 10);
+  }
+  ASSERT_EQ(map.query(px, py).status, Status::kOk);
+  ASSERT_EQ(map.query(qx, qy).status, Status::kOk);
+  const CcmCell* cell = map.ccm_layer(0).cell_at(px, py);
+  ASSERT_NE(cell, nullptr);
+  auto* bytes = reinterpret_cast<unsigned char*>(const_cast<CcmCell*>(cell));  // the upset
+  bytes[4] = static_cast<unsigned char>(bytes[4] ^ 0x04U);
+  const QueryResult hit = map.query(px, py);
+  ASSERT_EQ(hit.status, Status::kUnknown);
+  ASSERT_TRUE(hit.upset);
+  ASSERT_EQ(keeper.move_to(20.0F, 0.0F, PatchPose{20.0F, 0.0F, 0.0F, 0.0F, 0.0F}, nullptr), Status::kOk);
+  ASSERT_EQ(keeper.move_to(0.0F, 0.0F, PatchPose{}, nullptr), Status::kOk);
+  const QueryResult back = map.query(px, py);
+  EXPECT_EQ(back.status, Status::kUnknown);
+  EXPECT_TRUE(back.upset) << "the upset's mark was lost through the patch";
+  EXPECT_EQ(map.query(qx, qy).status, Status::kOk) << "an intact cell in another tile came back";
+  EXPECT_EQ(map.state_status(), Status::kOk);
+  // New points observe the place again: the mark is gone.
+  ASSERT_EQ(map.update_frame(points.data(), points.size(), PointXYZ{0.0F, 0.0F, 1.0F}, nullptr), Status::kOk);
+  const QueryResult seen = map.query(px, py);
+  EXPECT_EQ(seen.status, Status::kOk);
+  EXPECT_FALSE(seen.upset);
+}
+
 TEST(PatchKeeper, APosixDirectoryHoldsThePatches) {
   char directory[] = "/tmp/ccmap_patches_XXXXXX";
   ASSERT_NE(mkdtemp(directory), nullptr);

@@ -230,9 +230,11 @@ struct GlobalAccess {
   }
   [[nodiscard]] static float width(const StackType& stack, int layer) noexcept { return stack.layers_.widths[layer]; }
   [[nodiscard]] static const StackParams& params(const StackType& stack) noexcept { return stack.params_; }
+  /// The cell as a patch may keep it: itself if intact, else the distrusted cell (an upset's
+  /// mark travels through the patch, so the place answers unknown when it comes back).
   template <typename Cell>
-  [[nodiscard]] static Cell intact_or_empty(const StackType& stack, const Cell& cell) noexcept {
-    return detail::intact_or_empty(stack.layers_, cell);
+  [[nodiscard]] static Cell intact_or_distrusted(const StackType& stack, const Cell& cell) noexcept {
+    return detail::intact_or_distrusted(stack.layers_, cell);
   }
   /// Writes `value` into `cell` (a cell of the stack) and carries the change into its check.
   template <typename Cell>
@@ -493,12 +495,12 @@ class PatchKeeper {
       bool changed = false;
       std::uint32_t observed = 0U;
       for_each_cell(tx, ty, before, after, [&](std::int32_t x, std::int32_t y, std::size_t slot) {
-        const Cell cell = Access::intact_or_empty(*stack_, grid.cell_unchecked(CellIndex{x, y}));
+        const Cell cell = Access::intact_or_distrusted(*stack_, grid.cell_unchecked(CellIndex{x, y}));
         std::uint8_t bytes[kCellBytes]{};
-        if (cell.weight > 0.0F) {
+        if (cell.weight > 0.0F || detail::distrust_mark(cell)) {  // the distrusted cell: weight -0
           detail::SnapshotWriter w(bytes, kCellBytes);
           detail::snapshot_write_cell(w, cell);
-          ++observed;
+          observed += cell.weight > 0.0F ? 1U : 0U;
         }
         std::uint8_t* at = buffer_ + detail::kPatchHeaderBytes + slot * kCellBytes;
         if (std::memcmp(at, bytes, kCellBytes) != 0) {
@@ -546,13 +548,21 @@ class PatchKeeper {
       }
       for_each_cell(tx, ty, after, before, [&](std::int32_t x, std::int32_t y, std::size_t slot) {
         const Cell stored = stored_cell<Cell>(slot);
+        Cell& cell = grid.cell_unchecked(CellIndex{x, y});
+        if (detail::distrust_mark(stored)) {
+          // An upset had cost the place its cells: unknown (reason upset) until points observe
+          // it again, unless something observed it meanwhile.
+          if (!(Access::intact_or_distrusted(*stack_, cell).weight > 0.0F)) {
+            Access::write_cell(*stack_, cell, detail::distrusted_cell<Cell>());
+          }
+          return;
+        }
         if (!(stored.weight > 0.0F)) {
           return;
         }
-        Cell& cell = grid.cell_unchecked(CellIndex{x, y});
         // A move cleared the cell: the merge of the stored moments into it is their copy. Only
         // init() finds observed cells under a patch (a stack fed before its keeper was bound).
-        Cell merged = Access::intact_or_empty(*stack_, cell);
+        Cell merged = Access::intact_or_distrusted(*stack_, cell);
         if (merged.weight > 0.0F) {
           if (!detail::exchange_merge(merged, stored, 0.0F, Access::params(*stack_), width)) {
             ++r.cells_lost;
