@@ -23,7 +23,7 @@ foreach(p IN LISTS host)
 endforeach()
 
 set(union "")
-foreach(tier host cross lint fuzz baremetal python gdal coverage)
+foreach(tier host cross lint fuzz baremetal python gdal coverage cfs)
   tier_list(packages ${tier})
   list(LENGTH packages n)
   if(n EQUAL 0)
