@@ -136,8 +136,8 @@ TEST(SightTable, NeverBoundsACellBelowTheLowestWalkedRayAndBoundsMostOfThem) {
         for (std::int32_t i = 0; i < w.side[layer]; ++i) {
           const std::int32_t gx = w.min[layer].x + i, gy = w.min[layer].y + j;
           const float cw = static_cast<float>(1 << layer);
-          const float x0 = static_cast<float>((std::int64_t{gx} << layer) - pose.anchor.x) - k.sensor_u[0];
-          const float y0 = static_cast<float>((std::int64_t{gy} << layer) - pose.anchor.y) - k.sensor_u[1];
+          const float x0 = static_cast<float>((std::int64_t{gx} * (std::int64_t{1} << layer)) - pose.anchor.x) - k.sensor_u[0];
+          const float y0 = static_cast<float>((std::int64_t{gy} * (std::int64_t{1} << layer)) - pose.anchor.y) - k.sensor_u[1];
           const auto it = lowest.find(std::make_tuple(layer, gx, gy));
           walked_cells += it != lowest.end() ? 1U : 0U;
           SightCell c{};

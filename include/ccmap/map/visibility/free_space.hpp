@@ -281,6 +281,7 @@ class FreeSpace<Config, true> {
     hash_bool_bytes(h, every_);
     h.add(bin_scale_);
     h.add(sigma_c_);
+    h.add(cell_width_);
   }
 
  private:
@@ -435,11 +436,11 @@ class FreeSpace<Config, true> {
       const float step = consts_[layer].step_m;
       for (std::int32_t j = 0; j < side; ++j) {
         const std::int32_t gy = min.y + j;
-        const float y0 = static_cast<float>((std::int64_t{gy} << layer) - sight_anchor_.y) - k.sensor_u[1];
+        const float y0 = static_cast<float>((std::int64_t{gy} * (std::int64_t{1} << layer)) - sight_anchor_.y) - k.sensor_u[1];
         const float y1 = y0 + cw;
         for (std::int32_t i = 0; i < side; ++i) {
           const std::int32_t gx = min.x + i;
-          const float x0 = static_cast<float>((std::int64_t{gx} << layer) - sight_anchor_.x) - k.sensor_u[0];
+          const float x0 = static_cast<float>((std::int64_t{gx} * (std::int64_t{1} << layer)) - sight_anchor_.x) - k.sensor_u[0];
           const float x1 = x0 + cw;
           SightCell sc{};
           if (!sight_.read_cell(x0, x1, y0, y1, &sc)) {
