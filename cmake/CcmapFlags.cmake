@@ -22,9 +22,7 @@ if(CCMAP_COVERAGE)
   if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
     message(FATAL_ERROR "CCMAP_COVERAGE needs gcc (gcov data for gcovr), not ${CMAKE_CXX_COMPILER_ID}")
   endif()
-  # Atomic counters: the product's reader threads run the same code as the writer, and plain
-  # counter updates raced into negative branch counts that gcov writes and gcovr cannot parse.
-  add_compile_options(--coverage -fprofile-update=atomic)
+  add_compile_options(--coverage)
   add_link_options(--coverage)
 endif()
 
