@@ -61,11 +61,11 @@ static_assert(std::uint64_t{kMaxCostmapSide} * kMaxCostmapSide == std::uint64_t{
 inline constexpr std::int32_t kMaxInflationPixels = 32;
 
 struct CostmapSpec {
-  float centre_x;            ///< raster centre, map frame (m)
-  float centre_y;
-  float resolution_m;        ///< pixel side (m), > 0
-  std::uint32_t side;        ///< pixels per axis, 1 .. kMaxCostmapSide
-  float inflation_radius_m;  ///< 0: no inflation; at most kMaxInflationPixels * resolution_m
+  float centre_x = 0.0F;            ///< raster centre, map frame (m)
+  float centre_y = 0.0F;
+  float resolution_m = 0.0F;        ///< pixel side (m), > 0
+  std::uint32_t side = 0U;          ///< pixels per axis, 1 .. kMaxCostmapSide
+  float inflation_radius_m = 0.0F;  ///< 0: no inflation; at most kMaxInflationPixels * resolution_m
   /// Row budget: 0 (or side and above) fills every row; else only the central band of max_rows
   /// rows, every other pixel unknown (see the header comment).
   std::uint32_t max_rows = 0U;
