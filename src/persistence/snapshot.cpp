@@ -2,30 +2,17 @@
 // little-endian field codec, header, fingerprint, parameters, cells and counters.
 #include "ccmap/persistence/snapshot.hpp"
 
-#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
 
+#include "ccmap/core/crc32.hpp"
 #include "ccmap/map/classify.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap {
 
 namespace {
-
-constexpr std::array<std::uint32_t, 256> make_crc_table() noexcept {
-  std::array<std::uint32_t, 256> table{};
-  for (std::uint32_t i = 0; i < 256U; ++i) {
-    std::uint32_t c = i;
-    for (int bit = 0; bit < 8; ++bit) {
-      c = (c & 1U) != 0U ? (0xEDB88320U ^ (c >> 1U)) : (c >> 1U);
-    }
-    table[i] = c;
-  }
-  return table;
-}
-constexpr std::array<std::uint32_t, 256> kCrcTable = make_crc_table();
 
 // The format (snapshot.hpp) lists every field of these types; a new field needs a new format
 // version, not a silent omission.
@@ -59,11 +46,7 @@ std::uint32_t crc32_update(std::uint32_t crc, const std::uint8_t* data, std::siz
   if (data == nullptr) {
     return crc;
   }
-  std::uint32_t c = ~crc;
-  for (std::size_t i = 0; i < size; ++i) {
-    c = kCrcTable[(c ^ data[i]) & 0xFFU] ^ (c >> 8U);
-  }
-  return ~c;
+  return detail::crc32_continue(crc, data, size);
 }
 
 namespace detail {

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "ccmap/core/crc32.hpp"
 #include "ccmap/core/status.hpp"
 
 namespace ccmap {
@@ -74,23 +75,6 @@ struct ProductCell {
 
 namespace product_detail {
 
-/// CRC-32 table (IEEE 802.3 reflected polynomial 0xEDB88320), built at compile time.
-struct CrcTable {
-  std::uint32_t entry[256];
-};
-[[nodiscard]] constexpr CrcTable make_crc_table() noexcept {
-  CrcTable t{};
-  for (std::uint32_t i = 0; i < 256U; ++i) {
-    std::uint32_t c = i;
-    for (int k = 0; k < 8; ++k) {
-      c = (c & 1U) != 0U ? 0xEDB88320U ^ (c >> 1U) : c >> 1U;
-    }
-    t.entry[i] = c;
-  }
-  return t;
-}
-inline constexpr CrcTable kCrcTable = make_crc_table();
-
 inline void put_u16(std::uint8_t* p, std::uint16_t v) noexcept {
   p[0] = static_cast<std::uint8_t>(v & 0xFFU);
   p[1] = static_cast<std::uint8_t>(v >> 8U);
@@ -123,11 +107,7 @@ inline void put_f32(std::uint8_t* p, float v) noexcept {
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32) of data[0, size): product_crc32("123456789", 9) == 0xCBF43926.
 [[nodiscard]] inline std::uint32_t product_crc32(const std::uint8_t* data, std::size_t size) noexcept {
-  std::uint32_t c = 0xFFFFFFFFU;
-  for (std::size_t i = 0; i < size; ++i) {
-    c = product_detail::kCrcTable.entry[(c ^ data[i]) & 0xFFU] ^ (c >> 8U);
-  }
-  return ~c;
+  return detail::crc32_continue(0U, data, size);
 }
 
 /// Writes `h` into the first kProductHeaderSize bytes of `out` (magic, version, header_bytes and
