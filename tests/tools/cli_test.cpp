@@ -457,9 +457,10 @@ TEST(CliQuery, AnswersAtAMapFramePoint) {
     kv[line.substr(0, colon)] = line.substr(colon + 2);
   }
   for (const char* key : {"status", "layer", "cell_width_m", "height_m", "slope_x", "slope_y", "inclination",
-                          "normal_variance_m2", "elevation_variance_m2", "class"}) {
+                          "normal_variance_m2", "elevation_variance_m2", "class", "upset"}) {
     EXPECT_EQ(kv.count(key), 1U) << key;
   }
+  EXPECT_EQ(kv["upset"], "0") << "a map made in-process has had no upset";
   EXPECT_EQ(kv["status"], "ok");
   EXPECT_EQ(kv["layer"], "0");
   EXPECT_EQ(kv["class"], "traversable");
@@ -506,6 +507,7 @@ TEST(CliQuery, FootprintOfTheBodyOnThePlaneAndOnTheStep) {
   EXPECT_EQ(kv["class"], "traversable") << "the point answer is still there";
   EXPECT_EQ(kv["footprint_class"], "traversable");
   EXPECT_NEAR(std::stod(kv["footprint_unknown_share"]), 0.0, 1e-6);
+  EXPECT_EQ(kv["footprint_upset_share"], "0.000000");
   EXPECT_NEAR(std::stod(kv["footprint_max_step_m"]), 0.16, 2e-3);
   EXPECT_NEAR(std::stod(kv["footprint_max_inclination_deg"]), 12.604, 0.05);
   // Turned by 90 deg the body spans 0.6 m along y: 0.2 * 0.4 + 0.1 * 0.6 = 0.14 m.

@@ -197,7 +197,8 @@ constexpr const char* kMapFooter =
 constexpr const char* kQueryFooter =
     "Maps the clouds as 'ccmap map' does (same options, see 'ccmap map --help') and prints the\n"
     "map's answer at the map-frame point (X, Y): layer, height, slopes, inclination, normal\n"
-    "variance, elevation variance and class, one 'key: value' per line. Without --poses only the\n"
+    "variance, elevation variance, class and upset (1: unknown because the cell failed its check),\n"
+    "one 'key: value' per line. Without --poses only the\n"
     "tile that holds (X, Y) is mapped (the answer is the whole map's); a point whose tile holds no\n"
     "point of the clouds is outside the map (status: outside_map).\n"
     "\n"
@@ -383,7 +384,7 @@ void add_query_command(CLI::App& app, Options& o) {
       query, "--footprint", "L,W[,YAW_DEG]",
       "with --at: also the rover body, an L x W m rectangle centred there, its\n"
       "length along YAW_DEG (degrees from +x, default 0): adds footprint_class\n"
-      "(traversable|obstacle|steep|unknown), footprint_unknown_share,\n"
+      "(traversable|obstacle|steep|unknown), footprint_unknown_share, footprint_upset_share,\n"
       "footprint_max_step_m, footprint_max_inclination_deg",
       [&o](const std::string& v) {
         const std::vector<double> n = parse_list("--footprint", v, ',');
@@ -1178,6 +1179,7 @@ int run_query(const Options& o, std::ostream& out) {
   out << "elevation_variance_m2: " << fmt("%.6g", q.elevation_variance) << "\n";
   out << "weight: " << fmt("%.6g", q.weight) << "\n";
   out << "class: " << q.cell_class << "\n";
+  out << "upset: " << (q.upset ? 1 : 0) << "\n";
   if (o.have_footprint) {
     // The centred map (map_centred) or the map at the last pose: never tiles.
     const double lx = o.at_x - m.origin.xyz[0], ly = o.at_y - m.origin.xyz[1];
@@ -1188,6 +1190,7 @@ int run_query(const Options& o, std::ostream& out) {
     if (f.status != "ok" && f.status != "outside_map") fail("the map refused the footprint (" + f.status + ")", 2);
     out << "footprint_class: " << f.verdict << "\n";
     out << "footprint_unknown_share: " << fmt("%.6f", f.unknown_share) << "\n";
+    out << "footprint_upset_share: " << fmt("%.6f", f.upset_share) << "\n";
     out << "footprint_max_step_m: " << fmt("%.6f", f.max_step) << "\n";
     out << "footprint_max_inclination_deg: "
         << fmt("%.3f", std::atan(static_cast<double>(f.max_inclination)) * 180.0 / kPi) << "\n";

@@ -169,6 +169,7 @@ class StackRunner final : public MapRunner {
     out.elevation_variance = q.elevation_variance;
     out.weight = q.weight;
     out.cell_class = to_string(q.cell_class);
+    out.upset = q.upset;
     return out;
   }
 
@@ -180,6 +181,7 @@ class StackRunner final : public MapRunner {
     out.worst_class = to_string(r.worst_class);
     out.verdict = to_string(footprint_class(r, max_unknown_share));
     out.unknown_share = r.unknown_share;
+    out.upset_share = r.upset_share;
     out.max_step = r.max_step_m;
     out.max_inclination = r.max_inclination;
     out.min_height = r.min_height_m;

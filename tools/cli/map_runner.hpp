@@ -58,6 +58,7 @@ struct LocalQuery {
   float cell_width = 0, height = 0, slope_x = 0, slope_y = 0, inclination = 0;
   float normal_variance = 0, elevation_variance = 0, weight = 0;
   const char* cell_class = "unknown";
+  bool upset = false;  ///< QueryResult::upset: unknown because the cell failed its check (an upset)
 };
 
 /// A footprint query's answer (planner/footprint.hpp) in the local frame.
@@ -65,7 +66,7 @@ struct LocalFootprint {
   std::string status;               ///< ok, outside_map, or the refusal
   const char* worst_class = "unknown";
   const char* verdict = "unknown";  ///< footprint_class() with the caller's unknown share
-  float unknown_share = 1, max_step = 0, max_inclination = 0, min_height = 0, max_height = 0;
+  float unknown_share = 1, upset_share = 0, max_step = 0, max_inclination = 0, min_height = 0, max_height = 0;
   std::uint32_t cells_visited = 0;
 };
 

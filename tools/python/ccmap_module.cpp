@@ -344,6 +344,9 @@ const Field<QueryRecord> kQueryFields[] = {
      [](const QueryRecord& r) { return static_cast<double>(r.q.elevation_variance); }},
     {"weight", Kind::kFloat32, [](const QueryRecord& r) { return static_cast<double>(r.q.weight); }},
     {"class", Kind::kClassName, [](const QueryRecord& r) { return static_cast<double>(r.q.cell_class); }},
+    // 1 with status "unknown" when the answering cell failed its check or was reset by the scrub
+    // (a single-event upset: QueryResult::upset), else 0. Not a CLI key: the CLI maps in-process.
+    {"upset", Kind::kInt32, [](const QueryRecord& r) { return r.q.upset ? 1.0 : 0.0; }},
 };
 
 /// One exported cell and its layer.

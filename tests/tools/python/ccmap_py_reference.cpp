@@ -14,6 +14,8 @@
 //   frame <ox> <oy> <oz> <status> <counter>=<n>...               (update_frame, map frame)
 //   sensor_frame <r00> .. <r22> <tx> <ty> <tz> <status> <counter>=<n>...  (update_frame_sensor)
 //   query <layer|-1> <fx> <fy> <field>=<value>...   (raw QueryResult; -1 = Stack::query)
+//   upset <cells> <scrub_frames>   one bit flipped in each of <cells> live finest cells, then the
+//         scrub's empty frames: from here the Python side reads the scenario's snapshot (Map.load)
 //   layer <k> <count> <side> <centre_ix> <centre_iy> <width> <threshold>, then count lines
 //         "<ix> <iy> <cx> <cy> <weight> <height> <slope_x> <slope_y> <normal_var> <elev_var> <class>"
 //   totals <counter>=<n>...   rejected <moves> <frames>   snapshot <path>   end
@@ -26,8 +28,10 @@
 #include <vector>
 
 #include "ccmap/map/config.hpp"
-#include "ccmap/persistence/snapshot.hpp"
+#include "ccmap/map/detail/integrity.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/persistence/snapshot.hpp"
+#include "ccmap/planner/detail/region_walk.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 #include "support/hash_unit.hpp"
 
@@ -169,11 +173,35 @@ class Scenario {
   void query(int layer, float x, float y) const {
     const ccmap::QueryResult q = layer < 0 ? stack_->query(x, y) : stack_->query_layer(layer, x, y);
     std::printf("query %d %s %s status=%s layer=%d cell_width_m=%s height_m=%s slope_x=%s slope_y=%s inclination=%s"
-                " normal_variance_m2=%s elevation_variance_m2=%s weight=%s class=%s\n",
+                " normal_variance_m2=%s elevation_variance_m2=%s weight=%s class=%s upset=%d\n",
                 layer, bits(x).c_str(), bits(y).c_str(), ccmap::to_string(q.status), q.layer,
                 bits(q.cell_width_m).c_str(), bits(q.height_m).c_str(), bits(q.slope_x).c_str(),
                 bits(q.slope_y).c_str(), bits(q.inclination).c_str(), bits(q.normal_variance).c_str(),
-                bits(q.elevation_variance).c_str(), bits(q.weight).c_str(), ccmap::to_string(q.cell_class));
+                bits(q.elevation_variance).c_str(), bits(q.weight).c_str(), ccmap::to_string(q.cell_class), q.upset ? 1 : 0);
+  }
+
+  /// A single-event upset in every `stride`-th live finest cell (one bit in the middle of the
+  /// cell's bytes, flipped in place as radiation would), then the scrub's empty frames, which
+  /// find and distrust them. The distrust survives the snapshot finish() writes.
+  void upset(std::size_t stride, PointXYZ origin) {
+    const auto& fine = ccmap::detail::PlannerAccess<Config>::view(*stack_).layers().fine_storage;
+    auto* base = reinterpret_cast<unsigned char*>(stack_.get());
+    std::size_t live = 0;
+    std::size_t flipped = 0;
+    for (const auto& c : fine) {
+      if (!(c.weight > 0.0F) || live++ % stride != 0U) continue;
+      const std::size_t at = static_cast<std::size_t>(reinterpret_cast<const unsigned char*>(&c) - base) + sizeof c / 2U;
+      base[at] = static_cast<unsigned char>(base[at] ^ 0x04U);
+      ++flipped;
+    }
+    const std::uint32_t scrub = ccmap::detail::ConfigScrubFrames<Config>::value;
+    for (std::uint32_t f = 0; f < scrub; ++f) {
+      if (stack_->update_frame(nullptr, nullptr, 0U, origin, nullptr) != Status::kOk) {
+        std::fprintf(stderr, "%s: a scrub frame was refused\n", name_.c_str());
+        std::exit(1);
+      }
+    }
+    std::printf("upset %zu %u\n", flipped, scrub);
   }
 
   /// Stack queries on a grid over [x0, x1] x [y0, y1] (steps chosen not to align with cells),
@@ -255,6 +283,17 @@ void cadre_stereo(const char* dir) {
   s.finish(dir);
 }
 
+void cadre_upset(const char* dir) {
+  // cadre_stereo's first frame, then upsets in one live finest cell of seven: the answers the
+  // snapshot carries to a ground tool (Python reads it with Map.load).
+  Scenario<ccmap::CadreConfig> s("cadre_upset", "cadre", ccmap::default_stack_params(0.04F));
+  s.frame(make_frame(10U, 4000, 0.2, 4.6, -2.0, 2.0, false), PointXYZ{0.0F, 0.0F, 0.175F});
+  s.frame(make_frame(15U, 4000, 0.2, 3.0, -1.5, 1.5, false), PointXYZ{0.0F, 0.0F, 0.175F});
+  s.upset(7U, PointXYZ{0.0F, 0.0F, 0.175F});
+  s.queries(-0.5F, 3.0F, -1.6F, 1.6F);
+  s.finish(dir);
+}
+
 void ccm_lidar(const char* dir) {
   ccmap::StackParams p = ccmap::default_stack_params(0.16F);
   p.noise = ccmap::sensor::NoiseModel::lidar(ccmap::sensor::LidarParams{0.01F, 0.0F});
@@ -313,6 +352,7 @@ void omg_inverse_variance(const char* dir) {
 int main(int argc, char** argv) {
   const char* dir = argc > 1 ? argv[1] : nullptr;
   cadre_stereo(dir);
+  cadre_upset(dir);
   ccm_lidar(dir);
   kf_stereo(dir);
   omg_inverse_variance(dir);

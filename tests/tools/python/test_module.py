@@ -16,7 +16,7 @@ from support import bits, main
 SOURCE_DIR = os.environ.get("CCMAP_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 # The keys `ccmap query` prints (tools/cli/cli.cpp, run_query), in its order.
 CLI_QUERY_KEYS = ["x", "y", "status", "layer", "cell_width_m", "height_m", "slope_x", "slope_y", "inclination",
-                  "inclination_deg", "normal_variance_m2", "elevation_variance_m2", "weight", "class"]
+                  "inclination_deg", "normal_variance_m2", "elevation_variance_m2", "weight", "class", "upset"]
 
 
 def ground(n, seed, x=(0.3, 2.5), y=(-1.2, 1.2)):

@@ -21,7 +21,7 @@ import ccmap
 from support import bits, f32_from_bits, main
 
 REFERENCE = os.environ.get("CCMAP_PY_REFERENCE", "")
-SCENARIOS = ("cadre_stereo", "ccm_lidar", "kf_stereo", "omg_inverse_variance")
+SCENARIOS = ("cadre_stereo", "cadre_upset", "ccm_lidar", "kf_stereo", "omg_inverse_variance")
 QUERY_FLOATS = ("slope_x", "slope_y", "inclination", "normal_variance_m2", "elevation_variance_m2", "weight")
 CELL_FLOATS = ("cx", "cy", "weight", "height", "slope_x", "slope_y", "normal_var", "elev_var")
 # Snapshot tail (include/ccmap/persistence/snapshot.hpp): ... last update duration (u64), CRC-32 (u32).
@@ -109,6 +109,7 @@ class ReferenceTest(unittest.TestCase):
         self.assertEqual(got["status"], status, where)
         self.assertEqual(int(got["layer"]), layer, where)
         self.assertEqual(got["class"], expected["class"], where)
+        self.assertEqual(int(got["upset"]), int(expected["upset"]), f"{where}: upset")
         for key in QUERY_FLOATS:
             self.assertEqual(bits(got[key]), int(expected[key], 16), f"{where}: {key}")
         raw_height = f32_from_bits(expected["height_m"])
@@ -158,6 +159,7 @@ class ReferenceTest(unittest.TestCase):
         m = self.map = ccmap.Map(preset, **kwargs)
         points = weights = None
         frames = 0
+        upset_loaded = False
         stack_queries, layer_queries = [], {}
         for kind, data in ops:
             where = f"{name}: {kind} {' '.join(data[:3]) if isinstance(data, list) else ''}"
@@ -201,6 +203,12 @@ class ReferenceTest(unittest.TestCase):
                 self.assertEqual(m.total_counters, counters(data), f"{name}: totals")
             elif kind == "rejected":
                 self.assertEqual((m.rejected_moves, m.rejected_frames), (int(data[0]), int(data[1])), name)
+            elif kind == "upset":
+                # Python cannot flip the bits: from here the map is the C++ one's snapshot, which
+                # carries the distrusted cells (and the counters of the scrub that found them).
+                self.assertGreater(int(data[0]), 0, where)
+                m = self.map = ccmap.Map.load(next(d[0] for k, d in ops if k == "snapshot"), m.preset)
+                upset_loaded = True
             elif kind == "snapshot":
                 self.check_snapshot(m, data[0], ops, name)
             else:
@@ -214,6 +222,9 @@ class ReferenceTest(unittest.TestCase):
             for row, (x, y, expected) in zip(rows, queries):
                 self.check_query(row, expected, f"{name}: query_many layer {layer} at ({x}, {y})")
         self.assertIn("ok", {e["status"] for _, _, e in stack_queries}, "some query must be answered")
+        upset_answers = [e for _, _, e in stack_queries if e["upset"] == "1"]
+        self.assertEqual(bool(upset_answers), upset_loaded, f"{name}: upset answers only after upsets")
+        self.assertTrue(all(e["status"] == "unknown" for e in upset_answers), f"{name}: an upset answers unknown")
 
     def check_snapshot(self, m, path, ops, name):
         with open(path, "rb") as f:
