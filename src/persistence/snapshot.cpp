@@ -417,7 +417,7 @@ void snapshot_read_record(SnapshotReader& r, FreeSpaceCell* out) noexcept {
 
 // ---- counters, trailer ----
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uint32_t rejected_moves,
-                             std::uint32_t rejected_frames, std::uint64_t last_update_ns) noexcept {
+                             std::uint32_t rejected_frames) noexcept {
   const std::uint32_t values[] = {t.received,        t.used,           t.rejected_non_finite,
                                   t.rejected_out_of_range, t.rejected_weight, t.outside_map,
                                   t.too_noisy,       t.gated_finer,    t.gated_occluded,
@@ -431,11 +431,11 @@ void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& t, std::uin
   for (const std::uint32_t v : values) {
     w.u32(v);
   }
-  w.u64(last_update_ns);
+  w.u64(0U);  // reserved (snapshot.hpp): no measured time, so equal maps save equal bytes
 }
 
 void snapshot_read_counters(SnapshotReader& r, FrameCounters* t, std::uint32_t* rejected_moves,
-                            std::uint32_t* rejected_frames, std::uint64_t* last_update_ns) noexcept {
+                            std::uint32_t* rejected_frames) noexcept {
   t->received = r.u32();
   t->used = r.u32();
   t->rejected_non_finite = r.u32();
@@ -461,7 +461,7 @@ void snapshot_read_counters(SnapshotReader& r, FrameCounters* t, std::uint32_t* 
   t->drop_cells = r.u32();
   *rejected_moves = r.u32();
   *rejected_frames = r.u32();
-  *last_update_ns = r.u64();
+  (void)r.u64();  // reserved: a version-5 snapshot may hold a duration here; ignored
 }
 
 void snapshot_write_trailer(SnapshotWriter& w) noexcept {

@@ -53,7 +53,9 @@
 //                   (map/visibility/free_space_cell.hpp); nothing without free space
 //   counters    88  total FrameCounters (22 x uint32, in declaration order)
 //                8  rejected moves, rejected frames (uint32 each)
-//                8  last update duration (uint64, ns)
+//                8  reserved, written 0 (ignored on load): a measured duration is not map state,
+//                   so two maps fed the same frames save the same bytes; load leaves
+//                   last_update_ns() at 0 (no frame since the load)
 //   trailer      4  CRC-32 (IEEE 802.3 / zlib, reflected 0xEDB88320) of every byte before it
 //
 // Version history: 1 had only the 9-float CCM cell (36 bytes); version 2 added the cell kind
@@ -213,10 +215,11 @@ void snapshot_write_cell(SnapshotWriter& w, const OmgCell& c) noexcept;
 void snapshot_write_record(SnapshotWriter& w, const FreeSpaceCell& c) noexcept;
 /// Every bit pattern of a record is one a stack can hold: never refused.
 void snapshot_read_record(SnapshotReader& r, FreeSpaceCell* out) noexcept;
+/// The counters block, its 8 reserved bytes written 0 and skipped on read.
 void snapshot_write_counters(SnapshotWriter& w, const FrameCounters& totals, std::uint32_t rejected_moves,
-                             std::uint32_t rejected_frames, std::uint64_t last_update_ns) noexcept;
+                             std::uint32_t rejected_frames) noexcept;
 void snapshot_read_counters(SnapshotReader& r, FrameCounters* totals, std::uint32_t* rejected_moves,
-                            std::uint32_t* rejected_frames, std::uint64_t* last_update_ns) noexcept;
+                            std::uint32_t* rejected_frames) noexcept;
 /// Appends the CRC-32 of data[0..w.position()).
 void snapshot_write_trailer(SnapshotWriter& w) noexcept;
 
@@ -293,7 +296,7 @@ struct SnapshotAccess {
         stack.free_space_.records(layer)->for_each([&w](CellIndex, const FreeSpaceCell& c) { snapshot_write_record(w, c); });
       }
     }
-    snapshot_write_counters(w, stack.totals_, stack.rejected_moves_, stack.rejected_frames_, stack.last_update_ns_);
+    snapshot_write_counters(w, stack.totals_, stack.rejected_moves_, stack.rejected_frames_);
     snapshot_write_trailer(w);
     if (w.overflowed() || w.position() != size()) {
       return Status::kInvalidArgument;  // cannot happen: the layout and size() disagree
@@ -369,8 +372,7 @@ struct SnapshotAccess {
     FrameCounters totals{};
     std::uint32_t rejected_moves = 0U;
     std::uint32_t rejected_frames = 0U;
-    std::uint64_t last_update_ns = 0U;
-    snapshot_read_counters(r, &totals, &rejected_moves, &rejected_frames, &last_update_ns);
+    snapshot_read_counters(r, &totals, &rejected_moves, &rejected_frames);
     if (!valid || !r.ok() || r.position() != data_size - kSnapshotTrailerBytes) {
       return Status::kCorrupt;
     }
@@ -444,8 +446,8 @@ struct SnapshotAccess {
         records.for_each([&r](CellIndex, FreeSpaceCell& c) { snapshot_read_record(r, &c); });
       }
     }
-    snapshot_read_counters(r, &stack.totals_, &stack.rejected_moves_, &stack.rejected_frames_,
-                           &stack.last_update_ns_);
+    snapshot_read_counters(r, &stack.totals_, &stack.rejected_moves_, &stack.rejected_frames_);
+    stack.last_update_ns_ = 0U;  // no frame measured since the load
     reseal_all_cells(stack.layers_);  // integrity: the loaded cells' checks, the restored windows' seal
     stack.seal_state();
     return Status::kOk;
