@@ -171,8 +171,8 @@ Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, 
 // at load time (ifunc) on CPUs that have it (the baseline clone calls fmaf). Every clone
 // computes the same floats: single IEEE operations in the same order, the fused multiply-add
 // written out (std::fma rounds once everywhere). tests/map/front_test.cpp and the golden hashes
-// check it. Two traps, both found on 2026-12-06, when the host had run the baseline clone's
-// scalar SSE all along: a clone compiles only what is inlined into it, so the loops below are
+// check it. Two traps (either leaves the host running the baseline clone's scalar SSE without a
+// word): a clone compiles only what is inlined into it, so the loops below are
 // forced inline (CCMAP_FRONT_LOOP) into the two cloned entry points; and the clone is named by
 // its ISA level (x86-64-v3: AVX2, FMA, BMI2; gcc >= 12), which the loader tests with
 // __builtin_cpu_supports, not by a CPU model: "arch=haswell" is chosen only on a CPU that *is* a
