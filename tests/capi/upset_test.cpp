@@ -508,11 +508,19 @@ TEST(Upset, RandomFlipsInTheCApiStorage) { run_campaign(trials_from_environment(
 
 TEST(Upset, RandomFlipsOutsideTheCells) { run_campaign(trials_from_environment(200U), 0xB00C4EE9ULL, true); }
 
+// One bit in CCMAP_UPSET_BOOKKEEPING_BIT_STEP below: 1 (every bit) on the host; 3 under the
+// emulator (tests/capi/CMakeLists.txt), where every byte still sees two or three of its bits.
+#ifndef CCMAP_UPSET_BOOKKEEPING_BIT_STEP
+#define CCMAP_UPSET_BOOKKEEPING_BIT_STEP 1
+#endif
+
 TEST(Upset, EveryBitOfTheBookkeeping) {
   // Every bit of the values that index memory or give the cells their meaning: the header, the
   // parameters, each grid's binding (storage pointer, side, widths, window), the widths and kept
   // windows, and the 512 bytes after the counters (initialised word, seal, scrub cursor, the
   // front's index scale and shift, routing bounds).
+  constexpr std::size_t kBitStep = CCMAP_UPSET_BOOKKEEPING_BIT_STEP;
+  static_assert(kBitStep >= 1U && kBitStep < 8U, "every byte must see at least one of its bits");
   Campaign c;
   prepare(c);
   if (::testing::Test::HasFatalFailure()) return;
@@ -534,18 +542,18 @@ TEST(Upset, EveryBitOfTheBookkeeping) {
   };
   std::size_t failures = 0U;
   for (const Range& r : ranges) {
-    for (std::size_t byte = r.from; byte < r.to && failures <= 20U; ++byte) {
-      for (unsigned bit = 0; bit < 8U; ++bit) {
-        const std::string failure = trial(c, byte, bit);
-        if (!failure.empty()) {
-          ++failures;
-          ADD_FAILURE() << failure;
-        }
+    for (std::size_t at = r.from * 8U; at < r.to * 8U && failures <= 20U; at += kBitStep) {
+      const std::string failure = trial(c, at / 8U, static_cast<unsigned>(at % 8U));
+      if (!failure.empty()) {
+        ++failures;
+        ADD_FAILURE() << failure;
       }
     }
   }
   std::memcpy(&g_storage, &g_backup, ccmap_storage_size(CCMAP_PRESET_CADRE));
-  report(c, "every bit of the header, parameters, grid bindings, widths, kept windows and the 512 bytes after the counters", failures);
+  const std::string which = kBitStep == 1U ? std::string("every bit") : "one bit in " + std::to_string(kBitStep);
+  report(c, (which + " of the header, parameters, grid bindings, widths, kept windows and the 512 bytes after the counters").c_str(),
+         failures);
   EXPECT_EQ(failures, 0U);
 }
 

@@ -616,7 +616,7 @@ void bookkeeping_flip_is_refused(Stack<CadreConfig>& stack, const void* address,
   EXPECT_EQ(stack.query(0.5F, 0.0F).status, Status::kCorrupt) << what;
   EXPECT_EQ(stack.query_layer(1, 0.5F, 0.0F).status, Status::kCorrupt) << what;
   EXPECT_EQ(stack.move_to(0.1F, 0.0F), Status::kCorrupt) << what;
-  const test::CadreFrame frame = small_frame(0, 0.0F, 0.0F);
+  static const test::CadreFrame frame = small_frame(0, 0.0F, 0.0F);  // made once: the same frame every flip
   EXPECT_EQ(stack.update_frame_sensor(frame.sensor_points.data(), frame.sensor_points.size(), frame.pose, nullptr),
             Status::kCorrupt)
       << what;
