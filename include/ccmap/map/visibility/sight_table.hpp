@@ -261,14 +261,30 @@ class SightTable {
       }
     }
     // Pass 2: the scattered minimum. The key is the upper 16 bits: always inside the table.
-    for (std::size_t i = 0; i < count; ++i) {
-      const std::uint32_t w = packed_[i];
-      std::int16_t& entry = raw_[w >> 16];
-      const auto q = static_cast<std::int16_t>(static_cast<std::uint16_t>(w & 0xFFFFU));
-      entry = q < entry ? q : entry;
+    // Two points a turn, each a load, a compare and a store only when lower (the table's base
+    // in a register: ~6.5 aarch64 instructions a point instead of 11 for the plain select);
+    // in order, so two points of one entry leave the lower slope.
+    std::int16_t* const table = raw_;
+    const std::uint32_t* const packed = packed_;
+    std::size_t i = 0;
+    for (; i + 2U <= count; i += 2U) {
+      store_min(table, packed[i]);
+      store_min(table, packed[i + 1U]);
+    }
+    if (i < count) {
+      store_min(table, packed[i]);
     }
     points_ += written;
     refused_ += static_cast<std::uint32_t>(count) - written;
+  }
+
+  /// table[w >> 16] = min(it, the slope in w's lower 16 bits).
+  static void store_min(std::int16_t* table, std::uint32_t w) noexcept {
+    const auto q = static_cast<std::int16_t>(static_cast<std::uint16_t>(w & 0xFFFFU));
+    std::int16_t& entry = table[w >> 16];
+    if (q < entry) {
+      entry = q;
+    }
   }
 
   /// Lower edge of bin b (finest cells): (b / bin_scale)^2.
@@ -299,47 +315,59 @@ class SightTable {
   /// rover: the ground stays the level before it until a bin comes back within noise_m of it).
   /// An approximation for the drop-off rule's reference (a point's height from its bin's middle
   /// distance), not a bound.
+  /// Cost: only the sectors some point wrote are tracked (a sector no point wrote holds
+  /// kSightEmpty in every bin, which is also its answer: no ground), one sector at a time.
   void track_ground(float max_slope, float noise_m) noexcept {
-    float ground[kSightSectors];
-    float prev_h[kSightSectors];
-    float prev_s[kSightSectors];
-    std::int32_t state[kSightSectors];  // 0 no ground yet, 1 on ground, 2 on an obstacle
-    for (int k = 0; k < kSightSectors; ++k) {
-      ground[k] = 0.0F;
-      prev_h[k] = 0.0F;
-      prev_s[k] = 0.0F;
-      state[k] = 0;
+    // The lowest entry of each sector over the bins (vectorisable across sectors).
+    std::int16_t lowest[kSightSectors];
+    std::memcpy(lowest, raw_, sizeof(lowest));
+    for (int b = 1; b < kSightBins; ++b) {
+      const std::int16_t* row = raw_ + static_cast<std::size_t>(b) * kSightSectors;
+      for (int k = 0; k < kSightSectors; ++k) {
+        lowest[k] = row[k] < lowest[k] ? row[k] : lowest[k];
+      }
     }
     const float unit_m = kSightSlopeUnit * k_.cell_width_m;
+    float mid[kSightBins];
+    float per_unit[kSightBins];  // height (m) of one slope unit at the bin's middle
     for (int b = 0; b < kSightBins; ++b) {
-      std::int16_t* row = raw_ + static_cast<std::size_t>(b) * kSightSectors;
-      const float mid = 0.5F * (edge(b) + edge(b + 1));
-      const float per_unit = unit_m * mid;  // height (m) of one slope unit at the bin's middle
-      for (int k = 0; k < kSightSectors; ++k) {
-        const std::int16_t q = row[k];
+      mid[b] = 0.5F * (edge(b) + edge(b + 1));
+      per_unit[b] = unit_m * mid[b];
+    }
+    for (int k = 0; k < kSightSectors; ++k) {
+      if (lowest[k] == kSightEmpty) {
+        continue;
+      }
+      float ground = 0.0F;
+      float prev_h = 0.0F;
+      float prev_s = 0.0F;
+      std::int32_t state = 0;  // 0 no ground yet, 1 on ground, 2 on an obstacle
+      for (int b = 0; b < kSightBins; ++b) {
+        std::int16_t& entry = raw_[static_cast<std::size_t>(b) * kSightSectors + static_cast<std::size_t>(k)];
+        const std::int16_t q = entry;
         // Ground before this bin, in 2^-10 m from the sensor (kSightEmpty: none).
-        float g = ground[k] * 1024.0F;
+        float g = ground * 1024.0F;
         g = g < -32767.0F ? -32767.0F : (g > 32766.0F ? 32766.0F : g);
-        row[k] = state[k] == 0 ? kSightEmpty : static_cast<std::int16_t>(g);
+        entry = state == 0 ? kSightEmpty : static_cast<std::int16_t>(g);
         if (q == kSightEmpty) {
           continue;
         }
-        const float h = static_cast<float>(q) * per_unit;
-        if (state[k] == 0) {
-          ground[k] = h;
-          state[k] = 1;
-        } else if (state[k] == 1) {
-          if (h > prev_h[k] + max_slope * (mid - prev_s[k]) + noise_m) {
-            state[k] = 2;
+        const float h = static_cast<float>(q) * per_unit[b];
+        if (state == 0) {
+          ground = h;
+          state = 1;
+        } else if (state == 1) {
+          if (h > prev_h + max_slope * (mid[b] - prev_s) + noise_m) {
+            state = 2;
           } else {
-            ground[k] = h;
+            ground = h;
           }
-        } else if (h <= ground[k] + noise_m) {
-          state[k] = 1;
-          ground[k] = h;
+        } else if (h <= ground + noise_m) {
+          state = 1;
+          ground = h;
         }
-        prev_h[k] = h;
-        prev_s[k] = mid;
+        prev_h = h;
+        prev_s = mid[b];
       }
     }
   }
