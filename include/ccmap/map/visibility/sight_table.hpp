@@ -102,9 +102,7 @@ struct SightCell {
   int bin;               ///< first bin whose rays reach beyond the cell's farthest corner
   float s_near, s_far;   ///< nearest and farthest distance of the cell (finest cells)
   std::int32_t qmin;     ///< lowest slope over those sectors (kSightSlopeUnit)
-  std::int32_t qmax;     ///< highest slope over those sectors that hold one
   int covered;           ///< sectors holding a slope
-  bool all;              ///< every sector holds one
 };
 
 class SightTable;
@@ -305,6 +303,12 @@ class SightTable {
       for (int k = 0; k < kSightSectors; ++k) {
         out[k] = row[k] < next[k] ? row[k] : next[k];
       }
+    }    // Sectors holding a ray at all (bin 0 after the sweep), counted before each of the
+    // 2 kSightSectors positions a cell's [lo, hi) can name: read_cell's test for "none".
+    sectors_with_rays_[0] = 0U;
+    for (int k = 0; k < 2 * kSightSectors; ++k) {
+      const bool any = swept_[static_cast<std::size_t>(k & (kSightSectors - 1))] != kSightEmpty;
+      sectors_with_rays_[k + 1] = static_cast<std::uint16_t>(sectors_with_rays_[k] + (any ? 1U : 0U));
     }
   }
 
@@ -443,18 +447,15 @@ class SightTable {
         !sectors_inside(x0, x1, y0, y1, static_cast<float>(kSightSectors) * 0.25F, &c.lo, &c.hi)) {
       return false;
     }
+    // A cell whose sectors hold no ray at all (most cells outside the camera's view) ends here.
+    if (c.lo < 0 || c.hi > 2 * kSightSectors || sectors_with_rays_[c.hi] == sectors_with_rays_[c.lo]) {
+      return false;
+    }
     c.qmin = kSightEmpty;
-    c.qmax = -32768;
-    c.all = true;
     for (int s = c.lo; s < c.hi; ++s) {
       const std::int32_t q = slope(c.bin, s);
-      if (q == kSightEmpty) {
-        c.all = false;
-        continue;
-      }
       c.qmin = q < c.qmin ? q : c.qmin;
-      c.qmax = q > c.qmax ? q : c.qmax;
-      ++c.covered;
+      c.covered += q != kSightEmpty ? 1 : 0;
     }
     if (c.covered == 0) {
       return false;
@@ -495,6 +496,8 @@ class SightTable {
   std::uint32_t packed_[kFrontChunkPoints]{};
   std::int16_t raw_[kSightEntries]{};  ///< [bin][sector]
   std::int16_t swept_[kSightEntries]{};
+  /// sectors_with_rays_[i]: sectors k < i (taken modulo kSightSectors) holding a ray (sweep()).
+  std::uint16_t sectors_with_rays_[2 * kSightSectors + 1]{};
 };
 
 }  // namespace ccmap::detail
