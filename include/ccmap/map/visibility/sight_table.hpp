@@ -26,8 +26,8 @@
 // a ray crosses the cell.
 //
 // Cost (docs/performance.md 13): a key pass over the front's chunk (NEON on aarch64), one
-// scattered minimum per point, a sweep over the table, then the cells: 43 aarch64 instructions
-// per point of a CADRE frame, over the flight cycle's budget. No heap.
+// scattered minimum per point, a sweep over the table, then the cells: 38 aarch64 instructions
+// per point of a CADRE frame (22 of them the key pass), over the flight cycle's budget. No heap.
 #pragma once
 
 #include <cmath>
@@ -49,7 +49,7 @@ namespace ccmap {
 /// The mark a Config carries when its stack holds the table.
 struct EveryLineOfSightTag {};
 
-/// A Config that carries the viewshed table (256 KB per stack, not in the presets: the C API's
+/// A Config that carries the viewshed table (261 KB per stack, not in the presets: the C API's
 /// storage sizes and the presets' memory stay as they are): WithEveryLineOfSight<CadreConfig>.
 /// Its stack casts every line of sight when StackParams::free_space_rays is
 /// detail::kFreeSpaceEveryRay (65535), and samples rays at any other value, as the presets do.
