@@ -26,8 +26,8 @@
 // a ray crosses the cell.
 //
 // Cost (docs/performance.md 13): a key pass over the front's chunk (NEON on aarch64), one
-// scattered minimum per point, a sweep over the table, then the cells: 38 aarch64 instructions
-// per point of a CADRE frame (22 of them the key pass), over the flight cycle's budget. No heap.
+// scattered minimum per point, a sweep over the table, then the cells: 37 aarch64 instructions
+// per point of a CADRE frame (21 of them the key pass), over the flight cycle's budget. No heap.
 #pragma once
 
 #include <cmath>
@@ -176,7 +176,8 @@ class SightTable {
                                          vsubq_f32(vld1q_f32(chunk.fy + i), vsy));
         const float32x4_t l1 = vaddq_f32(vabsq_f32(dx), vabsq_f32(dy));
         const uint32x4_t l1_pos = vcgtq_f32(l1, zero);
-        const float32x4_t p = vdivq_f32(dy, vbslq_f32(l1_pos, l1, one));
+        // Lanes with l1 = 0 or d = 0 are refused (ok below): no guard on their divisions.
+        const float32x4_t p = vdivq_f32(dy, l1);
         const float32x4_t right = vbslq_f32(vcgeq_f32(dy, zero), p, vaddq_f32(four, p));
         const float32x4_t a = vbslq_f32(vcgeq_f32(dx, zero), right, vsubq_f32(two, p));
         const uint32x4_t sector =
@@ -189,16 +190,18 @@ class SightTable {
         const float32x4_t f = vsubq_f32(one, vdivq_f32(margin, vbslq_f32(r_pos, r, one)));
         const float32x4_t d = vsqrtq_f32(vaddq_f32(vmulq_f32(dx, dx), vmulq_f32(dy, dy)));
         const float32x4_t walked = vmulq_f32(d, f);
-        float32x4_t b = vmulq_n_f32(vsqrtq_f32(vbslq_f32(vcgtq_f32(walked, zero), walked, zero)), scale);
+        // walked >= 0 in every lane that is not refused (d > 0, f > 0).
+        float32x4_t b = vmulq_n_f32(vsqrtq_f32(walked), scale);
         b = vbslq_f32(vcltq_f32(b, last_bin), b, last_bin);
         const uint32x4_t bin = vreinterpretq_u32_s32(vcvtq_s32_f32(b));
         const uint32x4_t code = vreinterpretq_u32_s32(vld1q_s32(chunk.code + i));
-        const uint32x4_t ok = vandq_u32(vandq_u32(vcltq_u32(code, vlayers), l1_pos), vcgtq_f32(f, zero));
         const uint32x4_t d_pos = vcgtq_f32(d, zero);
-        const float32x4_t t = vdivq_f32(vsubq_f32(vld1q_f32(chunk.z + i), vdupq_n_f32(z0)),
-                                        vbslq_f32(d_pos, vmulq_n_f32(d, w0), one));
-        float32x4_t q = vrndpq_f32(vmulq_n_f32(t, kSightSlopeUnitsInv));
-        q = vbslq_f32(vcltq_f32(q, lo_q), lo_q, vbslq_f32(vcgtq_f32(q, hi_q), hi_q, q));
+        const uint32x4_t ok =
+            vandq_u32(vandq_u32(vcltq_u32(code, vlayers), vandq_u32(l1_pos, d_pos)), vcgtq_f32(f, zero));
+        const float32x4_t t = vdivq_f32(vsubq_f32(vld1q_f32(chunk.z + i), vdupq_n_f32(z0)), vmulq_n_f32(d, w0));
+        // Clamped as the scalar loop clamps (FMAX/FMIN: the same for the finite slopes of the
+        // lanes that are not refused).
+        const float32x4_t q = vminq_f32(vmaxq_f32(vrndpq_f32(vmulq_n_f32(t, kSightSlopeUnitsInv)), lo_q), hi_q);
         const uint32x4_t key = vorrq_u32(vshlq_n_u32(bin, kSightSectorBits), sector);
         const uint32x4_t slope = vandq_u32(vreinterpretq_u32_s32(vcvtq_s32_f32(q)), low16);
         vst1q_u32(packed_ + i, vbslq_u32(ok, vorrq_u32(vshlq_n_u32(key, 16), slope), refused));
@@ -224,7 +227,7 @@ class SightTable {
       float b = std::sqrt(walked > 0.0F ? walked : 0.0F) * scale;
       b = b < static_cast<float>(kSightBins - 1) ? b : static_cast<float>(kSightBins - 1);
       const bool ok = static_cast<std::uint32_t>(chunk.code[i]) < static_cast<std::uint32_t>(layers) && l1 > 0.0F &&
-                      f > 0.0F;
+                      d > 0.0F && f > 0.0F;
       // A slope of 8 or more bounds nothing: the entry's empty value; below -8: -8 (higher, safe).
       const float t = (chunk.z[i] - z0) / (d > 0.0F ? d * w0 : 1.0F);
       float q = std::ceil(t * kSightSlopeUnitsInv);
