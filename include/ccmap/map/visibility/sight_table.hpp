@@ -431,9 +431,9 @@ class SightTable {
     return true;
   }
 
-  /// The bound of the cell [x0, x1] x [y0, y1] (finest cells from the sensor): false if the
-  /// sensor lies in it, no sector lies wholly inside its azimuth interval, no bin reaches beyond
-  /// it or no ray of those sectors does. The terrain the rays of sector s crossed in the cell
+  /// After sweep(): the bound of the cell [x0, x1] x [y0, y1] (finest cells from the sensor):
+  /// false if the sensor lies in it, no sector lies wholly inside its azimuth interval, no bin
+  /// reaches beyond it or no ray of those sectors does. The terrain the rays of sector s crossed in the cell
   /// lies below z0 + q(s) kSightSlopeUnit w_0 (q < 0 ? s_near : s_far) (m).
   [[nodiscard]] bool read_cell(float x0, float x1, float y0, float y1, SightCell* out) const noexcept {
     if (x0 <= 0.0F && x1 >= 0.0F && y0 <= 0.0F && y1 >= 0.0F) {
