@@ -263,7 +263,7 @@ class SightTable {
     }
     // Pass 2: the scattered minimum. The key is the upper 16 bits: always inside the table.
     // Two points a turn, each a load, a compare and a store only when lower (the table's base
-    // in a register: ~6.5 aarch64 instructions a point instead of 11 for the plain select);
+    // in a register: 8.5 aarch64 instructions a point instead of 11 for the plain select);
     // in order, so two points of one entry leave the lower slope.
     std::int16_t* const table = raw_;
     const std::uint32_t* const packed = packed_;
@@ -306,7 +306,8 @@ class SightTable {
       for (int k = 0; k < kSightSectors; ++k) {
         out[k] = row[k] < next[k] ? row[k] : next[k];
       }
-    }    // Sectors holding a ray at all (bin 0 after the sweep), counted before each of the
+    }
+    // Sectors holding a ray at all (bin 0 after the sweep), counted before each of the
     // 2 kSightSectors positions a cell's [lo, hi) can name: read_cell's test for "none".
     sectors_with_rays_[0] = 0U;
     for (int k = 0; k < 2 * kSightSectors; ++k) {
