@@ -7,9 +7,11 @@
 // most of the cells the walk bounds (a table that bounds nothing would pass the first check).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <random>
 #include <utility>
 #include <vector>
@@ -69,6 +71,41 @@ Frame random_frame(std::mt19937& rng, float view_rad = 6.2831853F) {
   return f;
 }
 
+/// The table's constants for a frame of these tests (five layers, the stereo range error).
+SightFrameConstants constants_of(const Frame& f, const FramePose& pose) {
+  SightFrameConstants k{};
+  k.sensor_u[0] = pose.anchor_fraction[0];
+  k.sensor_u[1] = pose.anchor_fraction[1];
+  k.z0 = f.origin.z;
+  k.bin_scale = static_cast<float>(kSightBins) / std::sqrt(512.0F * 1.5F);
+  k.cell_width_m = kWidth;
+  k.sigma_c[2] = 3.0F * kStereoK;
+  k.layers = 5;
+  return k;
+}
+
+/// A table begun for the frame (on the heap: 261 KB).
+std::unique_ptr<SightTable> begun_table(const Frame& f, const FramePose& pose) {
+  auto table = std::make_unique<SightTable>();
+  table->begin(constants_of(f, pose));
+  return table;
+}
+
+/// Runs the front over the frame chunk by chunk and feeds the table; per_chunk(chunk, count)
+/// then sees each chunk.
+template <typename PerChunk>
+void fill_table(const Frame& f, const FrontConfig& config, const FramePose& pose, SightTable& table,
+                PerChunk&& per_chunk) {
+  auto chunk = std::make_unique<FrontChunk>();
+  const FineWindow none{CellIndex{0, 0}, 0, 0};
+  for (std::size_t begin = 0; begin < f.points.size(); begin += kFrontChunkPoints) {
+    const std::size_t count = std::min(kFrontChunkPoints, f.points.size() - begin);
+    front_map_chunk(f.points.data() + begin, count, pose, config, none, *chunk);
+    table.add_chunk(*chunk, count, nullptr, nullptr, pose.anchor);
+    per_chunk(*chunk, count);
+  }
+}
+
 TEST(SightTable, NeverBoundsACellBelowTheLowestWalkedRayAndBoundsMostOfThem) {
   std::mt19937 rng(31U);
   const float bounds[5] = {1.0e30F, 1.0e30F, 1.0e30F, 1.0e30F, 1.0e30F};
@@ -80,25 +117,12 @@ TEST(SightTable, NeverBoundsACellBelowTheLowestWalkedRayAndBoundsMostOfThem) {
     FramePose pose{};
     ASSERT_EQ(make_frame_pose(f.origin, nullptr, config, &pose), Status::kOk);
     const RayWindows w = windows_around(pose.anchor);
-    auto table = std::make_unique<SightTable>();
-    SightFrameConstants k{};
-    k.sensor_u[0] = pose.anchor_fraction[0];
-    k.sensor_u[1] = pose.anchor_fraction[1];
-    k.z0 = f.origin.z;
-    k.bin_scale = static_cast<float>(kSightBins) / std::sqrt(512.0F * 1.5F);
-    k.cell_width_m = kWidth;
-    k.sigma_c[2] = 3.0F * kStereoK;
-    k.layers = 5;
-    table->begin(k);
+    const auto table = begun_table(f, pose);
+    const SightFrameConstants& k = table->constants();
     // The reference: lowest walked height per (layer, cell).
     std::map<std::tuple<int, std::int32_t, std::int32_t>, float> lowest;
     const std::int64_t ou[2] = {ray_u(pose.anchor.x, pose.anchor_fraction[0]), ray_u(pose.anchor.y, pose.anchor_fraction[1])};
-    FrontChunk chunk{};
-    const FineWindow none{CellIndex{0, 0}, 0, 0};
-    for (std::size_t begin = 0; begin < f.points.size(); begin += kFrontChunkPoints) {
-      const std::size_t count = std::min(kFrontChunkPoints, f.points.size() - begin);
-      front_map_chunk(f.points.data() + begin, count, pose, config, none, chunk);
-      table->add_chunk(chunk, count, nullptr, nullptr, pose.anchor);
+    fill_table(f, config, pose, *table, [&](const FrontChunk& chunk, std::size_t count) {
       for (std::size_t i = 0; i < count; ++i) {
         if (chunk.code[i] < 0 || chunk.code[i] >= 5) {
           continue;
@@ -132,7 +156,7 @@ TEST(SightTable, NeverBoundsACellBelowTheLowestWalkedRayAndBoundsMostOfThem) {
           }
         });
       }
-    }
+    });
     table->sweep();
     for (int layer = 0; layer < 5; ++layer) {
       for (std::int32_t j = 0; j < w.side[layer]; ++j) {
@@ -183,23 +207,9 @@ TEST(SightTable, ReadsEveryCellAsTheSectorBySectorLoopDoes) {
     FramePose pose{};
     ASSERT_EQ(make_frame_pose(f.origin, nullptr, config, &pose), Status::kOk);
     const RayWindows w = windows_around(pose.anchor);
-    auto table = std::make_unique<SightTable>();
-    SightFrameConstants k{};
-    k.sensor_u[0] = pose.anchor_fraction[0];
-    k.sensor_u[1] = pose.anchor_fraction[1];
-    k.z0 = f.origin.z;
-    k.bin_scale = static_cast<float>(kSightBins) / std::sqrt(512.0F * 1.5F);
-    k.cell_width_m = kWidth;
-    k.sigma_c[2] = 3.0F * kStereoK;
-    k.layers = 5;
-    table->begin(k);
-    FrontChunk chunk{};
-    const FineWindow none{CellIndex{0, 0}, 0, 0};
-    for (std::size_t begin = 0; begin < f.points.size(); begin += kFrontChunkPoints) {
-      const std::size_t count = std::min(kFrontChunkPoints, f.points.size() - begin);
-      front_map_chunk(f.points.data() + begin, count, pose, config, none, chunk);
-      table->add_chunk(chunk, count, nullptr, nullptr, pose.anchor);
-    }
+    const auto table = begun_table(f, pose);
+    const SightFrameConstants& k = table->constants();
+    fill_table(f, config, pose, *table, [](const FrontChunk&, std::size_t) {});
     table->sweep();
     for (int layer = 0; layer < 5; ++layer) {
       const float cw = static_cast<float>(1 << layer);
