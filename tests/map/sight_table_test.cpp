@@ -7,9 +7,11 @@
 // most of the cells the walk bounds (a table that bounds nothing would pass the first check).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <random>
 #include <utility>
 #include <vector>
@@ -50,10 +52,13 @@ struct Frame {
   std::vector<PointXYZ> points;
 };
 
-Frame random_frame(std::mt19937& rng) {
+/// Points all around the sensor, or within `view_rad` of a random heading (a camera's view).
+Frame random_frame(std::mt19937& rng, float view_rad = 6.2831853F) {
   std::uniform_real_distribution<float> pos(-20.0F, 20.0F);
   std::uniform_real_distribution<float> height(0.15F, 1.2F);
-  std::uniform_real_distribution<float> angle(0.0F, 6.2831853F);
+  std::uniform_real_distribution<float> heading(0.0F, 6.2831853F);
+  const float first = view_rad < 6.2831853F ? heading(rng) : 0.0F;
+  std::uniform_real_distribution<float> angle(first, first + view_rad);
   std::uniform_real_distribution<float> unit(0.0F, 1.0F);
   Frame f;
   f.origin = PointXYZ{pos(rng), pos(rng), height(rng)};
@@ -64,6 +69,41 @@ Frame random_frame(std::mt19937& rng) {
     f.points.push_back(PointXYZ{f.origin.x + r * std::cos(a), f.origin.y + r * std::sin(a), ground});
   }
   return f;
+}
+
+/// The table's constants for a frame of these tests (five layers, the stereo range error).
+SightFrameConstants constants_of(const Frame& f, const FramePose& pose) {
+  SightFrameConstants k{};
+  k.sensor_u[0] = pose.anchor_fraction[0];
+  k.sensor_u[1] = pose.anchor_fraction[1];
+  k.z0 = f.origin.z;
+  k.bin_scale = static_cast<float>(kSightBins) / std::sqrt(512.0F * 1.5F);
+  k.cell_width_m = kWidth;
+  k.sigma_c[2] = 3.0F * kStereoK;
+  k.layers = 5;
+  return k;
+}
+
+/// A table begun for the frame (on the heap: 261 KB).
+std::unique_ptr<SightTable> begun_table(const Frame& f, const FramePose& pose) {
+  auto table = std::make_unique<SightTable>();
+  table->begin(constants_of(f, pose));
+  return table;
+}
+
+/// Runs the front over the frame chunk by chunk and feeds the table; per_chunk(chunk, count)
+/// then sees each chunk.
+template <typename PerChunk>
+void fill_table(const Frame& f, const FrontConfig& config, const FramePose& pose, SightTable& table,
+                PerChunk&& per_chunk) {
+  auto chunk = std::make_unique<FrontChunk>();
+  const FineWindow none{CellIndex{0, 0}, 0, 0};
+  for (std::size_t begin = 0; begin < f.points.size(); begin += kFrontChunkPoints) {
+    const std::size_t count = std::min(kFrontChunkPoints, f.points.size() - begin);
+    front_map_chunk(f.points.data() + begin, count, pose, config, none, *chunk);
+    table.add_chunk(*chunk, count, nullptr, nullptr, pose.anchor);
+    per_chunk(*chunk, count);
+  }
 }
 
 TEST(SightTable, NeverBoundsACellBelowTheLowestWalkedRayAndBoundsMostOfThem) {
@@ -77,25 +117,12 @@ TEST(SightTable, NeverBoundsACellBelowTheLowestWalkedRayAndBoundsMostOfThem) {
     FramePose pose{};
     ASSERT_EQ(make_frame_pose(f.origin, nullptr, config, &pose), Status::kOk);
     const RayWindows w = windows_around(pose.anchor);
-    auto table = std::make_unique<SightTable>();
-    SightFrameConstants k{};
-    k.sensor_u[0] = pose.anchor_fraction[0];
-    k.sensor_u[1] = pose.anchor_fraction[1];
-    k.z0 = f.origin.z;
-    k.bin_scale = static_cast<float>(kSightBins) / std::sqrt(512.0F * 1.5F);
-    k.cell_width_m = kWidth;
-    k.sigma_c[2] = 3.0F * kStereoK;
-    k.layers = 5;
-    table->begin(k);
+    const auto table = begun_table(f, pose);
+    const SightFrameConstants& k = table->constants();
     // The reference: lowest walked height per (layer, cell).
     std::map<std::tuple<int, std::int32_t, std::int32_t>, float> lowest;
     const std::int64_t ou[2] = {ray_u(pose.anchor.x, pose.anchor_fraction[0]), ray_u(pose.anchor.y, pose.anchor_fraction[1])};
-    FrontChunk chunk{};
-    const FineWindow none{CellIndex{0, 0}, 0, 0};
-    for (std::size_t begin = 0; begin < f.points.size(); begin += kFrontChunkPoints) {
-      const std::size_t count = std::min(kFrontChunkPoints, f.points.size() - begin);
-      front_map_chunk(f.points.data() + begin, count, pose, config, none, chunk);
-      table->add_chunk(chunk, count, nullptr, nullptr, pose.anchor);
+    fill_table(f, config, pose, *table, [&](const FrontChunk& chunk, std::size_t count) {
       for (std::size_t i = 0; i < count; ++i) {
         if (chunk.code[i] < 0 || chunk.code[i] >= 5) {
           continue;
@@ -129,7 +156,7 @@ TEST(SightTable, NeverBoundsACellBelowTheLowestWalkedRayAndBoundsMostOfThem) {
           }
         });
       }
-    }
+    });
     table->sweep();
     for (int layer = 0; layer < 5; ++layer) {
       for (std::int32_t j = 0; j < w.side[layer]; ++j) {
@@ -162,6 +189,72 @@ TEST(SightTable, NeverBoundsACellBelowTheLowestWalkedRayAndBoundsMostOfThem) {
   EXPECT_GT(static_cast<double>(table_cells), 0.6 * static_cast<double>(walked_cells))
       << table_cells << " of " << walked_cells << " walked cells bounded by the table";
   std::printf("sight table: %zu of %zu walked cells bounded\n", table_cells, walked_cells);
+}
+
+// read_cell's answer against a brute-force reading of the swept table: the sectors wholly inside
+// the cell's azimuth interval (sectors_inside), the first bin beyond its farthest corner, the
+// lowest slope and the count of sectors holding one, taken sector by sector. Frames seen by a
+// 90 degree view, so that most cells' sectors hold no ray (read_cell's early answer from the
+// sweep's count), and the view crosses sector 0 in some (the interval's wrap).
+TEST(SightTable, ReadsEveryCellAsTheSectorBySectorLoopDoes) {
+  std::mt19937 rng(3131U);
+  const float bounds[5] = {1.0e30F, 1.0e30F, 1.0e30F, 1.0e30F, 1.0e30F};
+  FrontConfig config{};
+  ASSERT_EQ(make_front_config(kWidth, bounds, 5, &config), Status::kOk);
+  std::size_t read = 0U, refused_without_rays = 0U;
+  for (int trial = 0; trial < 8; ++trial) {
+    const Frame f = random_frame(rng, 1.5707963F);
+    FramePose pose{};
+    ASSERT_EQ(make_frame_pose(f.origin, nullptr, config, &pose), Status::kOk);
+    const RayWindows w = windows_around(pose.anchor);
+    const auto table = begun_table(f, pose);
+    const SightFrameConstants& k = table->constants();
+    fill_table(f, config, pose, *table, [](const FrontChunk&, std::size_t) {});
+    table->sweep();
+    for (int layer = 0; layer < 5; ++layer) {
+      const float cw = static_cast<float>(1 << layer);
+      for (std::int32_t j = 0; j < w.side[layer]; ++j) {
+        for (std::int32_t i = 0; i < w.side[layer]; ++i) {
+          const std::int32_t gx = w.min[layer].x + i, gy = w.min[layer].y + j;
+          const float x0 = static_cast<float>((std::int64_t{gx} * (std::int64_t{1} << layer)) - pose.anchor.x) - k.sensor_u[0];
+          const float y0 = static_cast<float>((std::int64_t{gy} * (std::int64_t{1} << layer)) - pose.anchor.y) - k.sensor_u[1];
+          const float x1 = x0 + cw, y1 = y0 + cw;
+          // The brute force.
+          const bool holds_sensor = x0 <= 0.0F && x1 >= 0.0F && y0 <= 0.0F && y1 >= 0.0F;
+          const float fx = std::max(x0 * x0, x1 * x1), fy = std::max(y0 * y0, y1 * y1);
+          const int bin = table->first_bin_beyond(std::sqrt(fx + fy));
+          int lo = 0, hi = 0;
+          const bool inside = SightTable::sectors_inside(x0, x1, y0, y1, static_cast<float>(kSightSectors) * 0.25F, &lo, &hi);
+          int covered = 0;
+          std::int32_t qmin = kSightEmpty;
+          if (!holds_sensor && inside && bin < kSightBins) {
+            for (int sector = lo; sector < hi; ++sector) {
+              const std::int32_t q = table->slope(bin, sector);
+              if (q != kSightEmpty) {
+                ++covered;
+                qmin = std::min(qmin, q);
+              }
+            }
+          }
+          SightCell c{};
+          const bool answered = table->read_cell(x0, x1, y0, y1, &c);
+          ASSERT_EQ(answered, covered > 0) << "trial " << trial << ": layer " << layer << " cell " << gx << "," << gy;
+          if (answered) {
+            EXPECT_EQ(c.qmin, qmin) << "trial " << trial << ": layer " << layer << " cell " << gx << "," << gy;
+            EXPECT_EQ(c.covered, covered) << "trial " << trial << ": layer " << layer << " cell " << gx << "," << gy;
+            EXPECT_EQ(c.bin, bin);
+            ++read;
+          } else if (!holds_sensor && inside && bin < kSightBins) {
+            ++refused_without_rays;
+          }
+        }
+      }
+    }
+  }
+  // Both answers occur often: cells in the view and cells whose sectors hold no ray.
+  EXPECT_GT(read, 2000U);
+  EXPECT_GT(refused_without_rays, 2000U);
+  std::printf("sight table: %zu cells read, %zu with no ray in their sectors\n", read, refused_without_rays);
 }
 
 }  // namespace

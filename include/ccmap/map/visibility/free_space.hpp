@@ -453,7 +453,7 @@ class FreeSpace<Config, true> {
             continue;  // a coarser layer's empty cell under a finer window: the finer record speaks
           }
           const int lo = sc.lo, hi = sc.hi, bin = sc.bin;
-          const std::int32_t qmin = sc.qmin, qmax = sc.qmax;
+          const std::int32_t qmin = sc.qmin;
           bool all = true;  // every sector holding a ray agrees (sectors without one say nothing)
           const int covered = sc.covered;
           const float s_near = sc.s_near, s_far = sc.s_far;
@@ -470,7 +470,6 @@ class FreeSpace<Config, true> {
                 ++below;
               }
             }
-            (void)qmax;
             if (below >= 2 && below == covered) {
               (void)touch(rec, stamp_);
               if (frame_contradictions(rec) == 0U) {
