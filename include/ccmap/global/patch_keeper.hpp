@@ -463,6 +463,17 @@ class PatchKeeper {
     observer_context_ = context;
   }
 
+  /// The map-frame centre of a patch's tile (m); false for a bad layer or an unbound keeper.
+  [[nodiscard]] bool tile_centre(const platform::PatchKey& key, float* x, float* y) const noexcept {
+    if (stack_ == nullptr || x == nullptr || y == nullptr || key.layer < 0 || key.layer >= kLayerCount) {
+      return false;
+    }
+    const float side = static_cast<float>(kTile) * Access::width(*stack_, key.layer);
+    *x = (static_cast<float>(key.tile_x) + 0.5F) * side;
+    *y = (static_cast<float>(key.tile_y) + 0.5F) * side;
+    return true;
+  }
+
   [[nodiscard]] const PatchCounters& counters() const noexcept { return counters_; }
   [[nodiscard]] bool initialised() const noexcept { return stack_ != nullptr; }
 
