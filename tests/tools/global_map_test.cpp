@@ -4,9 +4,10 @@
 // directory; a loop closure with the simulation's own drift (in the analytic case, the one an
 // alignment would measure) is stitched (PatchStitcher) and the patches re-stamped. The drive
 // stops 3 m before the start: a window that came back over the start's patches in the drifted
-// frame would merge its cells into them at the wrong place (docs/design.md section 13.3). References: the terrain itself (the height RMS of the global map at its pixel
-// centres, with and without the corrections), the GeoTIFF read back with GDAL, a damaged file
-// beside good ones (counted, the good ones all used).
+// frame would merge its cells into them at the wrong place (docs/design.md section 13.6).
+// References: the terrain itself (the height RMS of the global map at its pixel centres, with and
+// without the corrections), the GeoTIFF read back with GDAL, a damaged file beside good ones
+// (counted, the good ones all used).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -14,7 +14,7 @@
 // classified as the stack does (classify_ccm with the layer's threshold).
 //
 // What it does not do: CCM layers only (Kalman and OMG fine layers hold no plane); one layer a
-// raster (the layers of a stack are different widths: design.md 13.3); no z correction.
+// raster (the layers of a stack are different widths: docs/design.md section 13.6); no z correction.
 #pragma once
 
 #include <cstdint>
