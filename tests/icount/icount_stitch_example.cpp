@@ -1,6 +1,6 @@
 // Instruction counts of stitching (include/ccmap/global/patch_stitcher.hpp) on a CADRE rover: it
-// drives `frames` CADRE frames 0.3 m apart along x, every move through a PatchStitcher beside
-// its PatchKeeper (patches of 16 x 16 cells in a caller region); then the chain is filled to
+// drives 8 CADRE frames (80 x 50 pixels) 0.3 m apart along x, every move through a PatchStitcher
+// beside its PatchKeeper (patches of 16 x 16 cells in a caller region); then the chain is filled to
 // its kMaxNodes with moves that write nothing, a loop is closed over the whole chain and the
 // patches are re-stamped, kPerStep a call. Regions (tests/support/icount_marker.hpp):
 //   1  PatchStitcher::move_to of a drive step (the keeper's move and the log of its writes)
@@ -8,7 +8,7 @@
 //   3  PatchStitcher::restamp_step, kPerStep patches a call (each read, checked, resealed, written)
 // On other targets the markers are empty and the program checks that every call succeeds.
 //
-//   icount_stitch_example [frames width_px height_px]   default: 8 80 50
+//   icount_stitch_example
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -16,7 +16,6 @@
 
 #include "ccmap/global/patch_stitcher.hpp"
 #include "support/cadre_frames.hpp"
-#include "support/count_arg.hpp"
 #include "support/icount_marker.hpp"
 
 namespace {
@@ -25,14 +24,8 @@ constexpr std::size_t kPatches = 256U;
 constexpr std::uint32_t kPerStep = 4U;
 }  // namespace
 
-int main(int argc, char** argv) {
-  int frames = 8, width_px = 80, height_px = 50;
-  if (argc != 1 &&
-      (argc != 4 || !ccmap::test::parse_count(argv[1], 100, &frames) ||
-       !ccmap::test::parse_count(argv[2], 4000, &width_px) || !ccmap::test::parse_count(argv[3], 4000, &height_px))) {
-    std::fprintf(stderr, "usage: icount_stitch_example [frames width_px height_px]\n");
-    return 2;
-  }
+int main() {
+  constexpr int kFrames = 8;  // CADRE frames of 80 x 50 pixels, 0.3 m apart
   using Map = ccmap::Stack<ccmap::CadreConfig>;
   using Keeper = ccmap::PatchKeeper<ccmap::CadreConfig, 16>;
   using Stitcher = ccmap::PatchStitcher<kNodes, kPatches>;
@@ -51,10 +44,10 @@ int main(int argc, char** argv) {
   std::uint32_t most_written = 0U;
   float x = 0.0F;
   float sigma = 0.0F;
-  for (int k = 0; k < frames; ++k) {
+  for (int k = 0; k < kFrames; ++k) {
     ccmap::test::CadreFrameSpec spec;
-    spec.width_px = width_px;
-    spec.height_px = height_px;
+    spec.width_px = 80;
+    spec.height_px = 50;
     spec.sensor_x = 0.3F * static_cast<float>(k);
     spec.seed = static_cast<std::uint32_t>(k) + 1U;
     const ccmap::test::CadreFrame f = ccmap::test::make_cadre_frame(spec);
@@ -107,7 +100,7 @@ int main(int argc, char** argv) {
   }
   std::printf("icount_stitch_example: %d frames, most patches written by a step %u; chain %zu nodes, %zu patches "
               "logged, %u re-stamped in %u calls of %u; stitcher %zu bytes\n",
-              frames, most_written, stitcher->node_count(), stitcher->logged_patches(), restamped, calls, kPerStep,
+              kFrames, most_written, stitcher->node_count(), stitcher->logged_patches(), restamped, calls, kPerStep,
               sizeof(Stitcher));
   return 0;
 }

@@ -22,45 +22,24 @@
 
 #include "ccmap/global/patch_stitcher.hpp"
 #include "global_map.hpp"
+#include "support/global_configs.hpp"
 #include "temp_dir.hpp"
 
 namespace ccmap {
 namespace {
 
-// One CCM layer of 64 x 64 cells of 4 cm (+-1.28 m).
-struct GlobalConfig {
-  static constexpr FineKind kFineKind = FineKind::kNone;
-  static constexpr CcmCellKind kCcmCell = CcmCellKind::kFull;
-  static constexpr std::int32_t kFineSide = 0;
-  static constexpr std::array<std::int32_t, 1> kCcmSides{{64}};
-  static constexpr float kDefaultFinestCellWidthM = 0.04F;
-};
+using GlobalConfig = test::OneCcm4cmConfig;
 using Map = Stack<GlobalConfig>;
+using Pose = test::DrivePose;
 using test::TempDir;
 using Keeper = PatchKeeper<GlobalConfig, 16>;
 using Stitcher = PatchStitcher<256, 4096>;
 
 double terrain(double x, double y) { return 0.3 * std::sin(0.7 * x) + 0.2 * std::cos(0.5 * y) + 0.02 * x; }
 
-struct Pose {
-  double x, y, yaw;
-};
-
 /// The ground within 1 m of the true pose, as the rover places it with its believed pose.
 std::vector<PointXYZ> frame(const Pose& truth, const Pose& believed) {
-  std::vector<PointXYZ> out;
-  const double ct = std::cos(truth.yaw), st = std::sin(truth.yaw);
-  const double cb = std::cos(believed.yaw), sb = std::sin(believed.yaw);
-  for (double v = -1.0; v <= 1.0; v += 0.02) {
-    for (double u = -1.0; u <= 1.0; u += 0.02) {
-      if (u * u + v * v <= 1.0) {
-        const double gx = truth.x + ct * u - st * v, gy = truth.y + st * u + ct * v;
-        out.push_back(PointXYZ{static_cast<float>(believed.x + cb * u - sb * v),
-                               static_cast<float>(believed.y + sb * u + cb * v), static_cast<float>(terrain(gx, gy))});
-      }
-    }
-  }
-  return out;
+  return test::ground_seen_from(truth, believed, 1.0, 0.02, terrain);
 }
 
 /// Drives 70 steps of the square into `directory`, closes the loop and re-stamps every patch.
