@@ -2,7 +2,8 @@
 // one CCM layer (files L<layer>_<tx>_<ty>.ccp, written by a PatchKeeper through
 // posix_directory_storage), places each at its corrected pose (global_map.hpp) and writes the
 // CLI's layer GeoTIFF (tools/io/raster_io.hpp: bands height, slope_x, slope_y, normal_var,
-// class; no-data NaN). Bad patch files are named on stderr and skipped.
+// class; no-data NaN). Bad patch files are named on stderr and skipped (exit code 3 then, 0 when
+// every file was used, 1 for an I/O error, 2 for a refused command line).
 //   ccmap_global_map --patches DIR --out FILE.tif [--layer L] [--uncorrected] [--epsg CODE]
 #include <cstdio>
 #include <string>
