@@ -30,7 +30,8 @@
 // Bounds: candidates per level <= (2 kMaxSteps + 1)^3, samples per level <= kMaxCoarseSamples;
 // time O(candidates x samples) plus one registration (at most max_iterations + 2 passes over
 // at most max_points samples). Memory: the tables of one layer
-// (kTableCells cells x 6 floats, kMaxCoarseSamples x 3 floats) in the aligner, no heap.
+// (kTableCells cells x 6 floats, kTableCells x 3 floats, kMaxCoarseSamples x 2 floats) in the
+// aligner, no heap.
 #pragma once
 
 #include <cmath>
@@ -411,8 +412,9 @@ class CoarseAligner {
   }
 
   /// Score of one candidate (dx, dy about the nominal offset; c, s: cos, sin of dyaw).
-  [[nodiscard]] Best score(float dx, float dy, float dyaw, float c, float s) const noexcept {
-    // Pass 1: the candidate's dz, the mean residual of its matches; pass 2: the likelihoods.
+  [[nodiscard]] Best score(float dx, float dy, float dyaw, float c, float s) noexcept {
+    // Pass 1: the candidate's dz, the mean residual of its matches (kept with their inverse
+    // variances: samples_ <= kMaxCoarseSamples); pass 2: the likelihoods of the kept ones.
     float sum_r = 0.0F;
     std::uint32_t matched = 0U;
     auto residual = [&](std::uint32_t n, float* r, float* inv_var) {
@@ -437,24 +439,22 @@ class CoarseAligner {
       float inv_var = 0.0F;
       if (residual(n, &r, &inv_var)) {
         sum_r += r;
+        matched_r_[matched] = r;
+        matched_inv_var_[matched] = inv_var;
         ++matched;
       }
     }
     const float dz = matched > 0U ? sum_r / static_cast<float>(matched) : 0.0F;
     float total = 0.0F;
-    for (std::uint32_t n = 0; n < samples_; ++n) {
-      float r = 0.0F;
-      float inv_var = 0.0F;
-      if (residual(n, &r, &inv_var)) {
-        const float e = r - dz;
-        total += std::exp(-0.5F * e * e * inv_var);
-      }
+    for (std::uint32_t k = 0; k < matched; ++k) {
+      const float e = matched_r_[k] - dz;
+      total += std::exp(-0.5F * e * e * matched_inv_var_[k]);
     }
     return Best{dx, dy, dyaw, dz, total, matched};
   }
 
   [[nodiscard]] Best search_level(float x0, float y0, float yaw0, float half_xy, float half_yaw, float step_xy,
-                                  float step_yaw, std::uint32_t* candidates) const noexcept {
+                                  float step_yaw, std::uint32_t* candidates) noexcept {
     const std::int32_t nxy = clamp_steps(half_xy / step_xy);
     const std::int32_t nyaw = clamp_steps(half_yaw / step_yaw);
     const float sxy = nxy > 0 ? half_xy / static_cast<float>(nxy) : 0.0F;
@@ -495,6 +495,8 @@ class CoarseAligner {
   float sx_[kTableCells]{};  ///< their usable cells, then the samples taken from them
   float sy_[kTableCells]{};
   float sz_[kTableCells]{};
+  float matched_r_[kMaxCoarseSamples]{};  ///< one candidate's matched residuals (score)
+  float matched_inv_var_[kMaxCoarseSamples]{};
   std::uint32_t samples_ = 0U;
   float lever_ = 0.0F;
   float width_ = 1.0F;
