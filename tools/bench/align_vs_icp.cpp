@@ -94,8 +94,10 @@ struct Tally {
   std::string method;
   int success = 0, draws = 0;
   std::vector<double> errors, times;
+  std::vector<double> every;  ///< every draw's error, failures included (1e9 when nothing came back)
   void add(double error, double time) {
     ++draws;
+    every.push_back(error);
     times.push_back(time);
     if (error < 0.05) {
       ++success;
@@ -161,6 +163,7 @@ struct Options {
   std::uint32_t seed = 1U;
   bool verbose = false;
   bool pcl = true;  ///< --pcl 0: ccmap only
+  float origin_z = 1.5F;
   ccmap::RegistrationParams registration = ccmap::default_registration_params();
   /// align_frame's: every point of the frame (about 5,600 on the scan, 14,400 on the DTM).
   ccmap::RegistrationParams point_registration = [] {
@@ -211,7 +214,7 @@ void run(const Scene& s, const Options& o) {
       const bool built = build_map(theirs, moved, s.fx, s.fy);
       const double t_built = thread_seconds();
       const ccmap::MapOffset identity{0.0F, 0.0F, 0.0F};
-      const ccmap::PointXYZ origin{static_cast<float>(s.fx), static_cast<float>(s.fy), 1.5F};
+      const ccmap::PointXYZ origin{static_cast<float>(s.fx), static_cast<float>(s.fy), o.origin_z};
       const ccmap::AlignmentResult a =
           on_points ? aligner.align_frame(ours, theirs, points.data(), points.size(), origin, identity,
                                           o.point_registration, o.search, nullptr)
@@ -234,10 +237,10 @@ void run(const Scene& s, const Options& o) {
       if (o.verbose) {
         std::printf(
             "  draw %d: offset %.2f m %.1f deg: %s %s observable %d%d%d%d error %.1f mm sigma x %.1f mm yaw %.2f "
-            "mrad; build %.2f ms, align %.2f ms\n",
+            "mrad; %u iterations; build %.2f ms, align %.2f ms\n",
             d, r, yaw * 180.0 / M_PI, on_points ? "ccmap" : "ccmap cells", ccmap::to_string(a.correction.status),
             a.correction.observable[0], a.correction.observable[1], a.correction.observable[2],
-            a.correction.observable[3], 1e3 * error, 1e3 * a.correction.sigma_dx, 1e3 * a.correction.sigma_dyaw,
+            a.correction.observable[3], 1e3 * error, 1e3 * a.correction.sigma_dx, 1e3 * a.correction.sigma_dyaw, a.correction.iterations,
             1e3 * (t_built - t0), 1e3 * (thread_seconds() - t_built));
       }
     }
@@ -285,6 +288,25 @@ void run(const Scene& s, const Options& o) {
     if (t->draws > 0) {
       print(s, *t);
     }
+  }
+  // The same pairs: ccmap's errors on the draws a PCL method aligned (success rates differ, and a
+  // median over different draws compares different pairs).
+  for (const Tally* t : {&icp_t, &gicp_t, &ndt_t}) {
+    if (t->success == 0) {
+      continue;
+    }
+    std::vector<double> pcl_errors, ours_there;
+    for (std::size_t k = 0; k < t->every.size() && k < cov.every.size(); ++k) {
+      if (t->every[k] < 0.05) {
+        pcl_errors.push_back(t->every[k]);
+        ours_there.push_back(cov.every[k]);
+      }
+    }
+    const double worst_theirs = *std::max_element(pcl_errors.begin(), pcl_errors.end());
+    const double worst_ours = *std::max_element(ours_there.begin(), ours_there.end());
+    std::printf("%-10s on the %zu draws %s aligned: %s median %.2f mm worst %.2f mm, ccmap median %.2f mm worst %.2f mm\n",
+                s.name.c_str(), pcl_errors.size(), t->method.c_str(), t->method.c_str(), 1e3 * median(pcl_errors),
+                1e3 * worst_theirs, 1e3 * median(ours_there), 1e3 * worst_ours);
   }
 }
 
@@ -346,6 +368,11 @@ int main(int argc, char** argv) {
     if (flag == "--iterations") o.registration.max_iterations = static_cast<std::uint32_t>(std::atoi(v));
     if (flag == "--verbose") o.verbose = std::atoi(v) != 0;
     if (flag == "--pcl") o.pcl = std::atoi(v) != 0;
+    if (flag == "--origin-z") o.origin_z = static_cast<float>(std::atof(v));
+    if (flag == "--frame-iterations") o.point_registration.max_iterations = static_cast<std::uint32_t>(std::atoi(v));
+    if (flag == "--frame-robust") o.point_registration.robust_sigmas = static_cast<float>(std::atof(v));
+    if (flag == "--frame-model-var") o.point_registration.model_variance_m2 = static_cast<float>(std::atof(v));
+    if (flag == "--frame-convergence") o.point_registration.convergence_m = static_cast<float>(std::atof(v));
     if (flag == "--frame-points") o.point_registration.max_points = static_cast<std::uint32_t>(std::atoi(v));
     if (flag == "--points") o.registration.max_points = static_cast<std::uint32_t>(std::atoi(v));
   }
