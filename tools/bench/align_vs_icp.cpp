@@ -7,8 +7,11 @@
 //   taskset -c 1 build/host-release/tools/bench/ccmap_align_vs_icp --draws 20
 // Host tool (std library, PCL): built only when PCL is installed (tools/install-deps pcl).
 //
-// What is timed. ccmap: the frame's own map (a Stack fed the frame's points) and the alignment;
-// the map it aligns against exists already (the rover's), as does PCL's target cloud. PCL: one
+// What is timed. ccmap: the frame's own map (a Stack, its thresholds calibrated once, reset and
+// fed the frame's points) and the alignment: align_frame (the search on the frame's map, the
+// registration on its points: row "ccmap") and align (the registration on its cells: row
+// "cells"); the map it aligns against exists already (the rover's), as does PCL's target
+// cloud. After the table: ccmap's errors on the draws each PCL method aligned. PCL: one
 // align() from the identity, the target's k-d tree built once outside the timing for ICP and
 // GICP (setSearchMethodTarget, no recompute); GICP computes its covariances inside align().
 #include <pcl/point_cloud.h>
