@@ -121,18 +121,9 @@ class CoarseAligner {
     if (report != nullptr) {
       *report = CoarseReport{};
     }
-    Status status = check(ours, theirs, offset, params, search);
-    if (status != Status::kOk) {
-      return detail::refused_alignment(status);
-    }
-    const detail::StackCells<Config> source{theirs};
-    const detail::CellSamples<Config, detail::StackCells<Config>> all(ours, source, offset, params.max_points);
-    Best best{};
-    status = coarse(ours, theirs, all, offset, params, search, report, &best);
-    if (status != Status::kOk) {
-      return detail::refused_alignment(status);
-    }
-    return refine(ours, all, MapOffset{0.0F, 0.0F, 0.0F}, 0.0F, all.count(), best, params);
+    return searched(ours, theirs, offset, params, search, report, [&](const TheirCells& all, const Best& best) {
+      return refine(ours, all, MapOffset{0.0F, 0.0F, 0.0F}, 0.0F, all.count(), best, params);
+    });
   }
 
   /// As align, but the registration after the search matches the frame's own points (their map
@@ -161,20 +152,11 @@ class CoarseAligner {
           std::fabs(origin.z) <= kMaxAbsCoordinateM)) {
       return detail::refused_alignment(Status::kOutOfRange);
     }
-    Status status = check(ours, theirs, offset, params, search);
-    if (status != Status::kOk) {
-      return detail::refused_alignment(status);
-    }
-    const detail::StackCells<Config> source{theirs};
-    const detail::CellSamples<Config, detail::StackCells<Config>> all(ours, source, offset, params.max_points);
-    Best best{};
-    status = coarse(ours, theirs, all, offset, params, search, report, &best);
-    if (status != Status::kOk) {
-      return detail::refused_alignment(status);
-    }
-    const detail::FrameSamples<Config> frame(ours, points, n, origin, nullptr, params.max_points);
-    const auto count = static_cast<std::uint32_t>(n < 0xFFFFFFFFU ? n : 0xFFFFFFFFU);
-    return refine(ours, frame, offset, origin.z + offset.z_m, count, best, params);
+    return searched(ours, theirs, offset, params, search, report, [&](const TheirCells&, const Best& best) {
+      const detail::FrameSamples<Config> frame(ours, points, n, origin, nullptr, params.max_points);
+      const auto count = static_cast<std::uint32_t>(n < 0xFFFFFFFFU ? n : 0xFFFFFFFFU);
+      return refine(ours, frame, offset, origin.z + offset.z_m, count, best, params);
+    });
   }
 
  private:
@@ -182,6 +164,27 @@ class CoarseAligner {
     float dx, dy, dyaw, dz, score;
     std::uint32_t matched;
   };
+
+  using TheirCells = detail::CellSamples<Config, detail::StackCells<Config>>;
+
+  /// The checks, their usable cells and the search; then fine(cells, best) answers, or the refusal.
+  template <typename Fine>
+  [[nodiscard]] AlignmentResult searched(const StackType& ours, const StackType& theirs, const MapOffset& offset,
+                                         const RegistrationParams& params, const CoarseSearchParams& search,
+                                         CoarseReport* report, Fine&& fine) noexcept {
+    Status status = check(ours, theirs, offset, params, search);
+    if (status != Status::kOk) {
+      return detail::refused_alignment(status);
+    }
+    const detail::StackCells<Config> source{theirs};
+    const TheirCells all(ours, source, offset, params.max_points);
+    Best best{};
+    status = coarse(ours, theirs, all, offset, params, search, report, &best);
+    if (status != Status::kOk) {
+      return detail::refused_alignment(status);
+    }
+    return fine(all, best);
+  }
 
   /// The checks every alignment makes first: kOk, or why not.
   [[nodiscard]] static Status check(const StackType& ours, const StackType& theirs, const MapOffset& offset,
@@ -203,8 +206,7 @@ class CoarseAligner {
 
   /// The search (levels 0 .. kLevels - 1) after check(): kOk and *out (about (cx_, cy_), the
   /// centre of their usable cells `all`, which it sets), or kInsufficientOverlap.
-  [[nodiscard]] Status coarse(const StackType& ours, const StackType& theirs,
-                              const detail::CellSamples<Config, detail::StackCells<Config>>& all,
+  [[nodiscard]] Status coarse(const StackType& ours, const StackType& theirs, const TheirCells& all,
                               const MapOffset& offset, const RegistrationParams& params,
                               const CoarseSearchParams& search, CoarseReport* report, Best* out) noexcept {
     CoarseReport r{};
