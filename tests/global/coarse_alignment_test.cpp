@@ -46,8 +46,11 @@ struct Motion {
 };
 
 /// Feeds `map` the ground over a disc of `radius` about (cx, cy) (our frame), expressed in the
-/// frame `m` maps into ours; points on a 1 cm lattice with deterministic 2 mm noise.
-void build(Map& map, const Ground& ground, float cx, float cy, float radius, const Motion& m) {
+/// frame `m` maps into ours; points on a lattice of `spacing` (1 cm unless told) with
+/// deterministic noise of +-`noise` (2 mm). With `out`, the points fed are copied there and
+/// *origin is the sensor origin used.
+void build(Map& map, const Ground& ground, float cx, float cy, float radius, const Motion& m, float spacing = 0.01F,
+           float noise_m = 0.002F, std::vector<PointXYZ>* out = nullptr, PointXYZ* origin = nullptr) {
   ASSERT_EQ(map.init(params()), Status::kOk);
   const float c = std::cos(m.yaw);
   const float s = std::sin(m.yaw);
@@ -57,13 +60,13 @@ void build(Map& map, const Ground& ground, float cx, float cy, float radius, con
   ASSERT_EQ(map.move_to(tx, ty), Status::kOk);
   std::vector<PointXYZ> points;
   std::uint32_t seed = 7U;
-  for (float y = cy - radius; y <= cy + radius; y += 0.01F) {
-    for (float x = cx - radius; x <= cx + radius; x += 0.01F) {
+  for (float y = cy - radius; y <= cy + radius; y += spacing) {
+    for (float x = cx - radius; x <= cx + radius; x += spacing) {
       if ((x - cx) * (x - cx) + (y - cy) * (y - cy) > radius * radius) {
         continue;
       }
       seed = seed * 1664525U + 1013904223U;
-      const float noise = 0.004F * (static_cast<float>(seed >> 8) / 16777216.0F - 0.5F);
+      const float noise = 2.0F * noise_m * (static_cast<float>(seed >> 8) / 16777216.0F - 0.5F);
       points.push_back(
           PointXYZ{c * (x - m.dx) + s * (y - m.dy), -s * (x - m.dx) + c * (y - m.dy), ground(x, y) + noise});
     }
@@ -72,7 +75,11 @@ void build(Map& map, const Ground& ground, float cx, float cy, float radius, con
   FrameCounters counters{};
   ASSERT_EQ(map.update_frame(points.data(), weights.data(), points.size(), PointXYZ{tx, ty, 1.5F}, &counters),
             Status::kOk);
-  ASSERT_GT(counters.received, 10000U);
+  ASSERT_GT(counters.received, 5000U);
+  if (out != nullptr) {
+    *out = points;
+    *origin = PointXYZ{tx, ty, 1.5F};
+  }
 }
 
 /// Largest horizontal distance, over their points of a disc, between where the correction puts
@@ -168,6 +175,62 @@ TEST(CoarseAlignment, RefusesWithoutOverlapAndBadParameters) {
             Status::kInvalidArgument);
   EXPECT_EQ(aligner.align(ours, theirs, MapOffset{NAN, 0.0F, 0.0F}, registration(), default_coarse_search_params(),
                           nullptr)
+                .correction.status,
+            Status::kOutOfRange);
+}
+
+// align_frame: the search on their map, the registration on the frame's own points. On a sparse
+// frame (one point per 4 cm cell, +-5 mm noise: about what the Lone Star scan gives) their cells
+// hold a few points each; the points fix the motion better than the cells' means, checked
+// against the motion applied.
+TEST(CoarseAlignment, AlignFrameRegistersTheFramesPoints) {
+  static Map ours;
+  static Map theirs;
+  static Aligner aligner;
+  build(ours, rolling, 0.0F, 0.0F, 4.8F, Motion{0.0F, 0.0F, 0.0F}, 0.04F, 0.005F);
+  const Motion m{0.7F, -0.5F, -0.1571F};
+  std::vector<PointXYZ> points;
+  PointXYZ origin{};
+  build(theirs, rolling, 0.3F, -0.2F, 1.7F, m, 0.04F, 0.005F, &points, &origin);
+  RegistrationParams every_point = registration();
+  every_point.max_points = 16384U;
+  const AlignmentResult a = aligner.align_frame(ours, theirs, points.data(), points.size(), origin, MapOffset{},
+                                                every_point, default_coarse_search_params(), nullptr);
+  ASSERT_EQ(a.correction.status, Status::kOk) << to_string(a.correction.status);
+  EXPECT_TRUE(a.correction.observable[kAxisX] && a.correction.observable[kAxisY] &&
+              a.correction.observable[kAxisYaw]);
+  EXPECT_EQ(a.cells, points.size());
+  EXPECT_EQ(a.correction.points_sampled, points.size());
+  const float frame_error = max_error(a, m, 0.3F, -0.2F, 1.5F);
+  EXPECT_LT(frame_error, 0.005F);
+  const AlignmentResult cells =
+      aligner.align(ours, theirs, MapOffset{}, every_point, default_coarse_search_params(), nullptr);
+  ASSERT_EQ(cells.correction.status, Status::kOk) << to_string(cells.correction.status);
+  EXPECT_LT(frame_error, max_error(cells, m, 0.3F, -0.2F, 1.5F));
+  // A nominal offset is applied to the points as to their cells: the same answer about it.
+  const MapOffset shift{0.1F, -0.05F, 0.02F};
+  const AlignmentResult shifted = aligner.align_frame(ours, theirs, points.data(), points.size(), origin, shift,
+                                                      every_point, default_coarse_search_params(), nullptr);
+  ASSERT_EQ(shifted.correction.status, Status::kOk) << to_string(shifted.correction.status);
+  EXPECT_NEAR(shifted.correction.dyaw, a.correction.dyaw, 0.003F);
+  EXPECT_NEAR(shifted.correction.dz, a.correction.dz - shift.z_m, 0.002F);
+  // Non-finite points are counted and skipped; bad arguments refused.
+  points[3] = PointXYZ{NAN, 0.0F, 0.0F};
+  const AlignmentResult with_nan = aligner.align_frame(ours, theirs, points.data(), points.size(), origin,
+                                                       MapOffset{}, every_point, default_coarse_search_params(), nullptr);
+  ASSERT_EQ(with_nan.correction.status, Status::kOk);
+  EXPECT_EQ(with_nan.correction.points_rejected, 1U);
+  EXPECT_LT(max_error(with_nan, m, 0.3F, -0.2F, 1.5F), 0.005F);
+  EXPECT_EQ(aligner.align_frame(ours, theirs, nullptr, 5U, origin, MapOffset{}, every_point,
+                                default_coarse_search_params(), nullptr)
+                .correction.status,
+            Status::kInvalidArgument);
+  EXPECT_EQ(aligner.align_frame(ours, theirs, points.data(), points.size(), PointXYZ{NAN, 0.0F, 1.5F}, MapOffset{},
+                                every_point, default_coarse_search_params(), nullptr)
+                .correction.status,
+            Status::kNonFiniteInput);
+  EXPECT_EQ(aligner.align_frame(ours, theirs, points.data(), points.size(), PointXYZ{1.0e9F, 0.0F, 1.5F},
+                                MapOffset{}, every_point, default_coarse_search_params(), nullptr)
                 .correction.status,
             Status::kOutOfRange);
 }

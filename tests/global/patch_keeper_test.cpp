@@ -18,19 +18,14 @@
 #include <vector>
 
 #include "ccmap/global/patch_keeper.hpp"
+#include "support/global_configs.hpp"
 
 namespace ccmap {
 namespace {
 
 // One CCM layer of 32 x 32 cells of 8 cm (+-1.28 m), and the wide map of the same cells that
 // never scrolls (SingleCcmConfig: 256 x 256, +-10.24 m).
-struct SmallCcmConfig {
-  static constexpr FineKind kFineKind = FineKind::kNone;
-  static constexpr CcmCellKind kCcmCell = CcmCellKind::kFull;
-  static constexpr std::int32_t kFineSide = 0;
-  static constexpr std::array<std::int32_t, 1> kCcmSides{{32}};
-  static constexpr float kDefaultFinestCellWidthM = 0.08F;
-};
+using SmallCcmConfig = test::OneCcm8cmConfig;
 // Three layers (Kalman 4 cm, CCM 8 and 16 cm), 32 cells a side.
 struct SmallStackConfig {
   static constexpr FineKind kFineKind = FineKind::kKalman;

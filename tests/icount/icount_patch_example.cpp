@@ -5,9 +5,13 @@
 // (tests/support/icount_marker.hpp):
 //   1  PatchKeeper::move_to of a drive step (patch reads and writes of the cells that left)
 //   2  update_frame_sensor (the frame's cost beside it)
-//   3  the jump back: the worst case of one move (max_writes_per_move patches)
+//   3  the jump back to the start (every window left whole; only tiles with observed cells written)
 //   4  a loop closure's alignment: CoarseAligner::align of a second map of the same ground (the
 //      drive's frames moved by 0.5 m, 0.3 m) against the rover's, default search (+-2 m, +-20 deg)
+//   5  the literal worst move: two places 138 m apart, every cell of every window observed at
+//      both and both kept before, the first observed again; the jump from it to the other
+//      writes every tile of every window (max_writes_per_move) after reading each, and reads
+//      every tile it lands on
 // On other targets the markers are empty and the program checks that every call succeeds.
 //
 //   icount_patch_example [frames width_px height_px]   default: 8 80 50
@@ -108,5 +112,54 @@ int main(int argc, char** argv) {
               "%u read, %u cells restored (bound %u writes); patch %zu bytes\n",
               frames, most_written, Keeper::max_writes_per_step(), jump.patches_written, jump.patches_read,
               jump.cells_restored, Keeper::max_writes_per_move(), Keeper::kCcmPatchBytes);
+  // Region 5: places A (101, 3) and B (3, 101), where every layer's window straddles 5 x 5 tiles,
+  // every cell of every window observed:
+  // for each layer a lattice of two points per cell width over its window, fed in blocks with
+  // the sensor above each at a height whose range only that layer takes (Section IV-G: CADRE's
+  // layers take ranges up to 1.32, 1.86, 2.63, 3.72, 5.26 m). A is kept by a jump to B, B by
+  // the jump back to A, A observed again (every stored patch of A changes); then A -> B again.
+  const auto fill = [&](float cx, float cy) {
+    const float heights[Map::kLayerCount] = {1.2F, 1.6F, 2.2F, 3.2F, 4.5F};
+    const float blocks[Map::kLayerCount] = {0.5F, 0.5F, 1.0F, 1.0F, 2.0F};
+    std::vector<ccmap::PointXYZ> block;
+    for (int layer = 0; layer < Map::kLayerCount; ++layer) {
+      const float w = map->layer_cell_width(layer);
+      const float half = 0.5F * static_cast<float>(Map::layer_side(layer)) * w + w;
+      const float b = blocks[layer];
+      for (float by = -half; by < half; by += b) {
+        for (float bx = -half; bx < half; bx += b) {
+          block.clear();
+          for (float v = 0.25F * w; v < b; v += 0.5F * w) {
+            for (float u = 0.25F * w; u < b; u += 0.5F * w) {
+              block.push_back(ccmap::PointXYZ{cx + bx + u, cy + by + v, 0.0F});
+            }
+          }
+          const ccmap::PointXYZ origin{cx + bx + 0.5F * b, cy + by + 0.5F * b, heights[layer]};
+          if (map->update_frame(block.data(), block.size(), origin, nullptr) != ccmap::Status::kOk) {
+            return false;
+          }
+        }
+      }
+    }
+    return true;
+  };
+  const ccmap::PatchPose still{0.0F, 0.0F, 0.0F, 0.0F, 0.0F};
+  ccmap::PatchMoveReport worst{};
+  if (keeper->move_to(101.0F, 3.0F, still, nullptr) != ccmap::Status::kOk || !fill(101.0F, 3.0F) ||
+      keeper->move_to(3.0F, 101.0F, still, nullptr) != ccmap::Status::kOk || !fill(3.0F, 101.0F) ||
+      keeper->move_to(101.0F, 3.0F, still, nullptr) != ccmap::Status::kOk || !fill(101.0F, 3.0F)) {
+    std::fprintf(stderr, "icount_patch_example: the worst move's set-up failed\n");
+    return 1;
+  }
+  ccmap::test::icount_begin<5>();
+  const ccmap::Status jumped = keeper->move_to(3.0F, 101.0F, still, &worst);
+  ccmap::test::icount_end<5>();
+  std::printf("icount_patch_example: the worst move: %u written, %u read, %u cells saved, %u restored, %u lost\n",
+              worst.patches_written, worst.patches_read, worst.cells_saved, worst.cells_restored, worst.cells_lost);
+  if (jumped != ccmap::Status::kOk || worst.patches_written != Keeper::max_writes_per_move() ||
+      worst.patches_read != 2U * Keeper::max_writes_per_move() || worst.cells_lost != 0U) {
+    std::fprintf(stderr, "icount_patch_example: the worst move did not write and read every tile\n");
+    return 1;
+  }
   return 0;
 }

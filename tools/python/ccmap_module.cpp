@@ -41,6 +41,7 @@
 #include "ccmap/map/types.hpp"
 #include "ccmap/product/product_format.hpp"
 #include "ccmap/sensor/noise_model.hpp"
+#include "global_map.hpp"
 #include "map_adapter.hpp"
 
 namespace py = pybind11;
@@ -1127,6 +1128,44 @@ class Map {
   std::unique_ptr<MapAdapter> map_;
 };
 
+/// ccmap.read_global_map: the global map of a patch directory (tools/global_map/global_map.hpp).
+py::dict read_global_map(const std::string& directory, int layer, bool corrected) {
+  if (layer < 0 || layer >= kMaxLayers) {
+    throw StatusError(Status::kInvalidArgument, "layer " + std::to_string(layer) + " (expected 0 .. 7)");
+  }
+  std::vector<tools::GlobalPatch> patches;
+  tools::PatchDirectoryCounts counts;
+  std::string error;
+  if (!tools::read_patch_directory(directory, layer, &patches, &counts, &error)) {
+    throw StatusError(Status::kInvalidArgument, error);
+  }
+  tools::GlobalMapOptions options;
+  options.apply_corrections = corrected;
+  tools::GlobalRaster raster;
+  if (!tools::assemble_global_map(patches, options, &raster, &error)) {
+    throw StatusError(Status::kInvalidArgument, error);
+  }
+  const auto band = [&raster](const std::vector<float>& values) {
+    py::array_t<float> grid({static_cast<py::ssize_t>(raster.ny), static_cast<py::ssize_t>(raster.nx)});
+    std::copy(values.begin(), values.end(), grid.mutable_data());
+    return grid;
+  };
+  py::dict out;
+  out["height"] = band(raster.height);
+  out["slope_x"] = band(raster.slope_x);
+  out["slope_y"] = band(raster.slope_y);
+  out["normal_var"] = band(raster.normal_var);
+  out["weight"] = band(raster.weight);
+  out["cell_class"] = band(raster.cell_class);
+  out["cell_width"] = raster.cell_width_m;
+  out["x_min"] = static_cast<double>(raster.ix_min) * raster.cell_width_m;
+  out["y_min"] = static_cast<double>(raster.iy_min) * raster.cell_width_m;
+  out["patches"] = counts.used;
+  out["refused"] = py::cast(counts.refused_names);
+  out["hazard_pixels"] = raster.hazard_pixels;
+  return out;
+}
+
 }  // namespace
 }  // namespace ccmap::python
 
@@ -1180,6 +1219,14 @@ PYBIND11_MODULE(ccmap, m) {
       py::arg("preset") = "cadre", py::arg("cell_width") = py::none(),
       "Map()'s parameter checks without a map: 'ok' if Map(preset, cell_width, **params) would accept\n"
       "them, else the status name it would refuse them with.");
+  m.def("read_global_map", &cp::read_global_map, py::arg("directory"), py::arg("layer") = 0,
+        py::arg("corrected") = true,
+        "The global map of a patch directory (PatchKeeper files L<layer>_<tx>_<ty>.ccp): every patch of\n"
+        "the CCM layer placed at its corrected pose (corrected=False: at its writing pose), as a dict of\n"
+        "(ny, nx) float32 arrays height, slope_x, slope_y, normal_var, weight, cell_class (NaN: no cell;\n"
+        "row 0 = the lowest y), x_min, y_min (the raster's lower-left corner, m), cell_width, patches\n"
+        "(used), refused (names of the files that failed a check: skipped), hazard_pixels. The same\n"
+        "raster as ccmap_global_map's GeoTIFF (whose row 0 is the highest y).");
   m.def("decode_product", &cp::decode_product, py::arg("data"),
         "Check and decode a map product (bytes from Map.product, ccmap_product_read or the ground link):\n"
         "a dict of the header fields (docs/icd.md) and 'cells', a (side_y, side_x) structured array\n"

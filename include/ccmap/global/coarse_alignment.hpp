@@ -16,7 +16,11 @@
 //     candidate scores alike) go to the candidate nearest the nominal offset.
 //  2. Level 1, the coarsest layer (CADRE: 64 cm), then level 2, the next finer one (32 cm): the
 //     same around the level before's best, over +-1 of its steps, at half its steps.
-//  3. The registration (align_maps' solver) from the last level's best, with every layer.
+//  3. The registration (align_maps' solver) from the last level's best, with every layer: of
+//     their cells (align), or of the frame's own points their map was built from (align_frame:
+//     point to plane against our cells, as Stack::register_frame; where their cells hold a few
+//     points each, a sparse scan, the points fix the motion 2-4 times better than the cells'
+//     means: docs/design.md, "Against ICP, GICP and NDT").
 // A level with fewer usable cells than RegistrationParams::min_matches (a small view) is
 // skipped: the next, finer one searches the whole box (its steps capped at kMaxSteps a side).
 // The answer is registration's: its statuses and its observability claims. A direction the
@@ -24,8 +28,10 @@
 // or yaw; a ditch along x: no x), so the search invents nothing the terrain does not fix.
 //
 // Bounds: candidates per level <= (2 kMaxSteps + 1)^3, samples per level <= kMaxCoarseSamples;
-// time O(candidates x samples) plus one registration. Memory: the tables of one layer
-// (kTableCells cells x 6 floats, kMaxCoarseSamples x 3 floats) in the aligner, no heap.
+// time O(candidates x samples) plus one registration (at most max_iterations + 2 passes over
+// at most max_points samples). Memory: the tables of one layer
+// (kTableCells cells x 6 floats, kTableCells x 3 floats, kMaxCoarseSamples x 2 floats) in the
+// aligner, no heap.
 #pragma once
 
 #include <cmath>
@@ -35,6 +41,7 @@
 #include "ccmap/cell/ccm_cell.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/registration/alignment.hpp"
+#include "ccmap/registration/registration.hpp"
 
 namespace ccmap {
 
@@ -62,25 +69,28 @@ struct CoarseReport {
 
 namespace detail {
 
-/// Registration samples (CellSamples) turned by dyaw about (cx, cy) and moved by (dx, dy).
+/// Registration samples (CellSamples, FrameSamples) shifted by `shift` (a nominal offset not yet
+/// in them), then turned by dyaw about (cx, cy) and moved by (dx, dy).
 template <typename Inner>
 class TurnedSamples {
  public:
-  TurnedSamples(const Inner& inner, float cx, float cy, float dx, float dy, float dyaw) noexcept
-      : inner_(inner), cx_(cx), cy_(cy), dx_(dx), dy_(dy), c_(std::cos(dyaw)), s_(std::sin(dyaw)) {}
+  TurnedSamples(const Inner& inner, const MapOffset& shift, float cx, float cy, float dx, float dy, float dyaw) noexcept
+      : inner_(inner), shift_(shift), cx_(cx), cy_(cy), dx_(dx), dy_(dy), c_(std::cos(dyaw)), s_(std::sin(dyaw)) {}
   template <typename Fn>
   SampleRefusals for_each(Fn&& fn) const noexcept {
     return inner_.for_each([&](RegistrationSample sample) {
-      const float x = sample.x - cx_;
-      const float y = sample.y - cy_;
+      const float x = sample.x + shift_.x_m - cx_;
+      const float y = sample.y + shift_.y_m - cy_;
       sample.x = c_ * x - s_ * y + cx_ + dx_;
       sample.y = s_ * x + c_ * y + cy_ + dy_;
+      sample.z += shift_.z_m;
       fn(sample);
     });
   }
 
  private:
   const Inner& inner_;
+  MapOffset shift_;
   float cx_, cy_, dx_, dy_, c_, s_;
 };
 
@@ -108,10 +118,77 @@ class CoarseAligner {
   [[nodiscard]] AlignmentResult align(const StackType& ours, const StackType& theirs, const MapOffset& offset,
                                       const RegistrationParams& params, const CoarseSearchParams& search,
                                       CoarseReport* report) noexcept {
-    CoarseReport r{};
     if (report != nullptr) {
-      *report = r;
+      *report = CoarseReport{};
     }
+    return searched(ours, theirs, offset, params, search, report, [&](const TheirCells& all, const Best& best) {
+      return refine(ours, all, MapOffset{0.0F, 0.0F, 0.0F}, 0.0F, all.count(), best, params);
+    });
+  }
+
+  /// As align, but the registration after the search matches the frame's own points (their map
+  /// frame: the points `theirs` was built from, `origin` the sensor's position there) against
+  /// our cells, point to plane as Stack::register_frame, instead of their cells. Where their
+  /// cells hold a few points each (a sparse scan: about one point per finest cell), the cells'
+  /// means carry less than the points (docs/design.md, "Against ICP, GICP and NDT"). The search
+  /// is align's, on their map's coarse layers. Points are sampled and refused as by
+  /// register_frame (RegistrationParams::max_points, non-finite ones counted); the result's
+  /// cells is the point count. Statuses: align's, plus kInvalidArgument for points == nullptr
+  /// with n > 0 and kNonFiniteInput / kOutOfRange for the origin.
+  [[nodiscard]] AlignmentResult align_frame(const StackType& ours, const StackType& theirs, const PointXYZ* points,
+                                            std::size_t n, const PointXYZ& origin, const MapOffset& offset,
+                                            const RegistrationParams& params, const CoarseSearchParams& search,
+                                            CoarseReport* report) noexcept {
+    if (report != nullptr) {
+      *report = CoarseReport{};
+    }
+    if (points == nullptr && n > 0U) {
+      return detail::refused_alignment(Status::kInvalidArgument);
+    }
+    if (!std::isfinite(origin.x) || !std::isfinite(origin.y) || !std::isfinite(origin.z)) {
+      return detail::refused_alignment(Status::kNonFiniteInput);
+    }
+    if (!(std::fabs(origin.x) <= kMaxAbsCoordinateM && std::fabs(origin.y) <= kMaxAbsCoordinateM &&
+          std::fabs(origin.z) <= kMaxAbsCoordinateM)) {
+      return detail::refused_alignment(Status::kOutOfRange);
+    }
+    return searched(ours, theirs, offset, params, search, report, [&](const TheirCells&, const Best& best) {
+      const detail::FrameSamples<Config> frame(ours, points, n, origin, nullptr, params.max_points);
+      const auto count = static_cast<std::uint32_t>(n < 0xFFFFFFFFU ? n : 0xFFFFFFFFU);
+      return refine(ours, frame, offset, origin.z + offset.z_m, count, best, params);
+    });
+  }
+
+ private:
+  struct Best {
+    float dx, dy, dyaw, dz, score;
+    std::uint32_t matched;
+  };
+
+  using TheirCells = detail::CellSamples<Config, detail::StackCells<Config>>;
+
+  /// The checks, their usable cells and the search; then fine(cells, best) answers, or the refusal.
+  template <typename Fine>
+  [[nodiscard]] AlignmentResult searched(const StackType& ours, const StackType& theirs, const MapOffset& offset,
+                                         const RegistrationParams& params, const CoarseSearchParams& search,
+                                         CoarseReport* report, Fine&& fine) noexcept {
+    Status status = check(ours, theirs, offset, params, search);
+    if (status != Status::kOk) {
+      return detail::refused_alignment(status);
+    }
+    const detail::StackCells<Config> source{theirs};
+    const TheirCells all(ours, source, offset, params.max_points);
+    Best best{};
+    status = coarse(ours, theirs, all, offset, params, search, report, &best);
+    if (status != Status::kOk) {
+      return detail::refused_alignment(status);
+    }
+    return fine(all, best);
+  }
+
+  /// The checks every alignment makes first: kOk, or why not.
+  [[nodiscard]] static Status check(const StackType& ours, const StackType& theirs, const MapOffset& offset,
+                                    const RegistrationParams& params, const CoarseSearchParams& search) noexcept {
     Status status = detail::check_alignment(ours, offset, params);
     if (status == Status::kOk) {
       status = theirs.state_status();
@@ -124,14 +201,17 @@ class CoarseAligner {
                                    search.model_sigma_m > 0.0F && std::isfinite(search.model_sigma_m))) {
       status = Status::kInvalidArgument;
     }
-    if (status != Status::kOk) {
-      return detail::refused_alignment(status);
-    }
-    // Their cells' centre: the rotation centre of every level and of the registration.
-    const detail::StackCells<Config> source{theirs};
-    const detail::CellSamples<Config, detail::StackCells<Config>> all(ours, source, offset, params.max_points);
+    return status;
+  }
+
+  /// The search (levels 0 .. kLevels - 1) after check(): kOk and *out (about (cx_, cy_), the
+  /// centre of their usable cells `all`, which it sets), or kInsufficientOverlap.
+  [[nodiscard]] Status coarse(const StackType& ours, const StackType& theirs, const TheirCells& all,
+                              const MapOffset& offset, const RegistrationParams& params,
+                              const CoarseSearchParams& search, CoarseReport* report, Best* out) noexcept {
+    CoarseReport r{};
     if (all.count() < params.min_matches) {
-      return detail::refused_alignment(Status::kInsufficientOverlap);
+      return Status::kInsufficientOverlap;
     }
     cx_ = all.centre_x();
     cy_ = all.centre_y();
@@ -179,15 +259,22 @@ class CoarseAligner {
     if (report != nullptr) {
       *report = r;
     }
-    // The registration from the coarse answer, about the same centre.
-    const detail::TurnedSamples<detail::CellSamples<Config, detail::StackCells<Config>>> turned(
-        all, cx_, cy_, best.dx, best.dy, best.dyaw);
+    *out = best;
+    return Status::kOk;
+  }
+
+  /// The registration of `samples` (shifted by `shift`) from the search's best, about (cx_, cy_),
+  /// composed with it.
+  template <typename Samples>
+  [[nodiscard]] AlignmentResult refine(const StackType& ours, const Samples& samples, const MapOffset& shift, float oz,
+                                       std::uint32_t count, const Best& best, const RegistrationParams& params) noexcept {
+    const detail::TurnedSamples<Samples> turned(samples, shift, cx_, cy_, best.dx, best.dy, best.dyaw);
     const detail::StackSurface<Config> surface(ours);
     const RegistrationResult fine =
-        detail::solve_registration(turned, surface, cx_, cy_, 0.0F, params, ours.layer_cell_width(0),
+        detail::solve_registration(turned, surface, cx_, cy_, oz, params, ours.layer_cell_width(0),
                                    ours.layer_cell_width(StackType::kLayerCount - 1));
     AlignmentResult out{};
-    out.cells = all.count();
+    out.cells = count;
     out.centre_x_m = cx_;
     out.centre_y_m = cy_;
     out.correction = fine;
@@ -213,11 +300,6 @@ class CoarseAligner {
     return out;
   }
 
- private:
-  struct Best {
-    float dx, dy, dyaw, dz, score;
-    std::uint32_t matched;
-  };
   /// One of our cells as a height predictor; known == 0: no prediction.
   struct Predictor {
     float mx, my, mz, gx, gy, inv_var;  ///< inv_var 0: unknown
@@ -332,8 +414,9 @@ class CoarseAligner {
   }
 
   /// Score of one candidate (dx, dy about the nominal offset; c, s: cos, sin of dyaw).
-  [[nodiscard]] Best score(float dx, float dy, float dyaw, float c, float s) const noexcept {
-    // Pass 1: the candidate's dz, the mean residual of its matches; pass 2: the likelihoods.
+  [[nodiscard]] Best score(float dx, float dy, float dyaw, float c, float s) noexcept {
+    // Pass 1: the candidate's dz, the mean residual of its matches (kept with their inverse
+    // variances: samples_ <= kMaxCoarseSamples); pass 2: the likelihoods of the kept ones.
     float sum_r = 0.0F;
     std::uint32_t matched = 0U;
     auto residual = [&](std::uint32_t n, float* r, float* inv_var) {
@@ -358,24 +441,22 @@ class CoarseAligner {
       float inv_var = 0.0F;
       if (residual(n, &r, &inv_var)) {
         sum_r += r;
+        matched_r_[matched] = r;
+        matched_inv_var_[matched] = inv_var;
         ++matched;
       }
     }
     const float dz = matched > 0U ? sum_r / static_cast<float>(matched) : 0.0F;
     float total = 0.0F;
-    for (std::uint32_t n = 0; n < samples_; ++n) {
-      float r = 0.0F;
-      float inv_var = 0.0F;
-      if (residual(n, &r, &inv_var)) {
-        const float e = r - dz;
-        total += std::exp(-0.5F * e * e * inv_var);
-      }
+    for (std::uint32_t k = 0; k < matched; ++k) {
+      const float e = matched_r_[k] - dz;
+      total += std::exp(-0.5F * e * e * matched_inv_var_[k]);
     }
     return Best{dx, dy, dyaw, dz, total, matched};
   }
 
   [[nodiscard]] Best search_level(float x0, float y0, float yaw0, float half_xy, float half_yaw, float step_xy,
-                                  float step_yaw, std::uint32_t* candidates) const noexcept {
+                                  float step_yaw, std::uint32_t* candidates) noexcept {
     const std::int32_t nxy = clamp_steps(half_xy / step_xy);
     const std::int32_t nyaw = clamp_steps(half_yaw / step_yaw);
     const float sxy = nxy > 0 ? half_xy / static_cast<float>(nxy) : 0.0F;
@@ -416,6 +497,8 @@ class CoarseAligner {
   float sx_[kTableCells]{};  ///< their usable cells, then the samples taken from them
   float sy_[kTableCells]{};
   float sz_[kTableCells]{};
+  float matched_r_[kMaxCoarseSamples]{};  ///< one candidate's matched residuals (score)
+  float matched_inv_var_[kMaxCoarseSamples]{};
   std::uint32_t samples_ = 0U;
   float lever_ = 0.0F;
   float width_ = 1.0F;

@@ -34,7 +34,11 @@
 //   28  pose of the writing move: x, y (m, map frame), yaw (rad), position sigma (m, 1-sigma),
 //       yaw sigma (rad, 1-sigma)
 //   48  write sequence (u32: the keeper's patch writes since init, this one included)
-//   52  T x T cells, rows of increasing y, x increasing (empty cells: all zero)
+//   52  corrected pose: x, y (m, map frame), yaw (rad): where a loop closure put the writing
+//       pose (PatchStitcher, global/patch_stitcher.hpp); the pose at 28 when never corrected.
+//       The patch's cells belong at C W^-1 m, m their map-frame position, W the pose at 28
+//       and C this one (rigid in the plane; heights unchanged).
+//   64  T x T cells, rows of increasing y, x increasing (empty cells: all zero)
 //  end  CRC-32 (IEEE, as snapshots) of every byte before it
 // A patch that fails any check (magic, version, kind, side, size, key, width, CRC, a cell no
 // export could write) is not used: counted (patches_refused), its cells are lost; an eviction
@@ -59,7 +63,7 @@
 
 namespace ccmap {
 
-inline constexpr std::uint16_t kPatchFormatVersion = 1U;
+inline constexpr std::uint16_t kPatchFormatVersion = 2U;
 
 /// The pose stamp of the patches a move writes.
 struct PatchPose {
@@ -68,6 +72,13 @@ struct PatchPose {
   float yaw_rad;        ///< rover heading (rad)
   float sigma_xy_m;     ///< position uncertainty, 1-sigma (m), >= 0
   float sigma_yaw_rad;  ///< heading uncertainty, 1-sigma (rad), >= 0
+};
+
+/// A pose in the plane: where a loop closure puts a patch's writing pose.
+struct PlanarPose {
+  float x_m;      ///< map frame (m)
+  float y_m;
+  float yaw_rad;  ///< rad
 };
 
 /// What one move_to did.
@@ -99,11 +110,13 @@ struct PatchHeader {
   float cell_width_m;
   PatchPose pose;
   std::uint32_t sequence;
+  PlanarPose corrected;  ///< the pose's correction by a loop closure (== pose's x, y, yaw if none)
 };
 
 namespace detail {
 
-inline constexpr std::size_t kPatchHeaderBytes = 52U;
+inline constexpr std::size_t kPatchHeaderBytes = 64U;
+inline constexpr std::size_t kPatchCorrectedOffset = 52U;
 inline constexpr std::uint8_t kPatchMagic[4] = {0x43U, 0x43U, 0x4DU, 0x50U};  // "CCMP"
 
 template <typename Cell>
@@ -158,6 +171,7 @@ inline constexpr std::size_t kPatchCellBytes = std::is_same_v<Cell, KalmanCell> 
   h.cell_width_m = r.f32();
   h.pose = PatchPose{r.f32(), r.f32(), r.f32(), r.f32(), r.f32()};
   h.sequence = r.u32();
+  h.corrected = PlanarPose{r.f32(), r.f32(), r.f32()};
   if (!r.ok() || version != kPatchFormatVersion || total != size) {
     return false;
   }
@@ -185,6 +199,17 @@ inline void patch_write_header(std::uint8_t* data, std::size_t size, const Patch
   w.f32(h.pose.sigma_xy_m);
   w.f32(h.pose.sigma_yaw_rad);
   w.u32(h.sequence);
+  w.f32(h.corrected.x_m);
+  w.f32(h.corrected.y_m);
+  w.f32(h.corrected.yaw_rad);
+}
+
+/// Rewrites the corrected pose of a patch whose header was checked (patch_read_header).
+inline void patch_write_corrected(std::uint8_t* data, const PlanarPose& corrected) noexcept {
+  SnapshotWriter w(data + kPatchCorrectedOffset, kPatchHeaderBytes - kPatchCorrectedOffset);
+  w.f32(corrected.x_m);
+  w.f32(corrected.y_m);
+  w.f32(corrected.yaw_rad);
 }
 
 /// Appends the CRC of data[0, size - 4) at size - 4.
@@ -401,6 +426,54 @@ class PatchKeeper {
     return load(key, buffer, header);
   }
 
+  /// Re-stamps the stored patch of key with the corrected pose (a loop closure's: the format's
+  /// offset 52): the patch is read, checked, changed there only, resealed and written back; its
+  /// cells and writing pose are untouched. kOk; kUnknown: no such patch; kCorrupt: a patch that
+  /// fails a check (counted in patches_refused, left as it is); kBufferTooSmall: the storage
+  /// refused the write (counted in write_failures; the stored patch keeps its old stamp);
+  /// kInvalidArgument: a bad layer or a non-finite pose; kNotInitialised.
+  [[nodiscard]] Status restamp(const platform::PatchKey& key, const PlanarPose& corrected) noexcept {
+    if (stack_ == nullptr) {
+      return Status::kNotInitialised;
+    }
+    if (key.layer < 0 || key.layer >= kLayerCount || !std::isfinite(corrected.x_m) ||
+        !std::isfinite(corrected.y_m) || !std::isfinite(corrected.yaw_rad)) {
+      return Status::kInvalidArgument;
+    }
+    const Status loaded = load(key, buffer_);
+    if (loaded != Status::kOk) {
+      return loaded;
+    }
+    const std::size_t size = patch_size(key.layer);
+    detail::patch_write_corrected(buffer_, corrected);
+    detail::patch_seal(buffer_, size);
+    if (storage_.write(storage_.context, key, buffer_, size) != platform::StorageResult::kOk) {
+      ++counters_.write_failures;
+      return Status::kBufferTooSmall;
+    }
+    return Status::kOk;
+  }
+
+  /// Called after every patch write of move_to with the patch's key and write sequence (a
+  /// PatchStitcher's log); nullptr: none. Bound before moves; the call must be bounded and must
+  /// not call the keeper.
+  using WriteObserver = void (*)(void* context, const platform::PatchKey& key, std::uint32_t sequence);
+  void set_write_observer(WriteObserver observer, void* context) noexcept {
+    observer_ = observer;
+    observer_context_ = context;
+  }
+
+  /// The map-frame centre of a patch's tile (m); false for a bad layer or an unbound keeper.
+  [[nodiscard]] bool tile_centre(const platform::PatchKey& key, float* x, float* y) const noexcept {
+    if (stack_ == nullptr || x == nullptr || y == nullptr || key.layer < 0 || key.layer >= kLayerCount) {
+      return false;
+    }
+    const float side = static_cast<float>(kTile) * Access::width(*stack_, key.layer);
+    *x = (static_cast<float>(key.tile_x) + 0.5F) * side;
+    *y = (static_cast<float>(key.tile_y) + 0.5F) * side;
+    return true;
+  }
+
   [[nodiscard]] const PatchCounters& counters() const noexcept { return counters_; }
   [[nodiscard]] bool initialised() const noexcept { return stack_ != nullptr; }
 
@@ -511,14 +584,17 @@ class PatchKeeper {
       if (!changed) {
         return;
       }
-      const PatchHeader h{detail::patch_cell_kind<Cell>(), kTile, key,
-                          Access::width(*stack_, layer),   stamp, sequence_ + 1U};
+      const PatchHeader h{detail::patch_cell_kind<Cell>(), kTile, key, Access::width(*stack_, layer), stamp,
+                          sequence_ + 1U, PlanarPose{stamp.x_m, stamp.y_m, stamp.yaw_rad}};
       detail::patch_write_header(buffer_, size, h);
       detail::patch_seal(buffer_, size);
       if (storage_.write(storage_.context, key, buffer_, size) == platform::StorageResult::kOk) {
         ++sequence_;
         ++r.patches_written;
         r.cells_saved += observed;
+        if (observer_ != nullptr) {
+          observer_(observer_context_, key, sequence_);
+        }
       } else {
         ++counters_.write_failures;
         r.cells_lost += observed;
@@ -590,6 +666,8 @@ class PatchKeeper {
   platform::PatchStorage storage_{};
   std::uint32_t sequence_ = 0U;
   PatchCounters counters_{};
+  WriteObserver observer_ = nullptr;
+  void* observer_context_ = nullptr;
   std::uint8_t buffer_[kMaxPatchBytes]{};
 };
 

@@ -15,7 +15,7 @@
 // tests/global/pose_chain_test.cpp checks it against the normal equations solved in double.
 //
 // Fixed size (kMaxNodes), no heap; O(n) per closure. What it does not do: move the cells of the
-// patches (they stay at the indices they were written at; design.md section 13.3).
+// patches (they stay at the indices they were written at; docs/design.md section 13.6).
 #pragma once
 
 #include <cmath>
