@@ -87,10 +87,8 @@ class Stack {
   static constexpr CcmCellKind kCcmCellKind = kConfigCcmCell<Config>;
   /// Held-point slots of the outlier gate's pools (CCM layers, finest layer; 0 without the gate
   /// compiled in): a frame judges at most this many cells of each (docs/design.md section 9).
-  static constexpr std::size_t kCcmHeldSlots =
-      kConfigOutlierGate<Config> ? detail::OutlierGate<Config>::kCcmSlots : std::size_t{0};
-  static constexpr std::size_t kFineHeldSlots =
-      kConfigOutlierGate<Config> && Layers::kHasFine ? detail::OutlierGate<Config>::kFineSlots : std::size_t{0};
+  static constexpr std::size_t kCcmHeldSlots = detail::OutlierGate<Config>::kCcmSlots;
+  static constexpr std::size_t kFineHeldSlots = Layers::kHasFine ? detail::OutlierGate<Config>::kFineSlots : std::size_t{0};
 
   Stack() noexcept = default;
   Stack(const Stack&) = delete;
@@ -529,11 +527,11 @@ class Stack {
   /// Cells whose points outside the outlier gate await the change rule (docs/design.md,
   /// "Outlier gate and change"); 0 with the gate off. Not map state: not in snapshots.
   [[nodiscard]] std::uint32_t held_cells() const noexcept {
-    return update_.pending_ccm_cells() + update_.pending_fine_cells();
+    return update_.gate().pending_ccm_cells() + update_.gate().pending_fine_cells();
   }
   /// Cells with held points at the end of the last frame, before the change rule decided (the
   /// held-point slots it took; at most kCcmHeldSlots + kFineHeldSlots).
-  [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
+  [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.gate().last_frame_slots(); }
   /// Frame updates accepted since init, load_snapshot() or reset_counters() (saturating).
   [[nodiscard]] std::uint32_t frames_since_reset() const noexcept { return counted_frames_; }
   /// set_params() accepted since init, load_snapshot() or reset_counters() (saturating).
