@@ -159,7 +159,7 @@ struct RegistrationAccess {
       return unclaimed_result(Status::kOutOfRange);
     }
     if (rotation != nullptr) {
-      const Status rotation_status = check_registration_rotation(rotation);
+      const Status rotation_status = check_rotation(rotation);
       if (rotation_status != Status::kOk) {
         return unclaimed_result(rotation_status);
       }

@@ -38,18 +38,6 @@
 
 namespace ccmap::detail {
 
-/// The largest range noise (m) layer `layer` (cell width `width`) receives: sigma_m at its
-/// routing bound max_range_sq_m2 (m^2; a point reaches a layer only from a range within the
-/// bound of the layer it was routed to, which is at most this one's), capped by what the
-/// routing admits (a CCM layer's IV-G bound, finest_max_sigma_m for a constant finest layer)
-/// where that is smaller or sigma_m is not finite.
-[[nodiscard]] inline float layer_max_sigma(const StackParams& params, float max_range_sq_m2, float width,
-                                           bool ccm_layer) noexcept {
-  const float admitted = ccm_layer ? sensor::max_sigma_for_cell_width(width) : params.finest_max_sigma_m;
-  const float sigma = params.noise.sigma_at_range_sq(max_range_sq_m2);
-  return sigma <= admitted ? sigma : admitted;
-}
-
 /// What the gate says about a point.
 enum class GateOutcome : std::uint8_t {
   kFold = 0,      ///< inside: fold it into its cell
@@ -269,7 +257,7 @@ class OutlierGate<Config, true> {
       // kMaxHeldFrames frames of at most 2^32 points each stay below 2^63 / 2^31 * 2^31.
       k.sum_height_q14 += h;
       k.sum_range_key += key;
-      const float v = static_cast<float>(std::int64_t{h} - std::int64_t{k.origin_q14}) * 6.10351562e-5F;  // m
+      const float v = static_cast<float>(std::int64_t{h} - std::int64_t{k.origin_q14}) * kHeightMPerQ14;  // m
       const float delta = v - k.mean_m;
       k.mean_m += delta / static_cast<float>(held->count);
       k.spread_sum += delta * (v - k.mean_m);
