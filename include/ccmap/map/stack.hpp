@@ -63,8 +63,6 @@ struct PlannerAccess;   // planner/detail/region_walk.hpp: the planner queries r
 template <typename Config>
 struct ExchangeAccess;  // persistence/exchange.hpp: delta export and merge read and fold cells
 template <typename Config>
-struct RegistrationAccess;  // registration/registration.hpp: register_frame(_sensor), public reads only
-template <typename Config>
 struct GlobalAccess;  // global/patch_keeper.hpp: cells leaving a window saved as patches, restored on return
 }  // namespace detail
 
@@ -380,25 +378,6 @@ class Stack {
     free_space_.run_sensor(layers_, params_, update_.front(), update_.scratch(), points, n, pose, frame);
     finish_frame(frame, start, counters);
     return Status::kOk;
-  }
-
-  // -------------------------------------------------------------------------------------------
-  // Registration (registration/registration.hpp; docs/design.md, "Registration")
-  // -------------------------------------------------------------------------------------------
-
-  /// The rigid correction (dx, dy, dz, dyaw about the vertical through sensor_origin) that best
-  /// aligns this frame's map-frame points with the map, with its standard deviations and which
-  /// of the four are observable (registration/types.hpp). Changes nothing in the map; the caller
-  /// applies it to its pose and then updates. Statuses: registration/registration.hpp.
-  [[nodiscard]] RegistrationResult register_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
-                                                  const RegistrationParams& params) const noexcept {
-    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_origin, nullptr, params);
-  }
-  /// The same for sensor-frame points with the sensor pose (rotation centre: the sensor position).
-  [[nodiscard]] RegistrationResult register_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& sensor_pose,
-                                                         const RegistrationParams& params) const noexcept {
-    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_pose.translation,
-                                                              &sensor_pose.rotation[0][0], params);
   }
 
   // -------------------------------------------------------------------------------------------
@@ -766,7 +745,3 @@ class Stack {
 };
 
 }  // namespace ccmap
-
-// Stack::register_frame(_sensor)'s implementation (it includes this header, then defines the
-// templates the two members forward to).
-#include "ccmap/registration/registration.hpp"
