@@ -1,5 +1,5 @@
 // Registration on the target (registration/registration.hpp): the 4 x 4 algebra (Eigen's
-// fixed-size float types, src/registration/normal_equations.cpp) linked into a board image, so
+// fixed-size float types, src/registration/detail/normal_equations.cpp) linked into a board image, so
 // that the image checks (no heap, no soft double, no exception tables) cover it. Two small CADRE
 // frames: the map from the first, the second registered with its heights 2 cm low.
 #include <cstddef>

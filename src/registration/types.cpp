@@ -1,4 +1,4 @@
-// Non-template parts of registration: the default parameters, their validation, the pose check.
+// Non-template parts of registration/types.hpp: the default parameters and their validation.
 #include <cmath>
 
 #include "ccmap/cell/ccm_cell.hpp"
