@@ -24,6 +24,7 @@
 #include "ccmap/product/publish.hpp"
 #include "ccmap/registration/alignment.hpp"
 #include "ccmap/platform/platform.hpp"
+#include "ccmap/registration/registration.hpp"
 
 namespace ccmap {
 namespace {
@@ -1102,7 +1103,7 @@ ccmap_status ccmap_register_frame(const ccmap_map* map, const float* xyz, size_t
   const ccmap::PointXYZ origin{sensor_origin_xyz[0], sensor_origin_xyz[1], sensor_origin_xyz[2]};
   const ccmap::RegistrationParams p = ccmap::registration_params_from_c(params);
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
-    const ccmap::RegistrationResult r = stack.register_frame(points, n, origin, p);
+    const ccmap::RegistrationResult r = ccmap::register_frame(stack, points, n, origin, p);
     ccmap::registration_to_c(r, origin.x, origin.y, 0U, out);
     return ccmap::to_c(r.status);
   });
@@ -1127,7 +1128,7 @@ ccmap_status ccmap_register_frame_sensor(const ccmap_map* map, const float* xyz,
   p.translation = ccmap::PointXYZ{pose->translation[0], pose->translation[1], pose->translation[2]};
   const ccmap::RegistrationParams rp = ccmap::registration_params_from_c(params);
   return ccmap::dispatch(map, CCMAP_INVALID_ARGUMENT, [&](const auto& stack) {
-    const ccmap::RegistrationResult r = stack.register_frame_sensor(points, n, p, rp);
+    const ccmap::RegistrationResult r = ccmap::register_frame_sensor(stack, points, n, p, rp);
     ccmap::registration_to_c(r, p.translation.x, p.translation.y, 0U, out);
     return ccmap::to_c(r.status);
   });

@@ -1,11 +1,12 @@
 // Registration on the target (registration/registration.hpp): the 4 x 4 algebra (Eigen's
-// fixed-size float types, src/registration/normal_equations.cpp) linked into a board image, so
+// fixed-size float types, src/registration/detail/normal_equations.cpp) linked into a board image, so
 // that the image checks (no heap, no soft double, no exception tables) cover it. Two small CADRE
 // frames: the map from the first, the second registered with its heights 2 cm low.
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 
+#include "ccmap/registration/registration.hpp"
 #include "harness.hpp"
 #include "shared_maps.hpp"
 #include "support/cadre_frames.hpp"
@@ -46,7 +47,7 @@ ccmap::bmtest::CadreStack& mapped(PointXYZ* origin) {
 BM_CASE(registration, a_frame_two_centimetres_low_is_corrected) {
   PointXYZ origin{};
   const ccmap::bmtest::CadreStack& s = mapped(&origin);
-  const ccmap::RegistrationResult r = s.register_frame(ccmap::bmtest::frame_map_points(), ccmap::bmtest::kFramePoints,
+  const ccmap::RegistrationResult r = ccmap::register_frame(s, ccmap::bmtest::frame_map_points(), ccmap::bmtest::kFramePoints,
                                                        origin, ccmap::default_registration_params());
   BM_CHECK_STATUS(r.status, Status::kOk, "registration of a frame 2 cm low");
   BM_CHECK(r.observable[ccmap::kAxisZ], "the height was not observable");
@@ -60,12 +61,12 @@ BM_CASE(registration, refusals_claim_nothing) {
   const ccmap::bmtest::CadreStack& s = mapped(&origin);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const ccmap::RegistrationParams p = ccmap::default_registration_params();
-  ccmap::RegistrationResult r = s.register_frame(ccmap::bmtest::frame_map_points(), ccmap::bmtest::kFramePoints,
+  ccmap::RegistrationResult r = ccmap::register_frame(s, ccmap::bmtest::frame_map_points(), ccmap::bmtest::kFramePoints,
                                                  PointXYZ{nan, 0.0F, 0.2F}, p);
   BM_CHECK_STATUS(r.status, Status::kNonFiniteInput, "a NaN sensor origin");
   BM_CHECK(!r.observable[ccmap::kAxisZ] && ccmap::bmtest::bits(r.dz) == 0U, "a refusal claimed a height");
-  r = s.register_frame(ccmap::bmtest::frame_map_points(), 0U, origin, p);
+  r = ccmap::register_frame(s, ccmap::bmtest::frame_map_points(), 0U, origin, p);
   BM_CHECK_STATUS(r.status, Status::kDegenerateInput, "no points");
-  r = s.register_frame(ccmap::bmtest::frame_map_points(), ccmap::bmtest::kFramePoints, PointXYZ{60.0F, 0.0F, 0.2F}, p);
+  r = ccmap::register_frame(s, ccmap::bmtest::frame_map_points(), ccmap::bmtest::kFramePoints, PointXYZ{60.0F, 0.0F, 0.2F}, p);
   BM_CHECK_STATUS(r.status, Status::kOutsideMap, "a pose far from the map");
 }

@@ -14,6 +14,7 @@
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "support/count_arg.hpp"
 #include "support/flight_cycle.hpp"
 #include "support/icount_marker.hpp"
@@ -45,11 +46,11 @@ int main(int argc, char** argv) {
     if (k > 0) {
       const auto t0 = std::chrono::steady_clock::now();
       ccmap::test::icount_begin<1>();
-      const ccmap::RegistrationResult a = map->register_frame_sensor(f.sensor_points.data(), f.sensor_points.size(), f.pose, params);
+      const ccmap::RegistrationResult a = ccmap::register_frame_sensor(*map, f.sensor_points.data(), f.sensor_points.size(), f.pose, params);
       ccmap::test::icount_end<1>();
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       ccmap::test::icount_begin<2>();
-      const ccmap::RegistrationResult b = map->register_frame(f.map_points.data(), f.map_points.size(), f.sensor_origin, params);
+      const ccmap::RegistrationResult b = ccmap::register_frame(*map, f.map_points.data(), f.map_points.size(), f.sensor_origin, params);
       ccmap::test::icount_end<2>();
       if (a.status != ccmap::Status::kOk || b.status != ccmap::Status::kOk || !a.observable[ccmap::kAxisZ] ||
           !b.observable[ccmap::kAxisZ]) {

@@ -33,6 +33,7 @@
 #include "ccmap/planner/costmap.hpp"
 #include "ccmap/planner/path_query.hpp"
 #include "ccmap/product/publish.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "support/cadre_frames.hpp"
 #include "support/icount_marker.hpp"
 
@@ -113,7 +114,7 @@ int main() {
   rp.max_iterations = kMaxRegistrationIterations;
   rp.convergence_m = 1.0e-30F;
   test::icount_begin<7>();
-  const RegistrationResult reg = stack->register_frame_sensor(probe.sensor_points.data(), probe.sensor_points.size(),
+  const RegistrationResult reg = ccmap::register_frame_sensor(*stack, probe.sensor_points.data(), probe.sensor_points.size(),
                                                               off, rp);
   test::icount_end<7>();
   if (reg.status != Status::kOk && reg.status != Status::kNotConverged) return fail("registration refused");

@@ -214,10 +214,10 @@ TEST(Integrity, AnUpsetStaysVisibleAfterMoreWritesToTheCell) {
   TwoCells layers;
   CcmCell& cell = layers.ccm_storage[1];
   for (int i = 0; i < 20; ++i) {
-    const detail::WideSignature before = detail::cell_signature_wide(cell);
-    detail::ccm_update_unchecked(cell, 0.01F * static_cast<float>(i % 5), -0.02F, 0.3F + 0.001F * static_cast<float>(i), 1.0F,
-                         1000.0F);
-    detail::rewrite_check(layers, cell, before);
+    detail::write_cell(layers, cell, [i](CcmCell& written) {
+      detail::ccm_update_unchecked(written, 0.01F * static_cast<float>(i % 5), -0.02F,
+                                   0.3F + 0.001F * static_cast<float>(i), 1.0F, 1000.0F);
+    });
   }
   ASSERT_TRUE(detail::cell_intact(layers, cell)) << "the writer hook lost the check of a cell it wrote";
   cell = flipped(cell, 6U * 32U + 3U);  // a low mantissa bit of s_zz: no invariant can see it
@@ -227,8 +227,9 @@ TEST(Integrity, AnUpsetStaysVisibleAfterMoreWritesToTheCell) {
   detail::CheckRun<CcmCell> run;
   for (int i = 0; i < 50; ++i) {
     CcmCell& target = layers.ccm_storage[i % 3 == 0 ? 0 : 1];
-    run.touch(layers, target);
-    detail::ccm_update_unchecked(target, 0.02F, 0.01F * static_cast<float>(i % 7), 0.31F, 1.0F, 1000.0F);
+    run.write(layers, target, [i](CcmCell& written) {
+      detail::ccm_update_unchecked(written, 0.02F, 0.01F * static_cast<float>(i % 7), 0.31F, 1.0F, 1000.0F);
+    });
   }
   run.close(layers);
   EXPECT_TRUE(detail::cell_intact(layers, layers.ccm_storage[0])) << "runs lost the check of the intact cell";

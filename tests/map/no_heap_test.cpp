@@ -19,6 +19,7 @@
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/registration/alignment.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "support/poses.hpp"
 
 extern "C" {
@@ -196,9 +197,9 @@ TEST(NoHeap, RegistrationAndAlignmentRunWithoutAllocating) {
   g_counting = true;
   long status_errors = 0;
   for (int k = 0; k < 3; ++k) {
-    status_errors += g_stack.register_frame(frame.data(), frame.size(), origin, params).status != Status::kOk;
-    status_errors += g_stack.register_frame_sensor(sensor.data(), sensor.size(), pose, params).status != Status::kOk;
-    status_errors += g_stack.register_frame(frame.data(), frame.size(), PointXYZ{std::nanf(""), 0.0F, 0.0F}, params)
+    status_errors += ccmap::register_frame(g_stack, frame.data(), frame.size(), origin, params).status != Status::kOk;
+    status_errors += ccmap::register_frame_sensor(g_stack, sensor.data(), sensor.size(), pose, params).status != Status::kOk;
+    status_errors += ccmap::register_frame(g_stack, frame.data(), frame.size(), PointXYZ{std::nanf(""), 0.0F, 0.0F}, params)
                          .status != Status::kNonFiniteInput;
     // Team alignment: the same map as another rover's, from the stack and from its snapshot.
     status_errors += align_maps(g_stack, g_stack, MapOffset{0.01F, 0.0F, 0.0F}, params).correction.status != Status::kOk;

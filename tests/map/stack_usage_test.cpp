@@ -24,6 +24,7 @@
 #include "ccmap/planner/footprint.hpp"
 #include "ccmap/planner/path_query.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "support/poses.hpp"
 
 // tests/map/stack_instances.cpp
@@ -189,11 +190,11 @@ TEST(StackUsage, EveryPublicCallUsesLessThanFourKiB) {
                          Status::kOk ? static_cast<float>(st.lethal) : -1.0F;
       }),
       CCMAP_CALL("register_frame", {
-        f.sink = f.stack->register_frame(f.points.data(), f.points.size(), PointXYZ{0.0F, 0.0F, 0.0F},
+        f.sink = ccmap::register_frame(*f.stack, f.points.data(), f.points.size(), PointXYZ{0.0F, 0.0F, 0.0F},
                                          default_registration_params()).dz;
       }),
       CCMAP_CALL("register_frame_sensor", {
-        f.sink = f.stack->register_frame_sensor(f.points.data(), 2000U, f.pose, default_registration_params()).dz;
+        f.sink = ccmap::register_frame_sensor(*f.stack, f.points.data(), 2000U, f.pose, default_registration_params()).dz;
       }),
       CCMAP_CALL("move_to (teleport)", { f.sink = f.stack->move_to(500.0F, 500.0F) == Status::kOk ? 1.0F : 0.0F; }),
   };

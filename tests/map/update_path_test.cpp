@@ -415,7 +415,7 @@ TEST(AcceptRuns, HandTheSlotsWhatPointByPointCountingGives) {
             ++m.held;
           }
         } else {
-          const bool new_run = cell != run_cell;  // CheckRun::touch's answer
+          const bool new_run = cell != run_cell;  // the update path's run (ChunkRuns)
           if (new_run) {
             accepts.start(*pool, cell);
             run_cell = cell;

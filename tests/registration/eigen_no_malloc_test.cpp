@@ -1,4 +1,4 @@
-// The 4 x 4 algebra of registration (src/registration/normal_equations.cpp, compiled into this
+// The 4 x 4 algebra of registration (src/registration/detail/normal_equations.cpp, compiled into this
 // test again with EIGEN_RUNTIME_NO_MALLOC and assertions on): no Eigen heap allocation while
 // Eigen::internal::set_is_malloc_allowed(false) (an eigen_assert fires otherwise), and the
 // answers against a double-precision solve of the same equations.

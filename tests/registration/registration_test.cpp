@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "registration/reference_registration.hpp"
 #include "support/map_state.hpp"
 #include "support/poses.hpp"
@@ -50,7 +51,7 @@ test::TerrainFrame displaced_frame(Terrain terrain, const TestCorrection& c, std
 RegistrationResult register_displaced(const Map& map, Terrain terrain, const TestCorrection& c,
                                       std::uint32_t seed = 7U) {
   const test::TerrainFrame f = displaced_frame(terrain, c, seed);
-  return map.register_frame(f.points.data(), f.points.size(), f.origin, default_registration_params());
+  return ccmap::register_frame(map, f.points.data(), f.points.size(), f.origin, default_registration_params());
 }
 
 /// Applies a result to a map-frame point about `o` (registration/types.hpp).
@@ -107,7 +108,7 @@ TEST(RegistrationTerrain, TiltedPlaneFixesItsTurnButNotWhereAlongItsGradient) {
   // vertical turns the plane's gradient: observable.
   auto map = map_of(Terrain::kPlane);
   const test::TerrainFrame f = displaced_frame(Terrain::kPlane, kOffset);
-  const RegistrationResult r = map->register_frame(f.points.data(), f.points.size(), f.origin, default_registration_params());
+  const RegistrationResult r = ccmap::register_frame(*map, f.points.data(), f.points.size(), f.origin, default_registration_params());
   ASSERT_EQ(r.status, Status::kOk) << to_string(r.status);
   EXPECT_FALSE(r.observable[kAxisX] || r.observable[kAxisY] || r.observable[kAxisZ])
       << "a single plane cannot fix x, y or z alone";
@@ -177,7 +178,7 @@ TEST(RegistrationTerrain, SinusoidBeyondHalfAPeriodLandsOnTheNextCrest) {
   p.max_iterations = 30U;
   const TestCorrection c{0.5, 0.0, 0.0, 0.0};
   const test::TerrainFrame f = displaced_frame(Terrain::kSinusoidX, c);
-  const RegistrationResult r = map->register_frame(f.points.data(), f.points.size(), f.origin, p);
+  const RegistrationResult r = ccmap::register_frame(*map, f.points.data(), f.points.size(), f.origin, p);
   ASSERT_EQ(r.status, Status::kOk) << to_string(r.status);
   EXPECT_NEAR(r.dx, 0.5 - 0.8, 0.01) << "expected the alias one period away";
 }
@@ -235,7 +236,7 @@ TEST(RegistrationReference, SolutionIsTheStationaryPointOfTheDoubleModel) {
     auto map = map_of(t);
     const test::TerrainFrame f = displaced_frame(t, kOffset);
     const RegistrationParams p = default_registration_params();
-    const RegistrationResult r = map->register_frame(f.points.data(), f.points.size(), f.origin, p);
+    const RegistrationResult r = ccmap::register_frame(*map, f.points.data(), f.points.size(), f.origin, p);
     ASSERT_EQ(r.status, Status::kOk) << to_string(r.status);
     const test::ReferenceRegistration<CadreConfig> model(*map, f.points, f.origin, p);
     const double at[4] = {r.dx, r.dy, r.dz, r.dyaw};
@@ -274,8 +275,8 @@ TEST(Registration, SensorFrameAgreesWithTheMapFrame) {
     sensor[i] = PointXYZ{c * x + s * y, -s * x + c * y, f.points[i].z - f.origin.z};
   }
   const RegistrationParams p = default_registration_params();
-  const RegistrationResult a = map->register_frame(f.points.data(), f.points.size(), f.origin, p);
-  const RegistrationResult b = map->register_frame_sensor(sensor.data(), sensor.size(), pose, p);
+  const RegistrationResult a = ccmap::register_frame(*map, f.points.data(), f.points.size(), f.origin, p);
+  const RegistrationResult b = ccmap::register_frame_sensor(*map, sensor.data(), sensor.size(), pose, p);
   ASSERT_EQ(a.status, Status::kOk);
   ASSERT_EQ(b.status, Status::kOk);
   EXPECT_NEAR(a.dx, b.dx, 2e-4);
@@ -310,7 +311,7 @@ TEST(Registration, OutliersAndChangedGroundFadeOut) {
     if ((h >> 24) < 26U) q.z += 0.2F + 0.8F * static_cast<float>((h >> 8) & 0xFFFFU) / 65535.0F;
     if (q.x > 2.0F && q.x < 2.4F && q.y > -0.2F && q.y < 0.2F) q.z += 0.3F;
   }
-  const RegistrationResult r = map->register_frame(f.points.data(), f.points.size(), f.origin, default_registration_params());
+  const RegistrationResult r = ccmap::register_frame(*map, f.points.data(), f.points.size(), f.origin, default_registration_params());
   ASSERT_EQ(r.status, Status::kOk) << to_string(r.status);
   EXPECT_NEAR(r.dx, kOffset.dx, 3.0 * r.sigma_dx + 1e-3);
   EXPECT_NEAR(r.dy, kOffset.dy, 3.0 * r.sigma_dy + 1e-3);
@@ -324,7 +325,7 @@ TEST(Registration, NonFinitePointsAreSkippedAndCounted) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (std::size_t i = 0; i < f.points.size(); i += 3) f.points[i].y = nan;
   f.points[1].x = 1e30F;
-  const RegistrationResult r = map->register_frame(f.points.data(), f.points.size(), f.origin, default_registration_params());
+  const RegistrationResult r = ccmap::register_frame(*map, f.points.data(), f.points.size(), f.origin, default_registration_params());
   ASSERT_EQ(r.status, Status::kOk) << to_string(r.status);
   EXPECT_GT(r.points_rejected, r.points_sampled / 3U) << "non-finite samples were not counted";
   EXPECT_NEAR(r.dx, kOffset.dx, 3.0 * r.sigma_dx + 5e-4);
@@ -357,66 +358,66 @@ TEST(RegistrationRefusals, EveryBadInputIsAnsweredAndNothingClaimed) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
 
   Map uninitialised;
-  expect_unclaimed(uninitialised.register_frame(pts, n, f.origin, p), Status::kNotInitialised, "before init");
-  expect_unclaimed(map->register_frame(nullptr, 10U, f.origin, p), Status::kInvalidArgument, "null points");
+  expect_unclaimed(ccmap::register_frame(uninitialised, pts, n, f.origin, p), Status::kNotInitialised, "before init");
+  expect_unclaimed(ccmap::register_frame(*map, nullptr, 10U, f.origin, p), Status::kInvalidArgument, "null points");
   RegistrationParams bad = p;
   bad.max_points = 0U;
-  expect_unclaimed(map->register_frame(pts, n, f.origin, bad), Status::kInvalidArgument, "zero max_points");
+  expect_unclaimed(ccmap::register_frame(*map, pts, n, f.origin, bad), Status::kInvalidArgument, "zero max_points");
   bad = p;
   bad.max_sigma_m = nan;
-  expect_unclaimed(map->register_frame(pts, n, f.origin, bad), Status::kInvalidArgument, "NaN max_sigma_m");
-  expect_unclaimed(map->register_frame(pts, n, PointXYZ{nan, 0.0F, 0.2F}, p), Status::kNonFiniteInput, "NaN origin");
-  expect_unclaimed(map->register_frame(pts, n, PointXYZ{2e5F, 0.0F, 0.2F}, p), Status::kOutOfRange, "origin beyond 1e5 m");
-  expect_unclaimed(map->register_frame(pts, n, PointXYZ{40.0F, 0.0F, 0.2F}, p), Status::kOutsideMap,
+  expect_unclaimed(ccmap::register_frame(*map, pts, n, f.origin, bad), Status::kInvalidArgument, "NaN max_sigma_m");
+  expect_unclaimed(ccmap::register_frame(*map, pts, n, PointXYZ{nan, 0.0F, 0.2F}, p), Status::kNonFiniteInput, "NaN origin");
+  expect_unclaimed(ccmap::register_frame(*map, pts, n, PointXYZ{2e5F, 0.0F, 0.2F}, p), Status::kOutOfRange, "origin beyond 1e5 m");
+  expect_unclaimed(ccmap::register_frame(*map, pts, n, PointXYZ{40.0F, 0.0F, 0.2F}, p), Status::kOutsideMap,
                    "a pose far from the map");
-  expect_unclaimed(map->register_frame(pts, 0U, f.origin, p), Status::kDegenerateInput, "no points");
+  expect_unclaimed(ccmap::register_frame(*map, pts, 0U, f.origin, p), Status::kDegenerateInput, "no points");
   std::vector<PointXYZ> all_nan(1000, PointXYZ{nan, nan, nan});
-  expect_unclaimed(map->register_frame(all_nan.data(), all_nan.size(), f.origin, p), Status::kNonFiniteInput,
+  expect_unclaimed(ccmap::register_frame(*map, all_nan.data(), all_nan.size(), f.origin, p), Status::kNonFiniteInput,
                    "every point NaN");
   std::vector<PointXYZ> one_spot(1000, PointXYZ{1.0F, 0.5F, 0.0F});
-  expect_unclaimed(map->register_frame(one_spot.data(), one_spot.size(), f.origin, p), Status::kDegenerateInput,
+  expect_unclaimed(ccmap::register_frame(*map, one_spot.data(), one_spot.size(), f.origin, p), Status::kDegenerateInput,
                    "every point at one spot");
   // Points beyond every layer's range, and points mostly beyond the windows from a sensor near
   // the window's edge.
   std::vector<PointXYZ> far = f.points;
   for (PointXYZ& q : far) q.x += 30.0F;
-  expect_unclaimed(map->register_frame(far.data(), far.size(), f.origin, p), Status::kOutsideMap,
+  expect_unclaimed(ccmap::register_frame(*map, far.data(), far.size(), f.origin, p), Status::kOutsideMap,
                    "points beyond every layer's range");
   std::vector<PointXYZ> edge = f.points;
   const PointXYZ edge_origin{f.origin.x + 9.8F, f.origin.y, f.origin.z};
   for (PointXYZ& q : edge) q.x += 9.8F;
-  expect_unclaimed(map->register_frame(edge.data(), edge.size(), edge_origin, p), Status::kOutsideMap,
+  expect_unclaimed(ccmap::register_frame(*map, edge.data(), edge.size(), edge_origin, p), Status::kOutsideMap,
                    "points beyond the windows");
   // Ground the map has never seen: behind the sensor.
   std::vector<PointXYZ> behind = f.points;
   for (PointXYZ& q : behind) q.x = f.origin.x - (q.x - f.origin.x);
-  expect_unclaimed(map->register_frame(behind.data(), behind.size(), f.origin, p), Status::kInsufficientOverlap,
+  expect_unclaimed(ccmap::register_frame(*map, behind.data(), behind.size(), f.origin, p), Status::kInsufficientOverlap,
                    "ground the map does not know");
   // An empty map.
   Map empty;
   ASSERT_EQ(empty.init(default_stack_params(0.04F)), Status::kOk);
-  expect_unclaimed(empty.register_frame(pts, n, f.origin, p), Status::kInsufficientOverlap, "an empty map");
+  expect_unclaimed(ccmap::register_frame(empty, pts, n, f.origin, p), Status::kInsufficientOverlap, "an empty map");
   // A pose error beyond the search bound.
   RegistrationParams tight = p;
   tight.max_translation_m = 0.02F;
-  expect_unclaimed(map->register_frame(pts, n, f.origin, tight), Status::kNotConverged,
+  expect_unclaimed(ccmap::register_frame(*map, pts, n, f.origin, tight), Status::kNotConverged,
                    "a correction beyond max_translation_m");
   // Too few iterations to converge.
   RegistrationParams one = p;
   one.max_iterations = 1U;
-  expect_unclaimed(map->register_frame(pts, n, f.origin, one), Status::kNotConverged, "one iteration");
+  expect_unclaimed(ccmap::register_frame(*map, pts, n, f.origin, one), Status::kNotConverged, "one iteration");
   // Sensor-frame input: a pose that is no rotation, or not finite.
   Pose pose = test::identity_pose(f.origin);
   pose.rotation[0][0] = 1.5F;
-  expect_unclaimed(map->register_frame_sensor(pts, n, pose, p), Status::kInvalidArgument, "a rotation entry of 1.5");
+  expect_unclaimed(ccmap::register_frame_sensor(*map, pts, n, pose, p), Status::kInvalidArgument, "a rotation entry of 1.5");
   pose = test::identity_pose(f.origin);
   pose.rotation[0][1] = 0.1F;
-  expect_unclaimed(map->register_frame_sensor(pts, n, pose, p), Status::kInvalidArgument, "R^T R off the identity");
+  expect_unclaimed(ccmap::register_frame_sensor(*map, pts, n, pose, p), Status::kInvalidArgument, "R^T R off the identity");
   pose = test::identity_pose(f.origin);
   pose.rotation[2][2] = nan;
-  expect_unclaimed(map->register_frame_sensor(pts, n, pose, p), Status::kNonFiniteInput, "a NaN rotation");
+  expect_unclaimed(ccmap::register_frame_sensor(*map, pts, n, pose, p), Status::kNonFiniteInput, "a NaN rotation");
   pose = test::identity_pose(PointXYZ{0.0F, nan, 0.2F});
-  expect_unclaimed(map->register_frame_sensor(pts, n, pose, p), Status::kNonFiniteInput, "a NaN translation");
+  expect_unclaimed(ccmap::register_frame_sensor(*map, pts, n, pose, p), Status::kNonFiniteInput, "a NaN translation");
 }
 
 TEST(RegistrationRefusals, ParamsAreValidated) {

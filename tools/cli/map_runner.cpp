@@ -9,6 +9,7 @@
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/registration/alignment.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap::tools {
@@ -246,7 +247,7 @@ class StackRunner final : public MapRunner {
       points_[i] = PointXYZ{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
     }
     const PointXYZ origin{sensor_origin[0], sensor_origin[1], sensor_origin[2]};
-    return to_local(stack_->register_frame(points_.data(), points_.size(), origin, default_registration_params()),
+    return to_local(ccmap::register_frame(*stack_, points_.data(), points_.size(), origin, default_registration_params()),
                     origin.x, origin.y, 0U);
   }
 

@@ -132,7 +132,7 @@ class MapRunner {
   /// Replaces the map by a snapshot (load_snapshot: parameters, windows, cells).
   virtual bool load_snapshot(const std::vector<std::uint8_t>& bytes, std::string* error) = 0;
   /// Registers a frame (xyz interleaved, local metres; sensor origin) against the map before it
-  /// is folded in (Stack::register_frame, default parameters): the map is unchanged.
+  /// is folded in (register_frame(stack, ...), default parameters): the map is unchanged.
   virtual LocalCorrection register_frame(const std::vector<float>& xyz, const float sensor_origin[3]) = 0;
   /// Team alignment (align_snapshot) of another map's snapshot placed by offset_m (its origin
   /// minus this one's, local metres): the defaults with a +-2 m, +-0.5 rad search in 40 iterations.

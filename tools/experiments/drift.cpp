@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "ccmap/registration/types.hpp"
 #include "experiments/common.hpp"
 #include "experiments/detection.hpp"
@@ -52,7 +53,7 @@ void register_frame_into(const Stack<CcmConfig>& s, DriftMap<CcmConfig>& m, cons
   for (std::size_t i = 0; i < points.size(); ++i) move(points[i].x, points[i].y, points[i].z, &(*out)[i]);
   move(cam.x, cam.y, cam.z, origin);
   if (!register_it) return;
-  const RegistrationResult r = s.register_frame(out->data(), out->size(), *origin, default_registration_params());
+  const RegistrationResult r = ccmap::register_frame(s, out->data(), out->size(), *origin, default_registration_params());
   if (r.status != Status::kOk) return;
   ++row->registrations;
   if (r.observable[kAxisX]) ++row->x_observable;

@@ -33,7 +33,7 @@
 //    fraction, an estimator that knows its drift rate). Same clouds, same poses.
 //  - Registration (compare_registration): every map also runs a third time with plain moves and
 //    each frame after the first registered against the map before it is folded in
-//    (Stack::register_frame, default parameters); the correction is composed into the map's pose
+//    (register_frame(stack, ...), default parameters); the correction is composed into the map's pose
 //    estimate (as a rover corrects its pose) and carried to the later frames, whose drifted poses
 //    it corrects first. The metric's camera is then the corrected one. final_pose_error_m: the
 //    horizontal distance of the last corrected (or drifted) camera from the true one.

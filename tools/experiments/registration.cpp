@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "cloud_reader.hpp"
 #include "experiments/common.hpp"
 #include "experiments/svg_plot.hpp"
@@ -279,7 +280,7 @@ RegistrationExpResult run_registration_experiment(const RegistrationExpConfig& c
             pts.push_back(PointXYZ{static_cast<float>(ox + cs * x - sn * y), static_cast<float>(oy + sn * x + cs * y),
                                    static_cast<float>(p.z - cdz)});
           }
-          const RegistrationResult r = map->register_frame(
+          const RegistrationResult r = ccmap::register_frame(*map, 
               pts.data(), pts.size(), PointXYZ{static_cast<float>(ox), static_cast<float>(oy), static_cast<float>(oz)}, rp);
           if (r.status != Status::kOk) {
             cell.statuses.push_back(to_string(r.status));

@@ -1,5 +1,5 @@
 // Registration on real and synthetic terrain (issue 22; docs/evaluation.md, "Registration"): the
-// error of Stack::register_frame against an injected pose error, as a function of the overlap
+// error of register_frame(stack, ...) against an injected pose error, as a function of the overlap
 // between the map and the frame and of the error's size, and where it fails.
 //
 // Procedure, per terrain and per (overlap, offset size), `trials` times:

@@ -4,6 +4,7 @@
 #include "ccmap/product/publish.hpp"
 #include "ccmap/map/stack.hpp"
 #include "ccmap/registration/alignment.hpp"
+#include "ccmap/registration/registration.hpp"
 
 namespace ccmap::python {
 namespace {
@@ -25,11 +26,11 @@ class StackAdapter final : public MapAdapter {
   }
   RegistrationResult register_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
                                     const RegistrationParams& params) const override {
-    return stack_->register_frame(points, n, sensor_origin, params);
+    return ccmap::register_frame(*stack_, points, n, sensor_origin, params);
   }
   RegistrationResult register_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& pose,
                                            const RegistrationParams& params) const override {
-    return stack_->register_frame_sensor(points, n, pose, params);
+    return ccmap::register_frame_sensor(*stack_, points, n, pose, params);
   }
   RegistrationResult align_snapshot(const std::uint8_t* data, std::size_t size, const float (&offset)[3],
                                     const RegistrationParams& params, float* centre_x, float* centre_y,

@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
                          "odometry heading drift per metre driven (default 0)");
   app.add_flag("--register", register_frames,
                "register every frame after the first against the map before folding it in, and carry\n"
-               "the correction in the pose estimate (Stack::register_frame_sensor)");
+               "the correction in the pose estimate (register_frame_sensor(stack, ...))");
   if (const int code = ccmap::tools::parse_args(app, argc, argv); code >= 0) return code;
   if (quick) {
     const std::string out = cfg.out_dir;

@@ -8,6 +8,7 @@
 #include "ccmap/planner/costmap.hpp"
 #include "ccmap/planner/path_query.hpp"
 #include "ccmap/map/stack.hpp"
+#include "ccmap/registration/registration.hpp"
 #include "experiments/canvas.hpp"
 #include "experiments/common.hpp"
 #include "layer_images.hpp"
@@ -440,7 +441,7 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
     position.z += c_z;
     Pose sensor = camera_pose(camera, position, est.yaw);
     if (cfg.register_frames && i > 0 && map->move_to(static_cast<float>(est.x), static_cast<float>(est.y)) == Status::kOk) {
-      const RegistrationResult r = map->register_frame_sensor(points.data(), points.size(), sensor, default_registration_params());
+      const RegistrationResult r = ccmap::register_frame_sensor(*map, points.data(), points.size(), sensor, default_registration_params());
       rec.registration = to_string(r.status);
       if (r.status == Status::kOk) {
         const double corr[4] = {r.dx, r.dy, r.dz, r.dyaw};

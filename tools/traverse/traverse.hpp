@@ -31,7 +31,7 @@
 // Odometry drift (drift_fraction, yaw_drift_rad_per_m; sim::apply_drift): the map is fed with the
 // drifted pose estimate, the camera still sees the terrain from the true pose. With
 // register_frames every frame after the first is registered against the map first
-// (Stack::register_frame_sensor, default parameters) and the correction composed into the pose
+// (register_frame_sensor(stack, ...), default parameters) and the correction composed into the pose
 // estimate, which carries it to the later frames. height_rms_m: the stack query's height against
 // the terrain's surface over the known points of the final window (the map error).
 //

@@ -264,9 +264,7 @@ struct GlobalAccess {
   /// Writes `value` into `cell` (a cell of the stack) and carries the change into its check.
   template <typename Cell>
   static void write_cell(StackType& stack, Cell& cell, const Cell& value) noexcept {
-    const WideSignature before = cell_signature_wide(cell);
-    cell = value;
-    rewrite_check(stack.layers_, cell, before);
+    detail::write_cell(stack.layers_, cell, [&](Cell& written) { written = value; });
   }
 };
 

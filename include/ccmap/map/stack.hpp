@@ -63,8 +63,6 @@ struct PlannerAccess;   // planner/detail/region_walk.hpp: the planner queries r
 template <typename Config>
 struct ExchangeAccess;  // persistence/exchange.hpp: delta export and merge read and fold cells
 template <typename Config>
-struct RegistrationAccess;  // registration/registration.hpp: register_frame(_sensor), public reads only
-template <typename Config>
 struct GlobalAccess;  // global/patch_keeper.hpp: cells leaving a window saved as patches, restored on return
 }  // namespace detail
 
@@ -87,10 +85,8 @@ class Stack {
   static constexpr CcmCellKind kCcmCellKind = kConfigCcmCell<Config>;
   /// Held-point slots of the outlier gate's pools (CCM layers, finest layer; 0 without the gate
   /// compiled in): a frame judges at most this many cells of each (docs/design.md section 9).
-  static constexpr std::size_t kCcmHeldSlots =
-      kConfigOutlierGate<Config> ? detail::OutlierGate<Config>::kCcmSlots : std::size_t{0};
-  static constexpr std::size_t kFineHeldSlots =
-      kConfigOutlierGate<Config> && Layers::kHasFine ? detail::OutlierGate<Config>::kFineSlots : std::size_t{0};
+  static constexpr std::size_t kCcmHeldSlots = detail::OutlierGate<Config>::kCcmSlots;
+  static constexpr std::size_t kFineHeldSlots = Layers::kHasFine ? detail::OutlierGate<Config>::kFineSlots : std::size_t{0};
 
   Stack() noexcept = default;
   Stack(const Stack&) = delete;
@@ -385,25 +381,6 @@ class Stack {
   }
 
   // -------------------------------------------------------------------------------------------
-  // Registration (registration/registration.hpp; docs/design.md, "Registration")
-  // -------------------------------------------------------------------------------------------
-
-  /// The rigid correction (dx, dy, dz, dyaw about the vertical through sensor_origin) that best
-  /// aligns this frame's map-frame points with the map, with its standard deviations and which
-  /// of the four are observable (registration/types.hpp). Changes nothing in the map; the caller
-  /// applies it to its pose and then updates. Statuses: registration/registration.hpp.
-  [[nodiscard]] RegistrationResult register_frame(const PointXYZ* points, std::size_t n, const PointXYZ& sensor_origin,
-                                                  const RegistrationParams& params) const noexcept {
-    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_origin, nullptr, params);
-  }
-  /// The same for sensor-frame points with the sensor pose (rotation centre: the sensor position).
-  [[nodiscard]] RegistrationResult register_frame_sensor(const PointXYZ* points, std::size_t n, const Pose& sensor_pose,
-                                                         const RegistrationParams& params) const noexcept {
-    return detail::RegistrationAccess<Config>::register_frame(*this, points, n, sensor_pose.translation,
-                                                              &sensor_pose.rotation[0][0], params);
-  }
-
-  // -------------------------------------------------------------------------------------------
   // Queries (const, constant time in map size and point count)
   // -------------------------------------------------------------------------------------------
 
@@ -529,11 +506,11 @@ class Stack {
   /// Cells whose points outside the outlier gate await the change rule (docs/design.md,
   /// "Outlier gate and change"); 0 with the gate off. Not map state: not in snapshots.
   [[nodiscard]] std::uint32_t held_cells() const noexcept {
-    return update_.pending_ccm_cells() + update_.pending_fine_cells();
+    return update_.gate().pending_ccm_cells() + update_.gate().pending_fine_cells();
   }
   /// Cells with held points at the end of the last frame, before the change rule decided (the
   /// held-point slots it took; at most kCcmHeldSlots + kFineHeldSlots).
-  [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.last_frame_slots(); }
+  [[nodiscard]] std::uint32_t last_frame_held_cells() const noexcept { return update_.gate().last_frame_slots(); }
   /// Frame updates accepted since init, load_snapshot() or reset_counters() (saturating).
   [[nodiscard]] std::uint32_t frames_since_reset() const noexcept { return counted_frames_; }
   /// set_params() accepted since init, load_snapshot() or reset_counters() (saturating).
@@ -768,7 +745,3 @@ class Stack {
 };
 
 }  // namespace ccmap
-
-// Stack::register_frame(_sensor)'s implementation (it includes this header, then defines the
-// templates the two members forward to).
-#include "ccmap/registration/registration.hpp"

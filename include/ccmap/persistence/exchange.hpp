@@ -577,9 +577,7 @@ struct ExchangeAccess {
       return Status::kOutOfRange;
     }
     if (commit) {
-      const WideSignature before = cell_signature_wide(cell);  // integrity hook: the check follows
-      cell = merged;
-      rewrite_check(layers, cell, before);
+      write_cell(layers, cell, [&](Cell& written) { written = merged; });  // the check follows
       if (copy != nullptr) {
         *copy = merged_copy;
       }

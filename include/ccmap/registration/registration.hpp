@@ -1,11 +1,12 @@
 // Registration of a frame to the map before it is fused (the paper's future work, Section
 // VIII: "pose estimate corrections based on the derived observation probabilities"):
-// Stack::register_frame (map-frame points and the sensor origin) and
-// Stack::register_frame_sensor (sensor-frame points and the pose) return the rigid correction
+// register_frame(stack, ...) (map-frame points and the sensor origin) and
+// register_frame_sensor(stack, ...) (sensor-frame points and the pose), free functions over the
+// stack as the planner queries are, return the rigid correction
 // (registration/types.hpp says what it is, what is observable and what is claimed) and change
 // nothing in the map. The caller applies the correction to its pose and then updates:
 //
-//   const ccmap::RegistrationResult c = map.register_frame_sensor(points, n, pose);
+//   const ccmap::RegistrationResult c = ccmap::register_frame_sensor(map, points, n, pose, params);
 //   if (c.status == ccmap::Status::kOk) { apply c to pose (registration/types.hpp) }
 //   map.update_frame_sensor(points, n, pose, &counters);
 //
@@ -136,47 +137,67 @@ class FrameSamples {
   float max_range_sq_[static_cast<std::size_t>(kLayers > 0 ? kLayers : 1)]{};
 };
 
-/// Stack::register_frame and register_frame_sensor (thin members forward here).
+/// register_frame and register_frame_sensor (below): `rotation` row-major 3 x 3, or nullptr for
+/// map-frame points. Reads the stack through its public calls only.
 template <typename Config>
-struct RegistrationAccess {
+[[nodiscard]] RegistrationResult register_points(const Stack<Config>& stack, const PointXYZ* points, std::size_t n,
+                                                 const PointXYZ& origin, const float* rotation,
+                                                 const RegistrationParams& params) noexcept {
   using StackType = Stack<Config>;
-
-  [[nodiscard]] static RegistrationResult register_frame(const StackType& stack, const PointXYZ* points, std::size_t n,
-                                                         const PointXYZ& origin, const float* rotation,
-                                                         const RegistrationParams& params) noexcept {
-    const Status state = stack.state_status();  // kNotInitialised, or kCorrupt after an upset
-    if (state != Status::kOk) {
-      return unclaimed_result(state);
-    }
-    if (validate_registration_params(params) != Status::kOk || (points == nullptr && n > 0U)) {
-      return unclaimed_result(Status::kInvalidArgument);
-    }
-    if (!std::isfinite(origin.x) || !std::isfinite(origin.y) || !std::isfinite(origin.z)) {
-      return unclaimed_result(Status::kNonFiniteInput);
-    }
-    if (!(std::fabs(origin.x) <= kMaxAbsCoordinateM && std::fabs(origin.y) <= kMaxAbsCoordinateM &&
-          std::fabs(origin.z) <= kMaxAbsCoordinateM)) {
-      return unclaimed_result(Status::kOutOfRange);
-    }
-    if (rotation != nullptr) {
-      const Status rotation_status = check_registration_rotation(rotation);
-      if (rotation_status != Status::kOk) {
-        return unclaimed_result(rotation_status);
-      }
-    }
-    // A pose far from the map: the stack is robot-centric, its coarsest window holds the robot.
-    const int coarsest = StackType::kLayerCount - 1;
-    CellIndex ignored{};
-    const bool held = StackType::layer_is_ccm(coarsest) ? stack.ccm_layer(coarsest - StackType::kFineLayerCount).locate(origin.x, origin.y, &ignored)
-                                                        : stack.fine_layer().locate(origin.x, origin.y, &ignored);
-    if (!held) {
-      return unclaimed_result(Status::kOutsideMap);
-    }
-    const FrameSamples<Config> samples(stack, points, n, origin, rotation, params.max_points);
-    const StackSurface<Config> surface(stack);
-    return solve_registration(samples, surface, origin.x, origin.y, origin.z, params, stack.layer_cell_width(0),
-                              stack.layer_cell_width(StackType::kLayerCount - 1));
+  const Status state = stack.state_status();  // kNotInitialised, or kCorrupt after an upset
+  if (state != Status::kOk) {
+    return unclaimed_result(state);
   }
-};
+  if (validate_registration_params(params) != Status::kOk || (points == nullptr && n > 0U)) {
+    return unclaimed_result(Status::kInvalidArgument);
+  }
+  if (!std::isfinite(origin.x) || !std::isfinite(origin.y) || !std::isfinite(origin.z)) {
+    return unclaimed_result(Status::kNonFiniteInput);
+  }
+  if (!(std::fabs(origin.x) <= kMaxAbsCoordinateM && std::fabs(origin.y) <= kMaxAbsCoordinateM &&
+        std::fabs(origin.z) <= kMaxAbsCoordinateM)) {
+    return unclaimed_result(Status::kOutOfRange);
+  }
+  if (rotation != nullptr) {
+    const Status rotation_status = check_rotation(rotation);
+    if (rotation_status != Status::kOk) {
+      return unclaimed_result(rotation_status);
+    }
+  }
+  // A pose far from the map: the stack is robot-centric, its coarsest window holds the robot.
+  const int coarsest = StackType::kLayerCount - 1;
+  CellIndex ignored{};
+  const bool held = StackType::layer_is_ccm(coarsest) ? stack.ccm_layer(coarsest - StackType::kFineLayerCount).locate(origin.x, origin.y, &ignored)
+                                                      : stack.fine_layer().locate(origin.x, origin.y, &ignored);
+  if (!held) {
+    return unclaimed_result(Status::kOutsideMap);
+  }
+  const FrameSamples<Config> samples(stack, points, n, origin, rotation, params.max_points);
+  const StackSurface<Config> surface(stack);
+  return solve_registration(samples, surface, origin.x, origin.y, origin.z, params, stack.layer_cell_width(0),
+                            stack.layer_cell_width(StackType::kLayerCount - 1));
+}
 
 }  // namespace ccmap::detail
+
+namespace ccmap {
+
+/// The rigid correction (dx, dy, dz, dyaw about the vertical through sensor_origin) that best
+/// aligns this frame's map-frame points with the map, with its standard deviations and which
+/// of the four are observable (registration/types.hpp). Changes nothing in the map; the caller
+/// applies it to its pose and then updates. Statuses: the file comment.
+template <typename Config>
+[[nodiscard]] RegistrationResult register_frame(const Stack<Config>& stack, const PointXYZ* points, std::size_t n,
+                                                const PointXYZ& sensor_origin, const RegistrationParams& params) noexcept {
+  return detail::register_points(stack, points, n, sensor_origin, nullptr, params);
+}
+
+/// The same for sensor-frame points with the sensor pose (rotation centre: the sensor position).
+template <typename Config>
+[[nodiscard]] RegistrationResult register_frame_sensor(const Stack<Config>& stack, const PointXYZ* points,
+                                                       std::size_t n, const Pose& sensor_pose,
+                                                       const RegistrationParams& params) noexcept {
+  return detail::register_points(stack, points, n, sensor_pose.translation, &sensor_pose.rotation[0][0], params);
+}
+
+}  // namespace ccmap

@@ -172,36 +172,54 @@ template <typename Layers, typename Cell>
   return cell_signature(cell) == check_of(layers, cell);
 }
 
-/// Writer hook, second half: after a write of `cell` whose wide signature before the write was
-/// `before`, carries the change into the cell's check (check ^= fold(before ^ wide(now))).
+/// Carries a write into the cell's check: `before` was the cell's wide signature before the
+/// write (check ^= fold(before ^ wide(now))). Writers call write_cell or CheckRun::write, which
+/// pair it with the signature; nothing else does.
 template <typename Layers, typename Cell>
 inline void rewrite_check(Layers& layers, const Cell& cell, WideSignature before) noexcept {
   check_of(layers, cell) ^= fold_signature(before ^ cell_signature_wide(cell));
 }
 
-/// The writer hook of the per-point updates (the update path's back half): a run of writes to
-/// one cell pays for its check once. touch(cell) before each write; when the cell differs from
-/// the run's, the run before it is closed (its check takes the change) and a new one opens with
-/// the cell's signature as it is now; close() after the last write of the chunk. Consecutive
-/// points of a frame mostly fall into the same cell, so this costs a compare per point and two
-/// signatures per run; touch() says whether a run started (the gate counts its in-gate points
-/// by these runs, map/update/held_pool.hpp AcceptRun). The run lives in registers or on the
-/// call stack, never in the map's storage: a run is open for at most one chunk of the update
-/// (kFrontChunkPoints points), and an upset in the open cell during that time is taken into its
-/// check (docs/integration.md).
+/// The one write of a cell of a LayerSet (every writer but the update path's per-point runs,
+/// CheckRun::write): takes the cell's signature, runs write(cell), and carries the change into
+/// the cell's check, so that an upset seen before the write stays seen after it.
+/// Precondition: `cell` is a cell of the layers' own storage.
+template <typename Layers, typename Cell, typename Write>
+inline void write_cell(Layers& layers, Cell& cell, Write&& fn) noexcept {
+  const WideSignature before = cell_signature_wide(cell);
+  fn(cell);
+  rewrite_check(layers, cell, before);
+}
+
+/// The cell write of the per-point updates (the update path's back half): a run of writes to
+/// one cell pays for its check once. open(cell) closes the open run (its check takes the
+/// change) and opens one on `cell` with its signature as it is now; write(fn) runs fn on the
+/// open run's cell; write(cell, fn) opens a run when `cell` is not the open one, then writes;
+/// close() after the last write of the chunk. Consecutive points of a frame mostly fall into
+/// the same cell, so this costs a compare per point and two signatures per run. The run lives
+/// in registers or on the call stack, never in the map's storage: a run is open for at most one
+/// chunk of the update (kFrontChunkPoints points), and an upset in the open cell during that
+/// time is taken into its check (docs/integration.md).
 template <typename Cell>
 class CheckRun {
  public:
-  /// True if `cell` starts a new run.
   template <typename Layers>
-  bool touch(Layers& layers, Cell& cell) noexcept {
+  void open(Layers& layers, Cell& cell) noexcept {
+    close(layers);
+    cell_ = &cell;
+    before_ = cell_signature_wide(cell);
+  }
+  /// fn(cell) on the open run's cell. Precondition: a run is open (open() since close()).
+  template <typename Write>
+  void write(Write&& fn) noexcept {
+    fn(*cell_);
+  }
+  template <typename Layers, typename Write>
+  void write(Layers& layers, Cell& cell, Write&& fn) noexcept {
     if (&cell != cell_) {
-      close(layers);
-      cell_ = &cell;
-      before_ = cell_signature_wide(cell);
-      return true;
+      open(layers, cell);
     }
-    return false;
+    fn(cell);
   }
   template <typename Layers>
   void close(Layers& layers) noexcept {

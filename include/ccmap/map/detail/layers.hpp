@@ -19,8 +19,21 @@
 #include "ccmap/grid/ring_grid.hpp"
 #include "ccmap/map/config.hpp"
 #include "ccmap/map/detail/integrity.hpp"
+#include "ccmap/sensor/noise_model.hpp"
 
 namespace ccmap::detail {
+
+/// The largest range noise (m) a layer of cell width `width` (m) receives: sigma_m at its
+/// routing bound max_range_sq_m2 (m^2; a point reaches a layer only from a range within the
+/// bound of the layer it was routed to, which is at most this one's), capped by what the
+/// routing admits (a CCM layer's IV-G bound, finest_max_sigma_m for a constant finest layer)
+/// where that is smaller or sigma_m is not finite.
+[[nodiscard]] inline float layer_max_sigma(const StackParams& params, float max_range_sq_m2, float width,
+                                           bool ccm_layer) noexcept {
+  const float admitted = ccm_layer ? sensor::max_sigma_for_cell_width(width) : params.finest_max_sigma_m;
+  const float sigma = params.noise.sigma_at_range_sq(max_range_sq_m2);
+  return sigma <= admitted ? sigma : admitted;
+}
 
 template <std::size_t N>
 constexpr std::size_t sum_of_squares(const std::array<std::int32_t, N>& sides) noexcept {

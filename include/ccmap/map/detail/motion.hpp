@@ -97,15 +97,15 @@ template <typename Config>
       const auto height = [](const FineCell* n) { return n != nullptr ? n->height : 0.0F; };
       const float gx = neighbour_gradient(seen(west), height(west), seen(east), height(east), cell.height, w);
       const float gy = neighbour_gradient(seen(south), height(south), seen(north), height(north), cell.height, w);
-      const WideSignature before = cell_signature_wide(cell);
-      if constexpr (Config::kFineKind == FineKind::kOmg) {
-        // Mixture variance s / W grows by g^2 sigma^2.
-        const float variance = cell.s / cell.weight;
-        cell.s = grown_variance(variance, gx, gy, sigma_sq) * cell.weight;
-      } else {
-        cell.variance = grown_variance(cell.variance, gx, gy, sigma_sq);
-      }
-      rewrite_check(layers, cell, before);
+      write_cell(layers, cell, [&](FineCell& grown) {
+        if constexpr (Config::kFineKind == FineKind::kOmg) {
+          // Mixture variance s / W grows by g^2 sigma^2.
+          const float variance = grown.s / grown.weight;
+          grown.s = grown_variance(variance, gx, gy, sigma_sq) * grown.weight;
+        } else {
+          grown.variance = grown_variance(grown.variance, gx, gy, sigma_sq);
+        }
+      });
     });
   }
   return corrupted;

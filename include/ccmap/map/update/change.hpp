@@ -67,16 +67,14 @@ void apply_change_rule(OutlierGate<Config>& gate, LayerSet<Config>& layers, cons
     frame.corrupted_slots += gate.ccm_pool().end_frame([&](const auto& slot) {
       auto& cell = layers.ccm_storage[slot.cell];
       const bool tight = held_is_tight(slot.held.s_zz, slot.held.weight, gate.constants(layer_of(slot)));
-      const WideSignature before = cell_signature_wide(cell);  // integrity hook
       switch (counted_verdict(slot, tight, rule, frame)) {
         case ChangeVerdict::kReseed:
-          cell = slot.held;  // the held points folded into an empty cell, limiter included
-          rewrite_check(layers, cell, before);  // integrity hook
+          // The held points folded into an empty cell, limiter included.
+          write_cell(layers, cell, [&](auto& written) { written = slot.held; });
           return false;
         case ChangeVerdict::kMerge:
           // Cannot fail: the limit was validated at init, the held weight is > 0 and finite.
-          (void)ccm_merge(cell, slot.held, params.weight_limit);
-          rewrite_check(layers, cell, before);  // integrity hook
+          write_cell(layers, cell, [&](auto& written) { (void)ccm_merge(written, slot.held, params.weight_limit); });
           return false;
         case ChangeVerdict::kPending:
           return true;
@@ -97,18 +95,17 @@ void apply_change_rule(OutlierGate<Config>& gate, LayerSet<Config>& layers, cons
       }
       const ChangeVerdict v = counted_verdict(slot, tight, rule, frame);
       if (v == ChangeVerdict::kReseed || v == ChangeVerdict::kMerge) {
-        auto& cell = layers.fine_storage[slot.cell];
-        const WideSignature before = cell_signature_wide(cell);  // integrity hook
-        if (v == ChangeVerdict::kReseed) {
-          cell = typename Gate::FineCell{};
-        }
-        if constexpr (Gate::kKalman) {
-          fuse_held(cell, slot.held, slot.count);
-        } else {
-          // Cannot fail: the limit was validated at init, the held statistics are finite.
-          (void)omg_merge(cell, slot.held, params.weight_limit);
-        }
-        rewrite_check(layers, cell, before);  // integrity hook
+        write_cell(layers, layers.fine_storage[slot.cell], [&](auto& cell) {
+          if (v == ChangeVerdict::kReseed) {
+            cell = typename Gate::FineCell{};
+          }
+          if constexpr (Gate::kKalman) {
+            fuse_held(cell, slot.held, slot.count);
+          } else {
+            // Cannot fail: the limit was validated at init, the held statistics are finite.
+            (void)omg_merge(cell, slot.held, params.weight_limit);
+          }
+        });
       }
       return v == ChangeVerdict::kPending;
     });

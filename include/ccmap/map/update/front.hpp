@@ -36,6 +36,7 @@
 #include "ccmap/core/status.hpp"
 #include "ccmap/grid/ring_index.hpp"
 #include "ccmap/map/types.hpp"
+#include "ccmap/map/update/fixed_point.hpp"
 
 namespace ccmap::detail {
 
@@ -124,15 +125,18 @@ struct FrontChunk {
 };
 static_assert(sizeof(FrontChunk) == std::size_t{40U} * kFrontChunkPoints, "ten 4-byte lanes per point, no padding");
 
-/// Range key units (m^2) of FrontChunk::range_key.
-inline constexpr float kRangeKeyM2 = 2.44140625e-4F;  // 2^-12
-
 /// Derives the front's constants for finest width w_0 and the routing table's squared ranges
 /// (m^2, non-decreasing; +inf allowed). kInvalidArgument for a width outside what
 /// validate_stack_params accepts (1/w_0 in [1e-3, 2^30 / 1e5]: every index of a position within
 /// kMaxAbsCoordinateM stays within +-2^30), bad pointers or layer counts. Evaluated at init.
 [[nodiscard]] Status make_front_config(float finest_width_m, const float* max_range_sq_m2, int layers,
                                        FrontConfig* out) noexcept;
+
+/// The rotation check of every call that takes a sensor pose (update_frame_sensor,
+/// register_frame_sensor): kOk for a row-major 3 x 3 rotation; kNonFiniteInput for a NaN/Inf
+/// entry; kInvalidArgument for an entry beyond 1 + 1e-3, or R^T R further than 1e-3 from the
+/// identity in any entry (a scaling or shear, not a rigid transform).
+[[nodiscard]] Status check_rotation(const float* rotation_row_major) noexcept;
 
 /// The frame's pose for the front. `rotation` may be nullptr (map-frame input: only the origin
 /// is used). kNonFiniteInput for a NaN/Inf entry; kOutOfRange for an origin beyond

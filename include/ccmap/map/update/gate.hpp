@@ -1,7 +1,7 @@
 // The outlier gate of the update path (docs/design.md, "Outlier gate and change"): per point,
 // whether it may be folded into its cell; per frame, what becomes of the points it held back.
 // Compiled in only when the stack's Config has the gate (kConfigOutlierGate, map/config.hpp):
-// a stack without it carries none of this object. Integrators need not read it.
+// a stack without it carries the null object OutlierGate<Config, false> (no storage, no work). Integrators need not read it.
 //
 // Per CCM or OMG point, in this order: the next finer layer's cell at the point, when it holds
 // points, must not have the point outside its gate (dropped, gated_finer: a coarse layer's range
@@ -38,18 +38,6 @@
 
 namespace ccmap::detail {
 
-/// The largest range noise (m) layer `layer` (cell width `width`) receives: sigma_m at its
-/// routing bound max_range_sq_m2 (m^2; a point reaches a layer only from a range within the
-/// bound of the layer it was routed to, which is at most this one's), capped by what the
-/// routing admits (a CCM layer's IV-G bound, finest_max_sigma_m for a constant finest layer)
-/// where that is smaller or sigma_m is not finite.
-[[nodiscard]] inline float layer_max_sigma(const StackParams& params, float max_range_sq_m2, float width,
-                                           bool ccm_layer) noexcept {
-  const float admitted = ccm_layer ? sensor::max_sigma_for_cell_width(width) : params.finest_max_sigma_m;
-  const float sigma = params.noise.sigma_at_range_sq(max_range_sq_m2);
-  return sigma <= admitted ? sigma : admitted;
-}
-
 /// What the gate says about a point.
 enum class GateOutcome : std::uint8_t {
   kFold = 0,      ///< inside: fold it into its cell
@@ -59,10 +47,43 @@ enum class GateOutcome : std::uint8_t {
   kPoolFull = 4,  ///< outside its cell's gate while no slot was free: dropped
 };
 
+template <typename Config, bool kCompiled = kConfigOutlierGate<Config>>
+class OutlierGate;
+
+/// A Config without the gate (map/config.hpp, kOutlierGate false): no storage, no work, never
+/// on. The update path calls it as it calls the gate; what only a gate that is on does (the
+/// back half's judging, the change rule) is compiled only where Gate::kCompiled.
 template <typename Config>
-class OutlierGate {
+class OutlierGate<Config, false> {
  public:
   using Layers = LayerSet<Config>;
+  static constexpr bool kCompiled = false;
+  static constexpr std::size_t kCcmSlots = 0U;
+  static constexpr std::size_t kFineSlots = 0U;
+  struct CcmJudge {};
+  struct CcmAccepts {};
+  void init(const StackParams&, const float*, const Layers&) noexcept {}
+  void set_constants(const StackParams&, const float*, const Layers&) noexcept {}
+  [[nodiscard]] bool on() const noexcept { return false; }
+  [[nodiscard]] const GateConstants& constants(int) const noexcept { return kNoGate; }
+  void begin_frame(const Layers&, const FramePose&, FrameCounters&) noexcept {}
+  [[nodiscard]] CcmJudge ccm_judge() const noexcept { return CcmJudge{}; }
+  void flush_accepts(CcmAccepts&) noexcept {}
+  void hash_constants(StateHasher&) const noexcept {}
+  [[nodiscard]] std::uint32_t pending_ccm_cells() const noexcept { return 0U; }
+  [[nodiscard]] std::uint32_t pending_fine_cells() const noexcept { return 0U; }
+  [[nodiscard]] std::uint32_t last_frame_slots() const noexcept { return 0U; }
+  void note_frame_slots() noexcept {}
+
+ private:
+  static constexpr GateConstants kNoGate{0.0F, 0.0F};
+};
+
+template <typename Config>
+class OutlierGate<Config, true> {
+ public:
+  using Layers = LayerSet<Config>;
+  static constexpr bool kCompiled = true;
   static constexpr bool kKalman = Config::kFineKind == FineKind::kKalman;
   static constexpr bool kCcmPool = Layers::kCcmLayerCount > 0;
   static constexpr bool kFinePool = Layers::kHasFine;
@@ -183,15 +204,13 @@ class OutlierGate {
     return GateOutcome::kHeld;
   }
 
-  /// Counts a point folded into CCM cell `number` (suspect_ccm() was false, or
-  /// judge_suspect_ccm() said kFold); `new_run`: the point starts a run of that cell
-  /// (CheckRun::touch). For the change rule's count of in-gate points (held_pool.hpp, AcceptRun).
-  __attribute__((always_inline)) void count_accepted(CcmAccepts& accepts, bool new_run, std::uint32_t number) noexcept {
-    if (new_run) {
-      accepts.start(ccm_held_, number);
-    }
-    accepts.add();
-  }
+  /// Counts a point folded into the cell of the current run (start_run; suspect_ccm() was
+  /// false, or judge_suspect_ccm() said kFold), for the change rule's count of in-gate points
+  /// (held_pool.hpp, AcceptRun).
+  __attribute__((always_inline)) void count_accepted(CcmAccepts& accepts) noexcept { accepts.add(); }
+  /// A run of points folded into CCM cell `number` starts (the update path's runs: ChunkRuns):
+  /// the last run's in-gate points to the pool.
+  void start_run(CcmAccepts& accepts, std::uint32_t number) noexcept { accepts.start(ccm_held_, number); }
 
   /// The end of a chunk: the last run's in-gate points to the pool.
   void flush_accepts(CcmAccepts& accepts) noexcept { accepts.flush(ccm_held_); }
@@ -238,7 +257,7 @@ class OutlierGate {
       // kMaxHeldFrames frames of at most 2^32 points each stay below 2^63 / 2^31 * 2^31.
       k.sum_height_q14 += h;
       k.sum_range_key += key;
-      const float v = static_cast<float>(std::int64_t{h} - std::int64_t{k.origin_q14}) * 6.10351562e-5F;  // m
+      const float v = static_cast<float>(std::int64_t{h} - std::int64_t{k.origin_q14}) * kHeightMPerQ14;  // m
       const float delta = v - k.mean_m;
       k.mean_m += delta / static_cast<float>(held->count);
       k.spread_sum += delta * (v - k.mean_m);

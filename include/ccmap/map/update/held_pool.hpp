@@ -217,16 +217,16 @@ class HeldPool {
 
 /// The in-gate points of a run of consecutive points folded into one cell, counted in a
 /// register and handed to the pool at once (HeldPool::accept(cell, n)) when a run of another
-/// cell starts and at the end of the chunk. Runs are the update path's check runs
-/// (map/detail/integrity.hpp, CheckRun::touch says when one starts): consecutive points of a
-/// frame mostly fall into the same cell (a CADRE frame's CCM points come in runs of six on
-/// average), so a point costs an add instead of a tag's load, test and store. The change rule
-/// reads the counts only at the frame's end, and a slot starts with its cell's tag and takes
-/// what is handed over after it, so the counts it reads are per-point accept()'s whether a run
-/// is handed over before or after its cell's slot is taken; with one exception: when the tag
-/// had saturated (32,767 points) before the slot, a run open at that moment counts in full
-/// (at most kFrontChunkPoints more). Lives in registers or on the call stack for one chunk,
-/// never in the map.
+/// cell starts and at the end of the chunk. The caller says when a run starts (start(); the
+/// update path's runs of consecutive points in one CCM cell, map/update/update_path.hpp
+/// ChunkRuns, which also open the cells' check runs): consecutive points of a frame mostly fall
+/// into the same cell (a CADRE frame's CCM points come in runs of six on average), so a point
+/// costs an add instead of a tag's load, test and store. The change rule reads the counts only at the
+/// frame's end, and a slot starts with its cell's tag and takes what is handed over after it,
+/// so the counts it reads are per-point accept()'s whether a run is handed over before or after
+/// its cell's slot is taken; with one exception: when the tag had saturated (32,767 points)
+/// before the slot, a run open at that moment counts in full (at most kFrontChunkPoints more).
+/// Lives in registers or on the call stack for one chunk, never in the map.
 template <typename Pool>
 class AcceptRun {
  public:

@@ -27,6 +27,7 @@
 
 #include "ccmap/cell/constant_cell.hpp"
 #include "ccmap/cell/outlier_gate.hpp"
+#include "ccmap/map/update/fixed_point.hpp"
 
 namespace ccmap::detail {
 
@@ -35,7 +36,7 @@ namespace ccmap::detail {
 /// converts without undefined behaviour (its check tells the readers; the gate only misjudges
 /// its points for a frame, until the scrub resets it: map/detail/integrity.hpp).
 [[nodiscard]] inline std::int32_t q14_floor_of(float v) noexcept {
-  const float q = std::floor(v * 16384.0F);
+  const float q = std::floor(v * kHeightQ14PerM);
   if (q >= -2147483648.0F && q < 2147483648.0F) {
     return static_cast<std::int32_t>(q);
   }
@@ -46,7 +47,7 @@ namespace ccmap::detail {
 /// conversion is to int32 (a float -> int64 conversion is a soft-double call on 32-bit Arm: no
 /// double may enter the core's image, tests/baremetal link.no_soft_double).
 [[nodiscard]] inline std::int64_t q14_half_width(float v) noexcept {
-  const float units = v * 16384.0F;
+  const float units = v * kHeightQ14PerM;
   return units < 2147483520.0F ? std::int64_t{static_cast<std::int32_t>(units)} : std::int64_t{2147483520};
 }
 
@@ -346,7 +347,7 @@ struct BatchMean {
   const std::int64_t whole_key = sum_range_key / n;  // keys are >= 0
   const std::int64_t rest_key = sum_range_key % n;
   const float mean_key = static_cast<float>(whole_key) + (static_cast<float>(rest_key) + 0.5F * nf) / nf;
-  return BatchMean{mean_q14 * 6.10351562e-5F, mean_key * 2.44140625e-4F};  // 2^-14 m, 2^-12 m^2
+  return BatchMean{mean_q14 * kHeightMPerQ14, mean_key * kRangeKeyM2};
 }
 
 }  // namespace ccmap::detail

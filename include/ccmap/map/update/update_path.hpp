@@ -20,8 +20,8 @@
 // chunks are taken in order.
 //
 // Single-event upsets (map/detail/integrity.hpp): every cell write keeps the cell's check (the
-// CCM and OMG updates through a run tracker per chunk, the Kalman fusion and the change rule
-// each with the cell's signature before and after); the derived constants below are sealed
+// CCM and OMG updates through a CheckRun per chunk, the Kalman fusion and the change rule
+// through write_cell); the derived constants below are sealed
 // (hash_constants) or recomputed each frame from sealed data (fine_window_, walk_); the frame
 // records are rewritten at each frame's start, the held slots verified; indices read from
 // per-frame scratch (the front's Kalman slot and codes, the pass-2 list) are masked or compared
@@ -67,22 +67,20 @@ class UpdatePath {
  public:
   using Layers = LayerSet<Config>;
   static constexpr bool kKalman = Config::kFineKind == FineKind::kKalman;
-  static constexpr bool kGateCompiled = kConfigOutlierGate<Config>;
+  /// The outlier gate, or its null object when the Config compiles it out (gate.hpp).
   using Gate = OutlierGate<Config>;
   using Batch = KalmanBatch<kKalman ? Layers::kFineCellCount : 1U>;
-  /// A chunk's run of in-gate CCM points (gate.hpp), if the gate is compiled in.
-  using Accepts = std::conditional_t<kGateCompiled, typename Gate::CcmAccepts, char>;
-  /// The gate's per-chunk copy of what judges a CCM point (gate.hpp, ccm_judge), if compiled in.
-  using Judge = std::conditional_t<kGateCompiled, typename Gate::CcmJudge, char>;
+  /// A chunk's run of in-gate CCM points (gate.hpp).
+  using Accepts = typename Gate::CcmAccepts;
+  /// The gate's per-chunk copy of what judges a CCM point (gate.hpp, ccm_judge).
+  using Judge = typename Gate::CcmJudge;
 
   /// Derives the front (index scale, routing bounds), the gate's constants and the budget.
   /// max_range_sq_m2: the routing table's squared ranges (m^2), per layer. Empties the frame
   /// batches and the held points. kInvalidArgument if the front refuses the width or bounds.
   [[nodiscard]] Status init(const StackParams& params, const float* max_range_sq_m2, const Layers& layers) noexcept {
     const Status status = set_constants(params, max_range_sq_m2, layers);
-    if constexpr (kGateCompiled) {
-      gate_.init(params, max_range_sq_m2, layers);
-    }
+    gate_.init(params, max_range_sq_m2, layers);
     batch_.clear();
     return status;
   }
@@ -98,9 +96,7 @@ class UpdatePath {
     }
     front_ = front;
     constant_weight_ = params.noise.weight_mode() == sensor::WeightMode::kConstant;
-    if constexpr (kGateCompiled) {
-      gate_.set_constants(params, max_range_sq_m2, layers);
-    }
+    gate_.set_constants(params, max_range_sq_m2, layers);
     point_budget_ = params.frame_point_budget;
     time_budget_ns_ = std::uint64_t{params.frame_time_budget_us} * 1000U;
     return Status::kOk;
@@ -121,9 +117,7 @@ class UpdatePath {
     h.add(point_budget_);
     h.add(time_budget_ns_);
     hash_bool_bytes(h, constant_weight_);
-    if constexpr (kGateCompiled) {
-      gate_.hash_constants(h);
-    }
+    gate_.hash_constants(h);
   }
 
   /// Folds map-frame points (weights may be nullptr: the noise model weighs them).
@@ -154,35 +148,23 @@ class UpdatePath {
     }, constant_weight_);
   }
 
-  /// Cells whose held points await the change rule (CCM layers; the finest layer).
-  [[nodiscard]] std::uint32_t pending_ccm_cells() const noexcept {
-    if constexpr (kGateCompiled) {
-      return gate_.pending_ccm_cells();
-    } else {
-      return 0U;
-    }
-  }
-  [[nodiscard]] std::uint32_t pending_fine_cells() const noexcept {
-    if constexpr (kGateCompiled) {
-      return gate_.pending_fine_cells();
-    } else {
-      return 0U;
-    }
-  }
-  /// Slots the last frame had taken at its end, before the change rule (both pools).
-  [[nodiscard]] std::uint32_t last_frame_slots() const noexcept {
-    if constexpr (kGateCompiled) {
-      return gate_.last_frame_slots();
-    } else {
-      return 0U;
-    }
-  }
+  /// The gate (its held cells and slots: Stack::held_cells, last_frame_held_cells).
+  [[nodiscard]] const Gate& gate() const noexcept { return gate_; }
 
  private:
   /// Counts of one chunk, kept in registers and added to the frame's counters once.
   struct ChunkCounts {
     std::uint32_t used = 0U, non_finite = 0U, out_of_range = 0U, too_noisy = 0U, bad_weight = 0U, outside = 0U,
                   finer = 0U, occluded = 0U, held = 0U, pool_full = 0U;
+  };
+
+  /// The runs of pass 2 of one chunk: consecutive CCM points folded into one cell are a run
+  /// (one compare per point, here), which opens that cell's check run (integrity.hpp, CheckRun)
+  /// and, with the gate on, the gate's count of in-gate points (held_pool.hpp, AcceptRun); the
+  /// OMG cells' check runs open themselves (CheckRun::write). Registers or the call stack.
+  struct ChunkRuns {
+    CheckRuns<Layers> checks{};
+    std::uint32_t ccm_number = 0xFFFFFFFFU;  ///< the CCM cell of the open run (none: no cell has it)
   };
 
   /// One frame: the chunks in order (no budget) or in the budget's order until it is spent,
@@ -192,13 +174,13 @@ class UpdatePath {
   void run(Layers& layers, const StackParams& params, std::size_t n, const FramePose& pose, FrameCounters& frame,
            Front&& front, bool unit_weights) noexcept {
     begin_frame(layers, pose, frame);
-    const bool gate = gate_on();
+    const bool gate = gate_.on();
     const auto chunks = static_cast<std::uint32_t>((n + kFrontChunkPoints - 1U) / kFrontChunkPoints);
     auto one_chunk = [&](std::uint32_t c) {
       const std::size_t begin = std::size_t{c} * kFrontChunkPoints;
       const std::size_t count = n - begin < kFrontChunkPoints ? n - begin : kFrontChunkPoints;
       const float* weights = front(begin, count, fine_window_);
-      if constexpr (kGateCompiled) {
+      if constexpr (Gate::kCompiled) {
         if (gate) {
           back_half<true>(layers, params, weights, count, unit_weights, frame);
           return count;
@@ -238,14 +220,6 @@ class UpdatePath {
     finish_frame(layers, params, frame);
   }
 
-  [[nodiscard]] bool gate_on() const noexcept {
-    if constexpr (kGateCompiled) {
-      return gate_.on();
-    } else {
-      return false;
-    }
-  }
-
   /// The start of a frame: the walk's windows, the finest layer's window for the front's Kalman
   /// slots, the Kalman gate's intervals, the gate's camera and the slots of cells that left.
   void begin_frame(const Layers& layers, const FramePose& pose, FrameCounters& frame) noexcept {
@@ -262,17 +236,12 @@ class UpdatePath {
     }
     // The frame records rewritten whole, with or without the gate (integrity: no sum of an
     // earlier frame or an upset between frames survives).
-    if constexpr (kGateCompiled) {
-      if (gate_.on()) {
-        if constexpr (kKalman) {
-          batch_.template begin_frame<true>(layers.fine_storage, gate_.constants(0));
-        }
-        gate_.begin_frame(layers, pose, frame);
-        return;
+    if (gate_.on()) {
+      if constexpr (kKalman) {
+        batch_.template begin_frame<true>(layers.fine_storage, gate_.constants(0));
       }
-    } else {
-      (void)pose;
-      (void)frame;
+      gate_.begin_frame(layers, pose, frame);
+      return;
     }
     if constexpr (kKalman) {
       batch_.template begin_frame<false>(layers.fine_storage, no_gate_);
@@ -289,7 +258,7 @@ class UpdatePath {
     if constexpr (kKalman) {
       if (unit_weights) {
         // Pass 1: the Kalman batch entries, the common case, in runs of one cell.
-        const GateConstants& gate0 = gate_constants(0);
+        const GateConstants& gate0 = gate_.constants(0);
         typename Batch::Run run{};
         for (std::size_t i = 0; i < count;) {
           const std::int32_t entry = chunk_.fine_slot[i];
@@ -334,15 +303,18 @@ class UpdatePath {
       }
     }
     // Pass 2: everything else walks the layers. Integrity: entries masked to the chunk; the CCM
-    // and OMG writes keep their cells' checks through one run tracker for the chunk.
-    CheckRuns<Layers> runs{};
+    // and OMG writes keep their cells' checks through the chunk's runs (ChunkRuns).
+    ChunkRuns runs{};
     Accepts accepts{};
-    const Judge judge = ccm_judge<kGate>();
+    Judge judge{};
+    if constexpr (kGate) {
+      judge = gate_.ccm_judge();
+    }
     for (std::size_t j = 0; j < others; ++j) {
       apply<kGate>(layers, params, others_[j] & (kFrontChunkPoints - 1U), weights, unit_weights, c, runs, accepts,
                    judge);
     }
-    runs.close(layers);
+    runs.checks.close(layers);
     if constexpr (kGate) {
       gate_.flush_accepts(accepts);
       c.used += accepts.handed();  // the CCM points folded in, counted by their runs
@@ -357,26 +329,6 @@ class UpdatePath {
     frame.gated_occluded += c.occluded;
     frame.gated_held += c.held;
     frame.gated_pool_full += c.pool_full;
-  }
-
-  /// The gate's constants for the CCM points of one chunk (kGate: the gate is on, so compiled
-  /// in); nothing without the gate.
-  template <bool kGate>
-  [[nodiscard]] Judge ccm_judge() const noexcept {
-    if constexpr (kGate) {
-      return gate_.ccm_judge();
-    } else {
-      return Judge{};
-    }
-  }
-
-  [[nodiscard]] const GateConstants& gate_constants(int layer) const noexcept {
-    if constexpr (kGateCompiled) {
-      return gate_.constants(layer);
-    } else {
-      (void)layer;
-      return no_gate_;
-    }
   }
 
   /// A point of the Kalman frame batch in cell slot `slot` of the finest layer.
@@ -431,7 +383,7 @@ class UpdatePath {
   /// Every other entry: refusals, weights, the walk, one CCM, Kalman or OMG cell.
   template <bool kGate>
   __attribute__((always_inline)) void apply(Layers& layers, const StackParams& params, std::size_t i, const float* weights, bool unit_weights,
-             ChunkCounts& c, CheckRuns<Layers>& runs, Accepts& accepts, const Judge& judge) noexcept {
+             ChunkCounts& c, ChunkRuns& runs, Accepts& accepts, const Judge& judge) noexcept {
     const std::int32_t code = chunk_.code[i];
     // Unsigned (integrity): a negative code, which the front never writes, is refused with them
     // (uncounted) rather than starting the walk below layer 0.
@@ -472,18 +424,26 @@ class UpdatePath {
           }
         }
       }
-      const bool new_run = runs.ccm.touch(layers, cell);  // integrity hook
+      if (hit.number != runs.ccm_number) {  // a run of another cell starts
+        runs.ccm_number = hit.number;
+        runs.checks.ccm.open(layers, cell);
+        if constexpr (kGate) {
+          gate_.start_run(accepts, hit.number);
+        }
+      }
       if constexpr (kGate) {
-        gate_.count_accepted(accepts, new_run, hit.number);  // and in c.used at the chunk's end
+        gate_.count_accepted(accepts);  // and in c.used at the chunk's end
       } else {
         ++c.used;
       }
-      ccm_update_unchecked(cell, x, y, chunk_.z[i], weight, params.weight_limit);
+      runs.checks.ccm.write([&](auto& written) {
+        ccm_update_unchecked(written, x, y, chunk_.z[i], weight, params.weight_limit);
+      });
       return;
     }
     if constexpr (kKalman) {
       // Kalman gains come from the range variance, not from weights.
-      kalman_point<kGate>(layers, hit.number, i, gate_constants(0), c);
+      kalman_point<kGate>(layers, hit.number, i, gate_.constants(0), c);
     } else if constexpr (Layers::kHasFine) {
       const float variance = measurement_variance(params, chunk_.range_sq[i]);
       const float z = chunk_.z[i];
@@ -496,8 +456,8 @@ class UpdatePath {
         }
       }
       auto& cell = layers.fine_storage[hit.number];
-      runs.fine.touch(layers, cell);  // integrity hook
-      omg_update_unchecked(cell, z, variance, weight, params.weight_limit);
+      runs.checks.fine.write(layers, cell,
+                      [&](auto& written) { omg_update_unchecked(written, z, variance, weight, params.weight_limit); });
       ++c.used;
     }
   }
@@ -525,13 +485,13 @@ class UpdatePath {
     if constexpr (kKalman) {
       KalmanCell* cells = layers.fine_storage;
       batch_.fuse([&](std::uint32_t slot, const KalmanFrameSum& sum) {
-        const WideSignature before = cell_signature_wide(cells[slot]);  // integrity hook
-        fuse_sums(cells[slot], params, sum.sum_height_q14, sum.sum_range_key, sum.count);
-        rewrite_check(layers, cells[slot], before);  // integrity hook
+        write_cell(layers, cells[slot], [&](KalmanCell& cell) {
+          fuse_sums(cell, params, sum.sum_height_q14, sum.sum_range_key, sum.count);
+        });
       });
     }
-    if constexpr (kGateCompiled) {
-      gate_.note_frame_slots();
+    gate_.note_frame_slots();
+    if constexpr (Gate::kCompiled) {
       if (gate_.on()) {
         apply_change_rule(
             gate_, layers, params, frame, [&](std::uint32_t cell) { return batch_.sum(cell).count; },
@@ -553,8 +513,8 @@ class UpdatePath {
   FineWindow fine_window_{};
   LayerWalk<Config> walk_{};
   Batch batch_{};
-  std::conditional_t<kGateCompiled, Gate, char> gate_{};  ///< the outlier gate, if compiled in
-  std::uint16_t others_[kFrontChunkPoints]{};             ///< chunk entries for the walk (pass 2)
+  Gate gate_{};                                ///< the outlier gate (a null object if compiled out)
+  std::uint16_t others_[kFrontChunkPoints]{};  ///< chunk entries for the walk (pass 2)
   std::uint32_t point_budget_ = 0U;
   std::uint64_t time_budget_ns_ = 0U;
   bool constant_weight_ = false;

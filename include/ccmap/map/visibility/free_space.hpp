@@ -777,16 +777,10 @@ class FreeSpace<Config, true> {
     const std::size_t slot = record - offset_[layer];
     // Integrity: the check takes the change (an upset seen before stays seen: the scrub counts it).
     if (Layers::is_ccm(layer)) {
-      CcmCellType& cell = layers.ccm_grid(layer).storage()[slot];
-      const WideSignature before = cell_signature_wide(cell);
-      cell = CcmCellType{};
-      rewrite_check(layers, cell, before);
+      write_cell(layers, layers.ccm_grid(layer).storage()[slot], [](CcmCellType& cell) { cell = CcmCellType{}; });
     } else {
       if constexpr (Layers::kHasFine) {
-        FineCell& cell = layers.fine.storage()[slot];
-        const WideSignature before = cell_signature_wide(cell);
-        cell = FineCell{};
-        rewrite_check(layers, cell, before);
+        write_cell(layers, layers.fine.storage()[slot], [](FineCell& cell) { cell = FineCell{}; });
       }
     }
     records_[record] = FreeSpaceCell{};

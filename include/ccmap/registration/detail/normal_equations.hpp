@@ -1,6 +1,6 @@
 // The 4 x 4 algebra of registration: normal equations of (dx, dy, dz, dyaw), their
 // eigen-decomposition for observability, the step and the covariance restricted to the
-// observable directions. Implemented in src/registration/normal_equations.cpp with Eigen's
+// observable directions. Implemented in src/registration/detail/normal_equations.cpp with Eigen's
 // fixed-size float types (Matrix4f, SelfAdjointEigenSolver<Matrix4f>: no heap, no exceptions);
 // this header names no Eigen type, so the public API stays free of it.
 #pragma once

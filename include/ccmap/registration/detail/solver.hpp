@@ -102,11 +102,6 @@ struct SampleRefusals {
   return r;
 }
 
-/// kOk for a rotation matrix (row-major 3 x 3) as update_frame_sensor accepts it: finite
-/// (else kNonFiniteInput), every |r_ij| <= 1.001 and R^T R within 1e-3 of the identity (else
-/// kInvalidArgument). src/registration/registration.cpp.
-[[nodiscard]] Status check_registration_rotation(const float* rotation) noexcept;
-
 /// How many times the gradients' noise information N is taken off the evidence E to judge
 /// observability (see the file comment): a direction counts when its information is at least
 /// this many times what noise in the map's slopes alone would give it (flat ground: E = N on

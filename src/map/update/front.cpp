@@ -113,6 +113,29 @@ Status make_front_config(float finest_width_m, const float* max_range_sq_m2, int
   return Status::kOk;
 }
 
+Status check_rotation(const float* r) noexcept {
+  for (int i = 0; i < 9; ++i) {
+    if (!std::isfinite(r[i])) {
+      return Status::kNonFiniteInput;
+    }
+    if (std::fabs(r[i]) > 1.001F) {
+      return Status::kInvalidArgument;
+    }
+  }
+  // R^T R = I within 1e-3: a rigid transform, not a scaling or shear (the range is taken in
+  // the sensor frame, which assumes it).
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const float dot = r[i] * r[j] + r[3 + i] * r[3 + j] + r[6 + i] * r[6 + j];
+      const float expected = i == j ? 1.0F : 0.0F;
+      if (std::fabs(dot - expected) > 1.0e-3F) {
+        return Status::kInvalidArgument;
+      }
+    }
+  }
+  return Status::kOk;
+}
+
 Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, const FrontConfig& config,
                        FramePose* out) noexcept {
   if (out == nullptr || !(config.inv_width > 0.0F) || config.layers == 0U) {
@@ -133,24 +156,9 @@ Status make_frame_pose(const PointXYZ& origin, const float* rotation_row_major, 
   pose.near_limit = std::fabs(origin.x) > kNear || std::fabs(origin.y) > kNear || std::fabs(origin.z) > kNear;
   if (rotation_row_major != nullptr) {
     const float* r = rotation_row_major;
-    for (int i = 0; i < 9; ++i) {
-      if (!std::isfinite(r[i])) {
-        return Status::kNonFiniteInput;
-      }
-      if (std::fabs(r[i]) > 1.001F) {
-        return Status::kInvalidArgument;
-      }
-    }
-    // R^T R = I within 1e-3: a rigid transform, not a scaling or shear (the range is taken in
-    // the sensor frame, which assumes it).
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) {
-        const float dot = r[i] * r[j] + r[3 + i] * r[3 + j] + r[6 + i] * r[6 + j];
-        const float expected = i == j ? 1.0F : 0.0F;
-        if (std::fabs(dot - expected) > 1.0e-3F) {
-          return Status::kInvalidArgument;
-        }
-      }
+    const Status rotation_status = check_rotation(r);
+    if (rotation_status != Status::kOk) {
+      return rotation_status;
     }
     for (int i = 0; i < 9; ++i) {
       pose.rotation[i] = r[i];
@@ -257,7 +265,7 @@ CCMAP_FRONT_LOOP std::size_t finish_entries_x8(std::size_t first, std::size_t n,
   const U8 mask = U8{} + fine.mask;
   const U8 min_x = U8{} + fine.min_x;
   const U8 min_y = U8{} + fine.min_y;
-  const F8 key_cap = F8{} + 524287.0F;
+  const F8 key_cap = F8{} + kRangeKeyCapM2;
   const I8 too_noisy = I8{} + std::int32_t{kFrontTooNoisy};
   const I8 none = I8{} - 1;
   for (std::size_t i = first; i < done; i += 8U) {
@@ -286,8 +294,8 @@ CCMAP_FRONT_LOOP std::size_t finish_entries_x8(std::size_t first, std::size_t n,
     const F8 capped = (r2 < key_cap) ? r2 : key_cap;
     I8 height;
     I8 key;
-    CCMAP_FLOOR8(z * 16384.0F, height);
-    CCMAP_FLOOR8(capped * 4096.0F, key);
+    CCMAP_FLOOR8(z * kHeightQ14PerM, height);
+    CCMAP_FLOOR8(capped * kRangeKeysPerM2, key);
     std::memcpy(&out.code[i], &code, sizeof code);
     std::memcpy(&out.fine_slot[i], &fine_slot, sizeof fine_slot);
     std::memcpy(&out.height_q14[i], &height, sizeof height);
@@ -320,8 +328,8 @@ CCMAP_FRONT_LOOP void finish_entries(std::size_t first, std::size_t n, const flo
         0U - static_cast<std::uint32_t>(((ux - fine.min_x) < fine.side) & ((uy - fine.min_y) < fine.side) & (code == 0));
     const std::uint32_t slot = ((uy & fine.mask) << fine.log2_side) | (ux & fine.mask);
     out.fine_slot[i] = static_cast<std::int32_t>((slot & ok) | ~ok);  // the slot, or -1
-    out.height_q14[i] = floor_to_int32(out.z[i] * 16384.0F);          // |z| <= 1.04e5 m: < 2^31
-    out.range_key[i] = floor_to_int32((r2 < 524287.0F ? r2 : 524287.0F) * 4096.0F);
+    out.height_q14[i] = floor_to_int32(out.z[i] * kHeightQ14PerM);       // |z| <= 1.04e5 m: < 2^31
+    out.range_key[i] = floor_to_int32((r2 < kRangeKeyCapM2 ? r2 : kRangeKeyCapM2) * kRangeKeysPerM2);
   }
 }
 
@@ -342,9 +350,9 @@ struct NeonFinish {
         log2_side(vdupq_n_s32(static_cast<std::int32_t>(fine.log2_side))),
         min_x(vdupq_n_u32(fine.min_x)),
         min_y(vdupq_n_u32(fine.min_y)),
-        q14(vdupq_n_f32(16384.0F)),
-        key_cap(vdupq_n_f32(524287.0F)),
-        key_scale(vdupq_n_f32(4096.0F)) {
+        q14(vdupq_n_f32(kHeightQ14PerM)),
+        key_cap(vdupq_n_f32(kRangeKeyCapM2)),
+        key_scale(vdupq_n_f32(kRangeKeysPerM2)) {
     for (int k = 0; k < kLayers; ++k) {
       bound[static_cast<std::size_t>(k)] = vdupq_n_f32(config.max_range_sq[k]);
     }

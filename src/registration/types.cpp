@@ -1,4 +1,4 @@
-// Non-template parts of registration: the default parameters, their validation, the pose check.
+// Non-template parts of registration/types.hpp: the default parameters and their validation.
 #include <cmath>
 
 #include "ccmap/cell/ccm_cell.hpp"
@@ -38,29 +38,4 @@ Status validate_registration_params(const RegistrationParams& p) noexcept {
   return counts && bounds ? Status::kOk : Status::kInvalidArgument;
 }
 
-namespace detail {
-
-Status check_registration_rotation(const float* r) noexcept {
-  for (int i = 0; i < 9; ++i) {
-    if (!std::isfinite(r[i])) {
-      return Status::kNonFiniteInput;
-    }
-    if (!(std::fabs(r[i]) <= 1.001F)) {
-      return Status::kInvalidArgument;
-    }
-  }
-  // R^T R = I within 1e-3 per entry.
-  for (int a = 0; a < 3; ++a) {
-    for (int b = 0; b < 3; ++b) {
-      const float dot = r[a] * r[b] + r[3 + a] * r[3 + b] + r[6 + a] * r[6 + b];
-      const float expected = a == b ? 1.0F : 0.0F;
-      if (!(std::fabs(dot - expected) <= 1.0e-3F)) {
-        return Status::kInvalidArgument;
-      }
-    }
-  }
-  return Status::kOk;
-}
-
-}  // namespace detail
 }  // namespace ccmap

@@ -1,85 +1,11 @@
+#include "ccmap/map/classify.hpp"
+
 #include <cmath>
 
 #include "ccmap/map/calibration.hpp"
-#include "ccmap/map/classify.hpp"
 #include "ccmap/map/stack.hpp"
 
 namespace ccmap {
-
-const char* to_string(CellClass cell_class) noexcept {
-  switch (cell_class) {
-    case CellClass::kUnknown: return "unknown";
-    case CellClass::kTraversable: return "traversable";
-    case CellClass::kObstacle: return "obstacle";
-    case CellClass::kSteep: return "steep";
-    case CellClass::kDropOff: return "drop";
-  }
-  return "unknown";
-}
-
-namespace detail {
-namespace {
-std::uint32_t saturating_add(std::uint32_t a, std::uint32_t b) noexcept {
-  return (a > 0xFFFFFFFFU - b) ? 0xFFFFFFFFU : a + b;
-}
-}  // namespace
-
-void accumulate(FrameCounters& total, const FrameCounters& frame) noexcept {
-  total.received = saturating_add(total.received, frame.received);
-  total.used = saturating_add(total.used, frame.used);
-  total.rejected_non_finite = saturating_add(total.rejected_non_finite, frame.rejected_non_finite);
-  total.rejected_out_of_range = saturating_add(total.rejected_out_of_range, frame.rejected_out_of_range);
-  total.rejected_weight = saturating_add(total.rejected_weight, frame.rejected_weight);
-  total.outside_map = saturating_add(total.outside_map, frame.outside_map);
-  total.too_noisy = saturating_add(total.too_noisy, frame.too_noisy);
-  total.gated_finer = saturating_add(total.gated_finer, frame.gated_finer);
-  total.gated_occluded = saturating_add(total.gated_occluded, frame.gated_occluded);
-  total.gated_held = saturating_add(total.gated_held, frame.gated_held);
-  total.gated_pool_full = saturating_add(total.gated_pool_full, frame.gated_pool_full);
-  total.gated_admitted = saturating_add(total.gated_admitted, frame.gated_admitted);
-  total.gated_dropped = saturating_add(total.gated_dropped, frame.gated_dropped);
-  total.reseeded_cells = saturating_add(total.reseeded_cells, frame.reseeded_cells);
-  total.merged_cells = saturating_add(total.merged_cells, frame.merged_cells);
-  total.skipped_budget = saturating_add(total.skipped_budget, frame.skipped_budget);
-  total.corrupted_cells = saturating_add(total.corrupted_cells, frame.corrupted_cells);
-  total.corrupted_slots = saturating_add(total.corrupted_slots, frame.corrupted_slots);
-  total.free_rays = saturating_add(total.free_rays, frame.free_rays);
-  total.free_rays_refused = saturating_add(total.free_rays_refused, frame.free_rays_refused);
-  total.cleared_cells = saturating_add(total.cleared_cells, frame.cleared_cells);
-  total.drop_cells = saturating_add(total.drop_cells, frame.drop_cells);
-}
-}  // namespace detail
-
-StackParams default_stack_params(float finest_cell_width_m) noexcept {
-  StackParams p{};
-  p.finest_cell_width_m = finest_cell_width_m;
-  p.weight_limit = 1000.0F;
-  p.coverage_tau = 0.8F;
-  p.min_weight = 5.0F;
-  p.obstacle_fraction = 0.75F;
-  p.max_inclination = 0.36397023F;  // tan(20 deg)
-  p.kalman_min_variance = kKalmanDefaultMinVariance;
-  for (float& t : p.normal_variance_threshold) {
-    t = 0.0F;
-  }
-  // The constant finest layer takes points while sigma_m <= its own IV-G bound
-  // (sensor/noise_model.hpp, constant_layer_max_sigma, argues why).
-  p.finest_max_sigma_m = sensor::constant_layer_max_sigma(finest_cell_width_m);
-  // The outlier gate and change rule, chosen by measurement (docs/design.md, "Outlier gate
-  // and change"; docs/evaluation.md, "Outliers").
-  p.outlier_gate_sigma = 3.0F;
-  p.change_min_points = 3.0F;
-  p.change_share = 0.08F;
-  // Free space from lines of sight, its ray count set by the headroom budget: 128 lines of sight
-  // cost 1.25 M aarch64 instructions per CADRE frame (512 cost 5.1 M, over the frame's allowance).
-  // docs/performance.md section 13 gives the cost, docs/evaluation.md what 128 rays do and do not
-  // achieve against 512 (docs/design.md, "Free space from lines of sight").
-  p.free_space_rays = 128.0F;
-  p.free_space_clear_frames = 3.0F;
-  p.sensor_view_axis = {0.0F, 0.0F, 0.0F};
-  p.noise = sensor::cadre_stereo();
-  return p;
-}
 
 Status validate_stack_params(const StackParams& p, int layer_count) noexcept {
   const float values[] = {p.finest_cell_width_m, p.coverage_tau,         p.min_weight,
