@@ -282,9 +282,9 @@ class SightTable {
   /// table[w >> 16] = min(it, the slope in w's lower 16 bits).
   static void store_min(std::int16_t* table, std::uint32_t w) noexcept {
     const auto q = static_cast<std::int16_t>(static_cast<std::uint16_t>(w & 0xFFFFU));
-    std::int16_t& entry = table[w >> 16];
-    if (q < entry) {
-      entry = q;
+    const std::uint32_t at = w >> 16;
+    if (q < table[at]) {
+      table[at] = q;
     }
   }
 
