@@ -1,1 +1,2 @@
-target_sources(ccmap_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/assert.cpp ${CMAKE_CURRENT_LIST_DIR}/status.cpp)
+target_sources(ccmap_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/assert.cpp ${CMAKE_CURRENT_LIST_DIR}/status.cpp
+                   ${CMAKE_CURRENT_LIST_DIR}/sin_cos.cpp)

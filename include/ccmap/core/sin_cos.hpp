@@ -1,7 +1,7 @@
 #pragma once
 
 // sin and cos without libm (bare metal has no vectorised one and the planner and registration
-// need bitwise-equal answers on every target): defined in src/planner/planner_support.cpp.
+// need bitwise-equal answers on every target): defined in src/core/sin_cos.cpp.
 
 namespace ccmap::detail {
 

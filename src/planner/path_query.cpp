@@ -1,78 +1,10 @@
-// Non-template parts of the planner queries: footprint validation and verdict, path sampling.
+// Non-template parts of the path queries (planner/path_query.hpp): path sampling.
 #include <cmath>
 
-#include "ccmap/map/classify.hpp"
-#include "ccmap/planner/footprint.hpp"
+#include "ccmap/core/sin_cos.hpp"
 #include "ccmap/planner/path_query.hpp"
 
-namespace ccmap {
-
-CellClass footprint_class(const FootprintResult& result, float max_unknown_share) noexcept {
-  if (result.status != Status::kOk && result.status != Status::kOutsideMap) {
-    return CellClass::kUnknown;
-  }
-  if (is_lethal(result.worst_class)) {
-    return result.worst_class;
-  }
-  // NaN max_unknown_share: every share "exceeds" it (the safe answer).
-  // An upset part is never tolerated (map/detail/integrity.hpp, "distrust").
-  if (result.worst_class == CellClass::kUnknown || !(result.unknown_share <= max_unknown_share) ||
-      result.upset_share > 0.0F) {
-    return CellClass::kUnknown;
-  }
-  return CellClass::kTraversable;
-}
-
-namespace detail {
-
-Status make_footprint_rect(const Footprint& f, float finest_width_m, std::uint32_t max_cells,
-                           OrientedRect* out) noexcept {
-  const float values[] = {f.x, f.y, f.heading_x, f.heading_y, f.length_m, f.width_m};
-  for (const float v : values) {
-    if (!std::isfinite(v)) {
-      return Status::kNonFiniteInput;
-    }
-  }
-  if (check_position(f.x, f.y) != Status::kOk) {
-    return Status::kOutOfRange;
-  }
-  OrientedRect rect{};
-  if (!(finest_width_m > 0.0F) || !make_oriented_rect(f.x, f.y, f.heading_x, f.heading_y, f.length_m, f.width_m, &rect)) {
-    return Status::kInvalidArgument;
-  }
-  // Finest-layer cells the bounding box touches, counted in float (a huge footprint gives a
-  // huge or infinite count, never an integer overflow).
-  const float inv = 1.0F / finest_width_m;
-  const float nx = std::floor((rect.cx + rect.half_extent_x) * inv) - std::floor((rect.cx - rect.half_extent_x) * inv) + 1.0F;
-  const float ny = std::floor((rect.cy + rect.half_extent_y) * inv) - std::floor((rect.cy - rect.half_extent_y) * inv) + 1.0F;
-  if (!(nx * ny <= static_cast<float>(max_cells))) {
-    return Status::kOutOfRange;
-  }
-  *out = rect;
-  return Status::kOk;
-}
-
-void sin_cos(float theta, float* sine, float* cosine) noexcept {
-  // theta = q pi/2 + r, |r| <= pi/4 (+ rounding); pi/2 in two parts (Cody-Waite, as fdlibm's
-  // float reduction): kHalfPiHi has 17 significant bits, so q kHalfPiHi is exact for |q| <= 64
-  // and theta - q kHalfPiHi is exact (Sterbenz); r carries the rounding of q kHalfPiLo (< 1e-11).
-  constexpr float kTwoOverPi = 0.636619772F;
-  constexpr float kHalfPiHi = 1.57078552F;     // 0x3FC90F80
-  constexpr float kHalfPiLo = 1.08043341e-5F;  // 0x37354443: pi/2 - kHalfPiHi
-  const float q = std::floor(theta * kTwoOverPi + 0.5F);
-  const float r = (theta - q * kHalfPiHi) - q * kHalfPiLo;
-  const float r2 = r * r;
-  // Taylor series to r^9 and r^10: truncation below 2e-9 on |r| <= pi/4.
-  const float s = r * (1.0F + r2 * (-1.0F / 6.0F + r2 * (1.0F / 120.0F + r2 * (-1.0F / 5040.0F + r2 * (1.0F / 362880.0F)))));
-  const float c = 1.0F + r2 * (-0.5F + r2 * (1.0F / 24.0F + r2 * (-1.0F / 720.0F + r2 * (1.0F / 40320.0F + r2 * (-1.0F / 3628800.0F)))));
-  const int quadrant = static_cast<int>(q) & 3;  // two's complement: -1 & 3 == 3
-  switch (quadrant) {
-    case 0: *sine = s; *cosine = c; break;
-    case 1: *sine = c; *cosine = -s; break;
-    case 2: *sine = -s; *cosine = -c; break;
-    default: *sine = -c; *cosine = s; break;
-  }
-}
+namespace ccmap::detail {
 
 Status PathSampler::make_polyline(const PathPoint* points, std::size_t count) noexcept {
   if (points == nullptr || count < 2U || count > kMaxPathVertices) {
@@ -204,5 +136,4 @@ Status path_sample_count(float length, const PathSweep& sweep, std::uint32_t* co
   return Status::kOk;
 }
 
-}  // namespace detail
-}  // namespace ccmap
+}  // namespace ccmap::detail
