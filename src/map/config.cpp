@@ -23,7 +23,7 @@ StackParams default_stack_params(float finest_cell_width_m) noexcept {
   p.change_min_points = 3.0F;
   p.change_share = 0.08F;
   // Free space from lines of sight, its ray count set by the headroom budget: 128 lines of sight
-  // cost 1.25 M aarch64 instructions per CADRE frame (512 cost 5.1 M, over the frame's allowance).
+  // stay well inside the stage's 4 M aarch64 instructions per CADRE frame, 512 do not.
   // docs/performance.md section 13 gives the cost, docs/evaluation.md what 128 rays do and do not
   // achieve against 512 (docs/design.md, "Free space from lines of sight").
   p.free_space_rays = 128.0F;
