@@ -382,6 +382,26 @@ template <typename Layers>
   return reset;
 }
 
+/// The scrub over the free-space records (map/visibility/free_space.hpp): checks `count` of the
+/// `total` records from *cursor on (wrapping; *cursor clamped first), resets every one whose
+/// signature disagrees with its check to no evidence (all zero, check 0) and returns how many.
+template <typename Record>
+[[nodiscard]] inline std::uint32_t scrub_record_slice(Record* records, CellCheck* checks, std::uint32_t total,
+                                                      std::uint32_t* cursor, std::uint32_t count) noexcept {
+  std::uint32_t at = *cursor < total ? *cursor : 0U;
+  std::uint32_t reset = 0U;
+  for (std::uint32_t k = 0; k < count && k < total; ++k) {
+    if (cell_signature(records[at]) != checks[at]) {
+      records[at] = Record{};
+      checks[at] = 0U;
+      ++reset;
+    }
+    at = at + 1U < total ? at + 1U : 0U;
+  }
+  *cursor = at;
+  return reset;
+}
+
 /// After RingGrid::move_to moved a window of `side` cells (a power of two) whose lowest global
 /// index was `old_min` to one whose lowest index is `new_min`: zeroes the checks (checks[slot],
 /// side * side of them, slot = grid::buffer_offset) of exactly the cells the move cleared, as
