@@ -64,6 +64,15 @@ struct Fixture {
   static std::uint16_t& check(Map& map, RecordAt at) {
     return const_cast<std::uint16_t*>(drops(map).checks[at.layer])[at.slot];
   }
+  /// Flips bit `bit` of the record (0 .. 31) or of its check (32 .. 47).
+  static void flip(Map& map, RecordAt at, int bit) {
+    if (bit < 32) {
+      auto* bytes = reinterpret_cast<unsigned char*>(&record(map, at));
+      bytes[bit / 8] = static_cast<unsigned char>(bytes[bit / 8] ^ (1U << (bit % 8)));
+    } else {
+      check(map, at) = static_cast<std::uint16_t>(check(map, at) ^ (1U << (bit - 32)));
+    }
+  }
   /// Records whose check differs from the model's (0: every writer kept every check).
   static std::size_t inconsistent(Map& map) {
     std::size_t bad = 0U;
@@ -209,12 +218,7 @@ void drop_campaign(float rays) {
     const ccmap::QueryResult want = reference->query(x, y);
     for (int bit = 0; bit < 48; ++bit) {
       auto map = load<Map>(snapshot);
-      if (bit < 32) {
-        auto* bytes = reinterpret_cast<unsigned char*>(&F::record(*map, at));
-        bytes[bit / 8] = static_cast<unsigned char>(bytes[bit / 8] ^ (1U << (bit % 8)));
-      } else {
-        F::check(*map, at) = static_cast<std::uint16_t>(F::check(*map, at) ^ (1U << (bit - 32)));
-      }
+      F::flip(*map, at, bit);
       const ccmap::QueryResult got = map->query(x, y);
       if (got.cell_class == CellClass::kDropOff) {
         EXPECT_EQ(want.cell_class, CellClass::kDropOff) << "bit " << bit << " of a record made a drop-off";
@@ -269,12 +273,7 @@ void clearing_campaign(float rays) {
   for (const RecordAt at : picked) {
     for (int bit = 0; bit < 48; ++bit) {
       auto map = load<Map>(snapshot);
-      if (bit < 32) {
-        auto* bytes = reinterpret_cast<unsigned char*>(&F::record(*map, at));
-        bytes[bit / 8] = static_cast<unsigned char>(bytes[bit / 8] ^ (1U << (bit % 8)));
-      } else {
-        F::check(*map, at) = static_cast<std::uint16_t>(F::check(*map, at) ^ (1U << (bit - 32)));
-      }
+      F::flip(*map, at, bit);
       FrameCounters got{};
       for (const SceneFrame& f : next) {
         fold(*map, f, &got);
