@@ -37,6 +37,13 @@
 // that land on the same check bit cancel: of all pairs of bits of a 10-float CCM cell, 94 % are
 // detected (both forms spread a cell's bits evenly over the 16 check bits).
 //
+// Free-space records (map/visibility/free_space.hpp, 4 B per cell of every layer) carry the same
+// 16-bit check, one per record in an array beside them, kept by their one write
+// (FreeSpace::write_record), verified before a record's evidence decides a clearing and before a
+// query answers a drop-off, and scrubbed with the cells (scrub_record_slice); a failed record is
+// reset to no evidence (all zero: no bound, no clearing, no drop-off) and counted in
+// corrupted_cells (tests/map/free_space_upset_test.cpp).
+//
 // Bookkeeping (state_seal): the values that index memory or give the cells their meaning (the
 // parameters, every derived constant, each grid's storage pointer, side, widths and window, the
 // kept windows, the initialised word) are sealed by a 128-bit check word (StateHasher) computed
