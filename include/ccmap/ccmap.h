@@ -122,10 +122,10 @@ int32_t ccmap_preset_available(ccmap_preset preset);
  * is its constant); ccmap_storage_size() gives the exact figure (docs/integration.md, section 7,
  * lists them). The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
-#define CCMAP_CADRE_STORAGE_SIZE 835584u          /* 816 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3211264u    /* 3136 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3506176u /* 3424 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1376256u    /* 1344 KiB */
+#define CCMAP_CADRE_STORAGE_SIZE 868352u          /* 848 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3342336u    /* 3264 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3637248u /* 3552 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1511424u    /* 1476 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \

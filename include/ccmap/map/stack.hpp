@@ -71,6 +71,9 @@ class Stack {
   using Layers = detail::LayerSet<Config>;
   /// Cells the scrub checks per frame: every cell within detail::ConfigScrubFrames<Config> frames.
   static constexpr std::uint32_t kScrubCellsPerFrame = detail::scrub_cells_per_frame<Config, Layers>();
+  /// Free-space records the scrub checks per frame: one record per cell, so as many as cells
+  /// (every record within the same frames); none without free space.
+  static constexpr std::uint32_t kScrubRecordsPerFrame = detail::FreeSpace<Config>::kEnabled ? kScrubCellsPerFrame : 0U;
 
  public:
   static constexpr bool kHasFine = Layers::kHasFine;
@@ -130,6 +133,7 @@ class Stack {
     }
     for (int layer = 0; layer < kLayerCount; ++layer) {
       drops_.layer[layer] = free_space_.records(layer);
+      drops_.checks[layer] = free_space_.record_checks(layer);
     }
     totals_ = FrameCounters{};
     rejected_moves_ = 0U;
@@ -620,6 +624,8 @@ class Stack {
     frame.received = static_cast<std::uint32_t>(n);
     // Integrity: the scrub's slice of this frame (map/detail/integrity.hpp).
     frame.corrupted_cells += detail::scrub_slice(layers_, &scrub_cursor_, kScrubCellsPerFrame);
+    // ... and of the free-space records (a record reset to no evidence counts as a corrupted cell).
+    frame.corrupted_cells += free_space_.scrub(kScrubRecordsPerFrame);
     return Status::kOk;
   }
 

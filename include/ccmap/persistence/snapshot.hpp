@@ -293,7 +293,9 @@ struct SnapshotAccess {
     }
     if constexpr (kFreeSpace) {
       for (int layer = 0; layer < kLayers; ++layer) {
-        stack.free_space_.records(layer)->for_each([&w](CellIndex, const FreeSpaceCell& c) { snapshot_write_record(w, c); });
+        // Integrity: a corrupted record is saved as no evidence (it is one until the scrub resets it).
+        stack.free_space_.records(layer)->for_each(
+            [&w, &stack](CellIndex, const FreeSpaceCell& c) { snapshot_write_record(w, stack.free_space_.intact_or_empty(c)); });
       }
     }
     snapshot_write_counters(w, stack.totals_, stack.rejected_moves_, stack.rejected_frames_);
@@ -449,6 +451,7 @@ struct SnapshotAccess {
     snapshot_read_counters(r, &stack.totals_, &stack.rejected_moves_, &stack.rejected_frames_);
     stack.last_update_ns_ = 0U;  // no frame measured since the load
     reseal_all_cells(stack.layers_);  // integrity: the loaded cells' checks, the restored windows' seal
+    stack.free_space_.reseal_records();  // and the loaded free-space records' checks
     stack.seal_state();
     return Status::kOk;
   }

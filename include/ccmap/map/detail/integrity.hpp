@@ -37,6 +37,13 @@
 // that land on the same check bit cancel: of all pairs of bits of a 10-float CCM cell, 94 % are
 // detected (both forms spread a cell's bits evenly over the 16 check bits).
 //
+// Free-space records (map/visibility/free_space.hpp, 4 B per cell of every layer) carry the same
+// 16-bit check, one per record in an array beside them, kept by their one write
+// (FreeSpace::write_record), verified before a record's evidence decides a clearing and before a
+// query answers a drop-off, and scrubbed with the cells (scrub_record_slice); a failed record is
+// reset to no evidence (all zero: no bound, no clearing, no drop-off) and counted in
+// corrupted_cells (tests/map/free_space_upset_test.cpp).
+//
 // Bookkeeping (state_seal): the values that index memory or give the cells their meaning (the
 // parameters, every derived constant, each grid's storage pointer, side, widths and window, the
 // kept windows, the initialised word) are sealed by a 128-bit check word (StateHasher) computed
@@ -377,6 +384,26 @@ template <typename Layers>
       }
     }
     at = at + 1U < kTotal ? at + 1U : 0U;
+  }
+  *cursor = at;
+  return reset;
+}
+
+/// The scrub over the free-space records (map/visibility/free_space.hpp): checks `count` of the
+/// `total` records from *cursor on (wrapping; *cursor clamped first), resets every one whose
+/// signature disagrees with its check to no evidence (all zero, check 0) and returns how many.
+template <typename Record>
+[[nodiscard]] inline std::uint32_t scrub_record_slice(Record* records, CellCheck* checks, std::uint32_t total,
+                                                      std::uint32_t* cursor, std::uint32_t count) noexcept {
+  std::uint32_t at = *cursor < total ? *cursor : 0U;
+  std::uint32_t reset = 0U;
+  for (std::uint32_t k = 0; k < count && k < total; ++k) {
+    if (cell_signature(records[at]) != checks[at]) {
+      records[at] = Record{};
+      checks[at] = 0U;
+      ++reset;
+    }
+    at = at + 1U < total ? at + 1U : 0U;
   }
   *cursor = at;
   return reset;

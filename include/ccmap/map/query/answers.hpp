@@ -20,9 +20,11 @@
 namespace ccmap::detail {
 
 /// The free-space records a query reads for drop-offs (map/visibility/free_space.hpp): one record
-/// grid per layer, or nullptr (a stack without free space: no drop-offs).
+/// grid per layer, or nullptr (a stack without free space: no drop-offs), and each layer's record
+/// checks (integrity.hpp: checks[layer][slot] belongs to the record of buffer slot `slot`).
 struct DropRecords {
   const RingGrid<FreeSpaceCell>* layer[kMaxLayers]{};
+  const CellCheck* checks[kMaxLayers]{};
 };
 
 [[nodiscard]] inline QueryResult empty_result(Status status, int layer) noexcept {
@@ -78,14 +80,20 @@ class QueryView {
   }
 
   /// True if the cell of `layer` at `index` (inside the window) holds no point of its own and
-  /// its free-space record makes it a drop-off.
+  /// its free-space record makes it a drop-off. A record whose bits disagree with its check is
+  /// no evidence (no drop-off; the scrub resets and counts it).
   [[nodiscard]] bool unobserved_drop(int layer, CellIndex index) const noexcept {
-    if (drops_ == nullptr || drops_->layer[layer] == nullptr) {
+    if (drops_ == nullptr || drops_->layer[layer] == nullptr || drops_->checks[layer] == nullptr) {
       return false;
     }
     const float weight = Layers::is_ccm(layer) ? layers_.ccm_grid(layer).cell_unchecked(index).weight
                                                : fine_weight(index);
-    return !(weight > 0.0F) && is_drop(drops_->layer[layer]->cell_unchecked(index));
+    if (weight > 0.0F) {
+      return false;
+    }
+    const RingGrid<FreeSpaceCell>& grid = *drops_->layer[layer];
+    const FreeSpaceCell& rec = grid.cell_unchecked(index);
+    return is_drop(rec) && cell_signature(rec) == drops_->checks[layer][static_cast<std::size_t>(&rec - grid.storage())];
   }
 
   /// The answer of an unobserved drop-off cell: kOk, class kDropOff, weight 0, height the upper

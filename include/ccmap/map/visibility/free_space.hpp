@@ -126,6 +126,9 @@ class FreeSpace<Config, false> {
   [[nodiscard]] RingGrid<FreeSpaceCell>* records(int) noexcept { return nullptr; }
   [[nodiscard]] std::uint32_t frames() const noexcept { return 0U; }
   void set_frames(std::uint32_t) noexcept {}
+  [[nodiscard]] const CellCheck* record_checks(int) const noexcept { return nullptr; }
+  void reseal_records() noexcept {}
+  [[nodiscard]] std::uint32_t scrub(std::uint32_t) noexcept { return 0U; }
   void hash_bindings(StateHasher&) const noexcept {}
 };
 
@@ -154,6 +157,8 @@ class FreeSpace<Config, true> {
     set_constants(params, max_range_sq_m2, layers);
     frames_ = 0U;
     contradicted_count_ = 0U;
+    reseal_records();
+    scrub_cursor_ = 0U;
     return Status::kOk;
   }
 
@@ -202,7 +207,10 @@ class FreeSpace<Config, true> {
   /// after each layer's move): records that leave are cleared, as the cells are.
   void follow(int layer, CellIndex centre) noexcept {
     if (layer >= 0 && layer < kLayerCount) {
+      const CellIndex old_min = grids_[layer].window_min();
       (void)grids_[layer].move_to(centre);  // cannot fail: the layer accepted the same centre
+      // Integrity: the records the move cleared have check 0 again.
+      clear_checks_after_move(checks_ + offset_[layer], Layers::side(layer), old_min, grids_[layer].window_min());
     }
   }
 
@@ -263,11 +271,35 @@ class FreeSpace<Config, true> {
   [[nodiscard]] std::uint32_t frames() const noexcept { return frames_; }
   void set_frames(std::uint32_t frames) noexcept { frames_ = frames; }
 
+  // ---- integrity of the records (map/detail/integrity.hpp, "Free-space records") ----
+  /// The checks of `layer`'s records (side^2 of them, in buffer order); nullptr for a bad layer.
+  [[nodiscard]] const CellCheck* record_checks(int layer) const noexcept {
+    return (layer >= 0 && layer < kLayerCount) ? checks_ + offset_[layer] : nullptr;
+  }
+  /// True if a record of this stage's storage agrees with its check.
+  [[nodiscard]] bool record_intact(const FreeSpaceCell& rec) const noexcept {
+    return cell_signature(rec) == checks_[static_cast<std::size_t>(&rec - records_)];
+  }
+  /// The record as a reader that keeps the checks may use it: itself if intact, else no evidence.
+  [[nodiscard]] FreeSpaceCell intact_or_empty(const FreeSpaceCell& rec) const noexcept {
+    return record_intact(rec) ? rec : FreeSpaceCell{};
+  }
+  /// Recomputes every record's check (init, and after a snapshot load wrote the records).
+  void reseal_records() noexcept {
+    for (std::size_t i = 0; i < kRecordCount; ++i) {
+      checks_[i] = cell_signature(records_[i]);
+    }
+  }
+  /// The scrub's slice of this frame: checks `count` records from the cursor on (wrapping; the
+  /// cursor clamped first), resets every corrupted one to no evidence and returns how many.
+  [[nodiscard]] std::uint32_t scrub(std::uint32_t count) noexcept {
+    return scrub_record_slice(records_, checks_, static_cast<std::uint32_t>(kRecordCount), &scrub_cursor_, count);
+  }
+
   /// Integrity (map/detail/integrity.hpp): what the stack's seal covers of this stage, every value
   /// that indexes memory or sets how much work a frame does (the record grids' bindings and
-  /// windows, the layer offsets and margins, the parameters). Not the records (a flipped record
-  /// can at worst mark, unmark or bound one cell of its own: docs/integration.md section 12), not
-  /// the frame counter (the sampling phase) nor the per-frame scratch (rewritten each frame,
+  /// windows, the layer offsets and margins, the parameters). Not the records (each has its own
+  /// check: record_intact, the scrub), not the scrub's cursor (clamped on use), not the frame counter (the sampling phase) nor the per-frame scratch (rewritten each frame,
   /// its indices checked where they are read).
   void hash_bindings(StateHasher& h) const noexcept {
     h.add_bytes<sizeof grids_>(reinterpret_cast<const unsigned char*>(grids_));
@@ -471,17 +503,21 @@ class FreeSpace<Config, true> {
               }
             }
             if (below >= 2 && below == covered) {
-              (void)touch(rec, stamp_);
-              if (frame_contradictions(rec) == 0U) {
-                remember(layer, index);
-              }
-              for (std::uint32_t c = 0; c < kContradictionsPerFrame; ++c) {
-                add_contradiction(rec);
-              }
+              write_record(rec, [&](FreeSpaceCell& r) {
+                (void)touch(r, stamp_);
+                if (frame_contradictions(r) == 0U) {
+                  remember(layer, index);
+                }
+                for (std::uint32_t c = 0; c < kContradictionsPerFrame; ++c) {
+                  add_contradiction(r);
+                }
+              });
             }
             continue;
           }
-          lower_bound(rec, k.z0 + static_cast<float>(qmin) * unit_m * (qmin < 0 ? s_near : s_far));
+          write_record(rec, [&](FreeSpaceCell& r) {
+            lower_bound(r, k.z0 + static_cast<float>(qmin) * unit_m * (qmin < 0 ? s_near : s_far));
+          });
           // Drop-off: every covered sector below its own ground by more than the step.
           const int near_bin = sight_.bin_of(s_near);
           int proving = 0;
@@ -504,9 +540,11 @@ class FreeSpace<Config, true> {
           }
           if (all && proving >= static_cast<int>(kDropRays)) {
             bool now = false;
-            for (std::uint32_t c = 0; c < kDropRays; ++c) {
-              now = add_drop_ray(rec) || now;
-            }
+            write_record(rec, [&now](FreeSpaceCell& r) {
+              for (std::uint32_t c = 0; c < kDropRays; ++c) {
+                now = add_drop_ray(r) || now;
+              }
+            });
             frame.drop_cells += now ? 1U : 0U;
           }
         }
@@ -628,9 +666,10 @@ class FreeSpace<Config, true> {
         // On its surface: not below the cell's mean by more than the range noise (a point on the
         // ground beneath a vanished rover lies below it and confirms nothing).
         if (z > cell.height - consts_[layer].rise_margin_m * kRangeSigmas) {
-          FreeSpaceCell& rec = grids_[layer].cell_unchecked(ray.end[layer]);
-          (void)touch(rec, stamp_);
-          confirm(rec);
+          write_record(grids_[layer].cell_unchecked(ray.end[layer]), [this](FreeSpaceCell& rec) {
+            (void)touch(rec, stamp_);
+            confirm(rec);
+          });
         }
       }
       return;
@@ -656,11 +695,13 @@ class FreeSpace<Config, true> {
     FreeSpaceCell& rec = grids_[layer].cell_unchecked(v.index);
     if (cell.weight > 0.0F) {
       if (top_above(cell, layer, z_hi)) {
-        (void)touch(rec, stamp_);
-        if (frame_contradictions(rec) == 0U) {
-          remember(layer, v.index);  // listed once per frame: at its first contradiction
-        }
-        add_contradiction(rec);
+        write_record(rec, [&](FreeSpaceCell& r) {
+          (void)touch(r, stamp_);
+          if (frame_contradictions(r) == 0U) {
+            remember(layer, v.index);  // listed once per frame: at its first contradiction
+          }
+          add_contradiction(r);
+        });
         ray.dirty = true;
       }
       if (v.walk_layer) {
@@ -692,13 +733,17 @@ class FreeSpace<Config, true> {
     if (ray.dirty) {
       return;
     }
-    lower_bound(rec, z_hi);
     const bool proves_drop = ray.has_ground && z_hi < ray.ground_m - consts_[layer].step_m;
+    bool now = false;
+    write_record(rec, [&](FreeSpaceCell& r) {
+      lower_bound(r, z_hi);
+      now = proves_drop && add_drop_ray(r);
+    });
     if (ray.run < kMaxRunCells) {
       run_[ray.run++] = RunCell{&rec, layer, proves_drop};
     }
     if (proves_drop) {
-      frame.drop_cells += add_drop_ray(rec) ? 1U : 0U;
+      frame.drop_cells += now ? 1U : 0U;
       mark_run(layer, ray, frame);
     }
   }
@@ -712,7 +757,9 @@ class FreeSpace<Config, true> {
       RunCell& c = run_[k];
       if (c.layer == layer && !c.marked) {
         c.marked = true;
-        frame.drop_cells += add_drop_ray(*c.record) ? 1U : 0U;
+        bool now = false;
+        write_record(*c.record, [&now](FreeSpaceCell& r) { now = add_drop_ray(r); });
+        frame.drop_cells += now ? 1U : 0U;
       }
     }
   }
@@ -761,7 +808,16 @@ class FreeSpace<Config, true> {
         continue;  // integrity: only an upset of this frame's scratch gives such an index
       }
       FreeSpaceCell& rec = records_[record];
-      if (settle_frame(rec) >= clear_frames_) {
+      // Integrity: the evidence decides a clearing, so it is used only when its record is intact;
+      // a corrupted record is reset to no evidence and counted (it clears nothing).
+      if (!record_intact(rec)) {
+        reset_record(record);
+        ++frame.corrupted_cells;
+        continue;
+      }
+      std::uint32_t evidence = 0U;
+      write_record(rec, [&evidence](FreeSpaceCell& r) { evidence = settle_frame(r); });
+      if (evidence >= clear_frames_) {
         clear_cell(layers, record);
         ++frame.cleared_cells;
       }
@@ -783,11 +839,30 @@ class FreeSpace<Config, true> {
         write_cell(layers, layers.fine.storage()[slot], [](FineCell& cell) { cell = FineCell{}; });
       }
     }
+    reset_record(record);
+  }
+
+  /// The one write of a record (every writer of this stage): carries the change into the
+  /// record's check (check ^= fold(wide(before) ^ wide(after)), as write_cell does for cells), so
+  /// that an upset seen before the write stays seen after it. Precondition: `rec` is a record of
+  /// records_.
+  template <typename Write>
+  void write_record(FreeSpaceCell& rec, Write&& fn) noexcept {
+    const WideSignature before = cell_signature_wide(rec);
+    fn(rec);
+    checks_[static_cast<std::size_t>(&rec - records_)] ^= fold_signature(before ^ cell_signature_wide(rec));
+  }
+
+  /// Record `record` is no evidence, its check consistent (check(0) = 0).
+  void reset_record(std::uint32_t record) noexcept {
     records_[record] = FreeSpaceCell{};
+    checks_[record] = 0U;
   }
 
   // ---- state (zero-initialised: a static stack lives in .bss) ----
   FreeSpaceCell records_[kRecordCount]{};
+  CellCheck checks_[kRecordCount]{};  ///< checks_[i] belongs to records_[i] (integrity.hpp)
+  std::uint32_t scrub_cursor_ = 0U;   ///< next record the scrub checks (clamped on use)
   RingGrid<FreeSpaceCell> grids_[Layers::kLayerSlots]{};
   std::size_t offset_[Layers::kLayerSlots]{};
   // ---- derived at init, scratch of a frame (not map state) ----
