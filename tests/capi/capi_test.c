@@ -17,13 +17,13 @@
 
 static ccmap_cadre_storage g_storage;
 static ccmap_cadre_storage g_storage_copy;
-/* One storage for the single-layer maps, placed one after another. On the board 1 MiB of RAM
- * stays for the rest of the image (its other statics and the main stack). The board's linker
+/* One storage for the single-layer maps, placed one after another. On the board 896 KiB of RAM
+ * stay for the rest of the image (its other statics and the main stack). The board's linker
  * script gives .bss a program header of its own at its RAM address (AT > RAM,
  * platform/boards/mps2_an500/mps2_an500.ld), so QEMU's loader zero-fills it there and only code
  * and .data must fit the 4 MiB flash; the single-layer OMG map fits beside the two CADRE maps. */
 #ifdef CCMAP_TEST_RAM_BYTES
-#define SINGLE_STORAGE_SIZE (CCMAP_TEST_RAM_BYTES - 2u * CCMAP_CADRE_STORAGE_SIZE - 1048576u)
+#define SINGLE_STORAGE_SIZE (CCMAP_TEST_RAM_BYTES - 2u * CCMAP_CADRE_STORAGE_SIZE - 917504u)
 #else
 #define SINGLE_STORAGE_SIZE CCMAP_SINGLE_KALMAN_STORAGE_SIZE
 #endif
