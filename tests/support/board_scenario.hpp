@@ -90,8 +90,10 @@ inline bool hash_stack(const StackT& stack, CellRecord* records, std::size_t cap
 }
 
 // ---- the board-sized scenario ----------------------------------------------------------------
-// Sized for a controller with 1 MiB of SRAM: the CADRE map (582 KB) + one frame of 10,000
-// points (120 KB) + their weights (40 KB) + an export buffer for the largest layer (180 KB).
+// Sized for a controller with 1 MiB + 192 KiB of SRAM (the image's RAM_SIZE 0x130000,
+// tests/baremetal/CMakeLists.txt): the CADRE map (874,256 B on the Cortex-M7, docs/integration.md
+// section 9) + one frame of 10,000 points (120 KB) + their weights (40 KB) + an export buffer for
+// the largest layer (180 KB).
 // 24 frames along a curved path, cycling through the three update calls (map frame, sensor
 // frame, map frame with per-point weights), with hostile points, then queries on a grid.
 inline constexpr std::uint32_t kBoardFramePoints = 10000U;

@@ -180,22 +180,33 @@ template <typename Layers, typename Cell>
 }
 
 /// Carries a write into the cell's check: `before` was the cell's wide signature before the
-/// write (check ^= fold(before ^ wide(now))). Writers call write_cell or CheckRun::write, which
-/// pair it with the signature; nothing else does.
+/// write (check ^= fold(before ^ wide(now))). CheckRun pairs it with the signature it took when
+/// it opened the run; nothing else calls it (the other writers use write_delta).
 template <typename Layers, typename Cell>
 inline void rewrite_check(Layers& layers, const Cell& cell, WideSignature before) noexcept {
   check_of(layers, cell) ^= fold_signature(before ^ cell_signature_wide(cell));
 }
 
+/// The one checked write of a value whose 16-bit check is kept apart from it (a cell of a
+/// LayerSet through write_cell; a free-space record, free_space.hpp): takes the value's wide
+/// signature, runs write(value), and returns what the value's check must be XORed with,
+/// fold(wide(before) ^ wide(after)), so that an upset seen before the write stays seen after it.
+/// Callers write `check ^= write_delta(value, fn)`: C++17 evaluates a compound assignment's right
+/// operand first, so the check's address is taken after the write (taking it before costs the
+/// flight cycle registers across the write).
+template <typename T, typename Write>
+[[nodiscard]] inline CellCheck write_delta(T& value, Write&& fn) noexcept {
+  const WideSignature before = cell_signature_wide(value);
+  fn(value);
+  return fold_signature(before ^ cell_signature_wide(value));
+}
+
 /// The one write of a cell of a LayerSet (every writer but the update path's per-point runs,
-/// CheckRun::write): takes the cell's signature, runs write(cell), and carries the change into
-/// the cell's check, so that an upset seen before the write stays seen after it.
+/// CheckRun::write): write_delta into the cell's own check.
 /// Precondition: `cell` is a cell of the layers' own storage.
 template <typename Layers, typename Cell, typename Write>
 inline void write_cell(Layers& layers, Cell& cell, Write&& fn) noexcept {
-  const WideSignature before = cell_signature_wide(cell);
-  fn(cell);
-  rewrite_check(layers, cell, before);
+  check_of(layers, cell) ^= write_delta(cell, fn);
 }
 
 /// The cell write of the per-point updates (the update path's back half): a run of writes to

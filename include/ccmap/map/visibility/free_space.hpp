@@ -842,15 +842,11 @@ class FreeSpace<Config, true> {
     reset_record(record);
   }
 
-  /// The one write of a record (every writer of this stage): carries the change into the
-  /// record's check (check ^= fold(wide(before) ^ wide(after)), as write_cell does for cells), so
-  /// that an upset seen before the write stays seen after it. Precondition: `rec` is a record of
-  /// records_.
+  /// The one write of a record (every writer of this stage): write_delta (integrity.hpp) into
+  /// the record's check, as write_cell is for cells. Precondition: `rec` is a record of records_.
   template <typename Write>
   void write_record(FreeSpaceCell& rec, Write&& fn) noexcept {
-    const WideSignature before = cell_signature_wide(rec);
-    fn(rec);
-    checks_[static_cast<std::size_t>(&rec - records_)] ^= fold_signature(before ^ cell_signature_wide(rec));
+    checks_[static_cast<std::size_t>(&rec - records_)] ^= write_delta(rec, fn);
   }
 
   /// Record `record` is no evidence, its check consistent (check(0) = 0).
