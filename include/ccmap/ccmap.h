@@ -123,9 +123,9 @@ int32_t ccmap_preset_available(ccmap_preset preset);
  * lists them). The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
 #define CCMAP_CADRE_STORAGE_SIZE 868352u          /* 848 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3342336u    /* 3264 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3637248u /* 3552 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1511424u    /* 1476 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3358720u    /* 3280 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3653632u /* 3568 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1523712u    /* 1488 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \
@@ -838,16 +838,16 @@ ccmap_status ccmap_product_decode(const void* data, size_t size, ccmap_product_h
  * lives in caller storage like the map. Sizes: upper bounds with headroom, exact figures from
  * ccmap_exchange_storage_size(). */
 #define CCMAP_CADRE_EXCHANGE_STORAGE_SIZE 475136u          /* 464 KiB */
-#define CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE 2686976u    /* 2624 KiB */
-#define CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE 802816u  /* 784 KiB */
-#define CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE 802816u     /* 784 KiB */
+#define CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE 2703360u    /* 2640 KiB */
+#define CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE 868352u  /* 848 KiB */
+#define CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE 868352u     /* 848 KiB */
 CCMAP_DEFINE_STORAGE_(ccmap_cadre_exchange_storage, CCMAP_CADRE_EXCHANGE_STORAGE_SIZE);
 CCMAP_DEFINE_STORAGE_(ccmap_single_ccm_exchange_storage, CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE);
 CCMAP_DEFINE_STORAGE_(ccmap_single_kalman_exchange_storage, CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE);
 CCMAP_DEFINE_STORAGE_(ccmap_single_omg_exchange_storage, CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE);
 
 /* Largest delta of a preset (every cell) and the smallest (no cell); 0 for a bad preset. */
-#define CCMAP_CADRE_DELTA_MAX_SIZE 473240u
+#define CCMAP_CADRE_DELTA_MAX_SIZE 616600u
 size_t ccmap_delta_max_size(ccmap_preset preset);
 size_t ccmap_delta_min_size(ccmap_preset preset);
 

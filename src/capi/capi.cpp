@@ -207,13 +207,13 @@ static_assert(MapExchange<CadreConfig>::max_delta_size() == CCMAP_CADRE_DELTA_MA
 // The smallest CADRE delta, as persistence/exchange.hpp documents it (header, five layer headers, CRC).
 static_assert(MapExchange<CadreConfig>::min_delta_size() == 152U, "the empty CADRE delta is documented as 152 bytes");
 // The KiB figures beside the storage constants in ccmap.h.
-static_assert(CCMAP_CADRE_STORAGE_SIZE == 848U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 3264U * 1024U &&
-                  CCMAP_SINGLE_KALMAN_STORAGE_SIZE == 3552U * 1024U && CCMAP_SINGLE_OMG_STORAGE_SIZE == 1476U * 1024U,
+static_assert(CCMAP_CADRE_STORAGE_SIZE == 848U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 3280U * 1024U &&
+                  CCMAP_SINGLE_KALMAN_STORAGE_SIZE == 3568U * 1024U && CCMAP_SINGLE_OMG_STORAGE_SIZE == 1488U * 1024U,
               "ccmap.h: a map storage constant and its KiB comment disagree");
 static_assert(CCMAP_CADRE_EXCHANGE_STORAGE_SIZE == 464U * 1024U &&
-                  CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE == 2624U * 1024U &&
-                  CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE == 784U * 1024U &&
-                  CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE == 784U * 1024U,
+                  CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE == 2640U * 1024U &&
+                  CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE == 848U * 1024U &&
+                  CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE == 848U * 1024U,
               "ccmap.h: an exchange storage constant and its KiB comment disagree");
 
 ccmap_status to_c(Status status) noexcept { return static_cast<ccmap_status>(status); }
