@@ -881,6 +881,9 @@ typedef struct ccmap_export_report {
   uint32_t cells_saturated;  /* of those, sent whole: weight limit or variance floor engaged */
   uint32_t cells_pending;    /* changed, not written (below the floor or no room): sent later */
   uint64_t bytes;
+  uint32_t drops_written;    /* free-space entries (delta format 3): drop-offs */
+  uint32_t clears_written;   /* free-space entries: cells this map's lines of sight emptied */
+  uint32_t drops_pending;    /* drop-offs not written for want of room: sent later */
 } ccmap_export_report;
 
 /* Writes a delta of what the map gained since the last export (coarsest layer first, as many
@@ -899,6 +902,13 @@ typedef struct ccmap_merge_report {
   uint32_t cells_merged;
   uint32_t cells_outside;  /* outside this map's windows: dropped */
   uint32_t deltas_missed;  /* sequence numbers of this sender lost before this delta */
+  /* The delta's free-space section (exchange.hpp gives the receiver's rule for clears): */
+  uint32_t drops_merged;     /* drop-offs folded into this map's records */
+  uint32_t cells_cleared;    /* cells a team mate's clear emptied here */
+  uint32_t clears_deferred;  /* clears of cells holding this map's own points: evidence raised only */
+  uint32_t entries_outside;  /* outside this map's windows: dropped */
+  uint32_t entries_refused;  /* failed their check or a field check, or missing (truncated) */
+  ccmap_status free_space_status; /* CCMAP_OK, or CCMAP_CORRUPT for a damaged section (good entries merged) */
 } ccmap_merge_report;
 
 /* Folds another rover's delta into the map, all-or-nothing: CCMAP_NOT_INITIALISED (as for
@@ -936,6 +946,13 @@ typedef struct ccmap_exchange_counters {
   uint64_t cells_exported;
   uint64_t cells_merged;
   uint64_t cells_outside;
+  uint64_t drops_exported;
+  uint64_t clears_exported;
+  uint64_t drops_merged;
+  uint64_t cells_cleared;
+  uint64_t clears_deferred;
+  uint64_t entries_refused;
+  uint32_t sections_damaged; /* merged deltas whose free-space section was damaged */
 } ccmap_exchange_counters;
 /* CCMAP_INVALID_ARGUMENT: NULL out, a bad handle. An exchange never bound answers zeros. */
 ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_exchange_counters* out);

@@ -434,7 +434,10 @@ ccmap_status place_handle(void* storage, std::size_t size, ccmap_preset preset, 
 
 void merge_report_to_c(const MergeReport& r, ccmap_merge_report* out) noexcept {
   if (out != nullptr) {
-    *out = ccmap_merge_report{r.sender_id, r.sequence, r.cells_merged, r.cells_outside, r.deltas_missed};
+    *out = ccmap_merge_report{r.sender_id,     r.sequence,        r.cells_merged,
+                              r.cells_outside, r.deltas_missed,   r.drops_merged,
+                              r.cells_cleared, r.clears_deferred, r.entries_outside,
+                              r.entries_refused, to_c(r.free_space_status)};
   }
 }
 
@@ -1022,8 +1025,10 @@ ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, si
     ccmap::ExportReport r{};
     const Status status = ex.export_delta(buffer, capacity, ccmap::ExportOptions{weight_floor, finest_layer}, written, &r);
     if (report != nullptr) {
-      *report = ccmap_export_report{r.sequence, r.cells_written, r.cells_saturated, r.cells_pending,
-                                    static_cast<std::uint64_t>(r.bytes)};
+      *report = ccmap_export_report{r.sequence,      r.cells_written,
+                                    r.cells_saturated, r.cells_pending,
+                                    static_cast<std::uint64_t>(r.bytes), r.drops_written,
+                                    r.clears_written, r.drops_pending};
     }
     return ccmap::to_c(status);
   });
@@ -1074,7 +1079,8 @@ ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_e
     *out = ccmap_exchange_counters{c.deltas_exported,   c.deltas_merged,      c.snapshots_merged, c.refused,
                                    c.refused_corrupt,   c.refused_duplicate,  c.refused_misaligned, c.deltas_missed,
                                    c.bytes_exported,    c.bytes_merged,       c.cells_exported,   c.cells_merged,
-                                   c.cells_outside};
+                                   c.cells_outside,     c.drops_exported,     c.clears_exported,  c.drops_merged,
+                                   c.cells_cleared,     c.clears_deferred,    c.entries_refused,  c.sections_damaged};
     return CCMAP_OK;
   });
 }

@@ -38,6 +38,26 @@
 //    for that receiver (they were committed as sent).
 //  - Cells a receiver cannot place (outside its windows) are dropped and counted; the receiver
 //    keeps no copy of them.
+//  - Free space (map/visibility/free_space.hpp) travels as entries after the cells: a drop-off
+//    the sender's rays proved in a cell it holds no point in (sent once; a drop-off merged from
+//    a team mate is not sent on), and a clear of every cell its lines of sight emptied since the
+//    last export (the stage marks them: FreeSpace::clear_marked). A clear goes in the same delta
+//    as the cell's first gain after it or before it (a cleared cell's sent copy becomes empty,
+//    so that gain is everything since the clear); a clear without room waits with its cell.
+//    The receiver folds a drop-off into its record of an unobserved cell (its bound lowered to
+//    the sender's, moved by the origins' z offset and rounded up, its drop rays raised: both
+//    idempotent); a cell it observed answers with its own points. It applies a clear before the
+//    cells (a gain after a clear is new ground) under this rule: the cell is emptied (with its
+//    sent copy and record) when it holds no point of the receiver's own (everything in it came
+//    from team mates, whose data the sender's lines of sight overruled as its own), or when the
+//    receiver's own lines of sight contradicted it too (its record's evidence >= 1: a frame
+//    since the surface was last confirmed); otherwise the cell stays and its evidence is raised
+//    to free_space_clear_frames - 1, so that one frame of the receiver's own contradicting rays
+//    empties it and a point of its own on the surface (a confirmation) forgets the clear. Limits:
+//    a clear whose cell left the sender's window before the next export is not sent; "own
+//    points" is known from the sent copy and a per-cell flag (a gain exported, or the cell
+//    differing from its sent copy at a merge), so a cell the motion pass rescaled counts as
+//    own (the safe side).
 //  - Exported cells can be limited by a weight floor, by layer and by the buffer: cells whose
 //    gain weighs less than the floor, of layers finer than ExportOptions::finest_layer, or for
 //    which the buffer has no room, stay pending (not sent, not lost; a later export sends their
@@ -50,11 +70,12 @@
 // and stay nested (kMisaligned otherwise). A cell then keeps its mean relative to its centre,
 // and only the heights move by the origins' z offset.
 //
-// Delta format (version 2). Little-endian, field by field (the snapshot's writer and reader),
-// floats as IEEE-754 binary32 bits; sizes in bytes:
+// Delta format (version 3). Little-endian, field by field (the snapshot's writer and reader),
+// floats as IEEE-754 binary32 bits; a core (header, layers, CRC-32) and a free-space section of
+// entries that carry their own checks; sizes in bytes:
 //   header       4  magic "CCMD" (0x43 0x43 0x4D 0x44)
-//                2  format version (kDeltaFormatVersion), 2 reserved 0
-//                4  total size, trailer included
+//                2  format version (kDeltaFormatVersion), 2 free-space entries n (after the core)
+//                4  size of the core, its CRC included (the delta is that plus 10 n bytes)
 //               40  preset fingerprint, as in snapshots (fine kind, layer count, sides, cell bytes)
 //                4  finest cell width (m)
 //   sender       4  rover id, 4 session, 4 sequence (1, 2, ... per session)
@@ -69,19 +90,31 @@
 //                   one (the first: its position), as a LEB128 varint (1 byte below 128), then
 //                   the cell in the snapshot's cell codec (snapshot_write_cell: CCM 40 bytes
 //                   for CcmCell with s_xy, 36 for CcmPaperCell; Kalman and OMG 12 bytes)
-//   trailer      4  CRC-32 (IEEE 802.3 / zlib) of every byte before it
+//   core's CRC   4  CRC-32 (IEEE 802.3 / zlib) of every byte of the core before it
+//   section   10 n  free-space entries, clears first, then drop-offs, coarsest layer first
+//                   (map/visibility/free_space_cell.hpp gives their 10 bytes: position in the
+//                   layer's window above, layer, kind, bound, drop rays, CRC-16 of the entry)
 // Size: 88 + 12 per layer + 4 bytes of frame (152 for CADRE: src/capi/capi.cpp asserts it), and
 // per cell the varint (1 byte for a gap below 128 positions, 2 below 16,384: every gap of a
 // 64 x 64 layer, 3 in a 256 x 256 one) and 40 bytes (CCM, full cell; 36 paper cell) or 12
-// (Kalman, OMG); docs/integration.md gives typical exchanges. Version history: 1 carried the
-// 9-float CCM cell only; 2 (the cell kinds, as snapshot version 2) is refused by a version-1
-// reader and refuses version 1 with kVersionMismatch.
+// (Kalman, OMG), and 10 per free-space entry (at most kMaxDeltaEntries); docs/integration.md
+// gives typical exchanges. Version history: 1 carried the 9-float CCM cell only; 2 the cell
+// kinds (as snapshot version 2); 3 the free-space section in the header's reserved field and
+// after the core. A version-2 delta merges as a version-3 one without entries (its size field is
+// the whole delta: bytes beyond it are kCorrupt); version 1 and versions after 3 are refused with
+// kVersionMismatch; a version-2 reader refuses version 3 with kVersionMismatch.
 //
 // Statuses of merge_delta, all before anything is written (on any refusal the map and the sent
-// copy are bitwise unchanged; the refusal is counted in counters()):
+// copy are bitwise unchanged; the refusal is counted in counters()). They judge the core; the
+// free-space section never refuses a delta whose core merges: each entry is checked alone (its
+// CRC-16, its fields, its layer and position) and a bad one is refused and counted
+// (MergeReport::entries_refused, free_space_status kCorrupt, counters().sections_damaged), as
+// are entries the header announces but the bytes do not hold, while the cells and every good
+// entry merge; bytes beyond the announced entries make the section damaged (kCorrupt status in
+// the report) and are ignored:
 //   kNotInitialised   exchange not initialised, or its stack re-initialised since (init again)
 //   kInvalidArgument  data == nullptr
-//   kCorrupt          truncated, trailing bytes, wrong magic, CRC mismatch, or content no export
+//   kCorrupt          a core truncated or with trailing bytes, wrong magic, CRC mismatch, or content no export
 //                     writes (an odd window centre, a cell position outside the window, a
 //                     non-finite or negative statistic, a zero weight, a mean outside its cell);
 //                     or the stack's own state failed its integrity check (Stack::state_status:
@@ -490,6 +523,7 @@ struct ExchangeAccess {
                                                      kDeltaTrailerBytes <= capacity, 0U);
     const StackParams& params = stack.params_;
     std::uint32_t clears = 0U;
+    const bool marked = stack.free_space_.any_clear_marked();  // most exports: no cell cleared since the last
     for (int layer = kLayers - 1; layer >= 0; --layer) {
       const bool skipped = layer < options.finest_layer;
       const float width = stack.layers_.widths[layer];
@@ -515,7 +549,8 @@ struct ExchangeAccess {
           const std::size_t entries_reserved = static_cast<std::size_t>(clears) * kFreeSpaceEntryBytes;
           if constexpr (kFreeSpace) {
             std::uint8_t& flags = sent.flags[first + slot];
-            if ((flags & kClearingBit) == 0U && stack.free_space_.clear_marked(static_cast<std::uint32_t>(first + slot))) {
+            if (marked && (flags & kClearingBit) == 0U &&
+                stack.free_space_.clear_marked(static_cast<std::uint32_t>(first + slot))) {
               if (clears >= kMaxDeltaEntries ||
                   w.position() + reserve + entries_reserved + kFreeSpaceEntryBytes > capacity) {
                 ++report.cells_pending;  // the clear does not fit: the cell waits with it
@@ -561,7 +596,7 @@ struct ExchangeAccess {
   /// point in (intact records; a drop-off merged from a team mate is not sent on), as many as
   /// fit (the rest wait: drops_pending). Coarsest layer first. Returns the entries written.
   static std::uint32_t write_section(StackType& stack, SentCells& sent, SnapshotWriter& w, std::size_t capacity,
-                                     ExportReport& report) noexcept {
+                                     std::uint32_t clears, ExportReport& report) noexcept {
     std::uint32_t entries = 0U;
     if constexpr (kFreeSpace) {
       std::uint8_t entry[kFreeSpaceEntryBytes] = {};
@@ -572,44 +607,62 @@ struct ExchangeAccess {
         }
         ++entries;
       };
-      for (int pass = 0; pass < 2; ++pass) {  // 0: the reserved clears, 1: drop-offs
+      // Storage order (slot by slot): the global index is computed only for an entry written.
+      for (int pass = clears > 0U ? 0 : 1; pass < 2; ++pass) {  // 0: the reserved clears, 1: drop-offs
         for (int layer = kLayers - 1; layer >= 0; --layer) {
           const std::size_t first = record_offset(layer);
-          const RingGrid<FreeSpaceCell>& records = *stack.free_space_.records(layer);
+          const RingGrid<FreeSpaceCell>* record_grid = stack.free_space_.records(layer);
+          if (record_grid == nullptr) {
+            continue;  // not reached: every layer has its records
+          }
+          const FreeSpaceCell* records = record_grid->storage();
           with_layer(stack, &sent, layer, [&](auto& grid, auto*) {
-            using Cell = std::remove_reference_t<decltype(grid.cell_unchecked(CellIndex{}))>;
             const std::int32_t side = grid.side();
             const CellIndex min = grid.window_min();
-            grid.for_each([&](CellIndex index, const Cell& cell) {
-              const std::size_t slot = grid::buffer_offset(index, side);
+            const auto* cells = grid.storage();
+            const auto mask = static_cast<std::uint32_t>(side - 1);
+            const auto slots = static_cast<std::uint32_t>(side) * static_cast<std::uint32_t>(side);
+            const auto index_of = [&](std::uint32_t slot) {
+              const std::uint32_t dx = ((slot & mask) - static_cast<std::uint32_t>(min.x)) & mask;
+              const std::uint32_t dy = ((slot / static_cast<std::uint32_t>(side)) - static_cast<std::uint32_t>(min.y)) & mask;
+              return CellIndex{min.x + static_cast<std::int32_t>(dx), min.y + static_cast<std::int32_t>(dy)};
+            };
+            const auto position_of = [&](CellIndex index) {
+              return static_cast<std::uint32_t>((index.y - min.y) * side + (index.x - min.x));
+            };
+            for (std::uint32_t slot = 0; slot < slots; ++slot) {
               std::uint8_t& flags = sent.flags[first + slot];
-              const auto position = static_cast<std::uint32_t>((index.y - min.y) * side + (index.x - min.x));
               if (pass == 0) {
                 if ((flags & kClearingBit) != 0U) {
-                  put(FreeSpaceEntry{FreeSpaceEntryKind::kCleared, static_cast<std::uint8_t>(layer), position, 0U, 0U});
+                  const CellIndex index = index_of(slot);
+                  put(FreeSpaceEntry{FreeSpaceEntryKind::kCleared, static_cast<std::uint8_t>(layer), position_of(index),
+                                     0U, 0U});
                   flags = static_cast<std::uint8_t>(flags & ~kClearingBit);
                   stack.free_space_.drop_clear_mark(static_cast<std::uint32_t>(first + slot));
                   ++report.clears_written;
                 }
-                return;
+                continue;
               }
-              if (!is_drop(records.cell_unchecked(index))) {
-                flags = static_cast<std::uint8_t>(flags & ~kDropSentBit);  // reset since (cleared, scrubbed)
-                return;
+              if (!is_drop(records[slot])) {
+                continue;  // (the flag of a record that was reset went with it: a clear or a move resets it)
               }
+              const auto& cell = cells[slot];
+              if ((flags & kDropSentBit) != 0U || cell.weight > 0.0F || distrust_mark(cell)) {
+                continue;  // sent, or observed here, or distrusted
+              }
+              const CellIndex index = index_of(slot);
               FreeSpaceCell rec{};
-              if ((flags & kDropSentBit) != 0U || cell.weight > 0.0F || distrust_mark(cell) ||
-                  !stack.free_space_.record_at(layer, index, &rec)) {
-                return;  // sent, observed here, distrusted, or an upset's record
+              if (!stack.free_space_.record_at(layer, index, &rec)) {
+                continue;  // an upset's record: the scrub resets it
               }
               if (entries >= kMaxDeltaEntries || w.position() + kFreeSpaceEntryBytes > capacity) {
                 ++report.drops_pending;
-                return;
+                continue;
               }
-              put(drop_entry_of(rec, layer, position));
+              put(drop_entry_of(rec, layer, position_of(index)));
               flags |= kDropSentBit;
               ++report.drops_written;
-            });
+            }
           });
         }
       }
@@ -618,6 +671,7 @@ struct ExchangeAccess {
       (void)sent;
       (void)w;
       (void)capacity;
+      (void)clears;
       (void)report;
     }
     return entries;
@@ -983,10 +1037,10 @@ class MapExchange {
                                      frames_at_export_, stack_->accepted_frames(), params_.origin_cells,
                                      params_.origin_z_m, 0U, 0U};
     detail::delta_write_header(w, detail::SnapshotAccess<Config>::fingerprint(), sender);
-    (void)Access::write_layers(*stack_, sent_, w, capacity, options, r);
+    const std::uint32_t clears = Access::write_layers(*stack_, sent_, w, capacity, options, r);
     const std::size_t core_end = w.position();
     w.u32(0U);  // the core's CRC, written by delta_finish
-    const std::uint32_t entries = Access::write_section(*stack_, sent_, w, capacity, r);
+    const std::uint32_t entries = Access::write_section(*stack_, sent_, w, capacity, clears, r);
     detail::delta_finish(w, core_end, entries);
     sequence_ = r.sequence;
     frames_at_export_ = stack_->accepted_frames();
@@ -1004,7 +1058,8 @@ class MapExchange {
   }
 
   /// Folds another rover's delta into the map (and into the sent copies, so that it is never
-  /// sent on). All-or-nothing: see the statuses in the file comment. report may be nullptr.
+  /// sent on). The core all-or-nothing, the free-space entries one by one: see the statuses in
+  /// the file comment. report may be nullptr.
   [[nodiscard]] Status merge_delta(const std::uint8_t* data, std::size_t size, MergeReport* report) noexcept {
     MergeReport r{};
     const Status status = merge_delta_impl(data, size, r);

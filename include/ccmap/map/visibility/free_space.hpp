@@ -131,6 +131,7 @@ class FreeSpace<Config, false> {
   [[nodiscard]] std::uint32_t scrub(std::uint32_t) noexcept { return 0U; }
   void hash_bindings(StateHasher&) const noexcept {}
   [[nodiscard]] bool clear_marked(std::uint32_t) const noexcept { return false; }
+  [[nodiscard]] bool any_clear_marked() const noexcept { return false; }
   void drop_clear_mark(std::uint32_t) noexcept {}
   void clear_all_marks() noexcept {}
   [[nodiscard]] bool record_at(int, CellIndex, FreeSpaceCell* out) const noexcept {
@@ -318,6 +319,14 @@ class FreeSpace<Config, true> {
     }
     const std::uint32_t bit = 1U << (record % 32U);
     return (clear_marks_[0][record / 32U] & clear_marks_[1][record / 32U] & bit) != 0U;
+  }
+  /// True if any record is marked (clear_marked): an export with none skips the per-cell test.
+  [[nodiscard]] bool any_clear_marked() const noexcept {
+    std::uint32_t any = 0U;
+    for (std::size_t i = 0; i < (kRecordCount + 31U) / 32U; ++i) {
+      any |= clear_marks_[0][i] & clear_marks_[1][i];
+    }
+    return any != 0U;
   }
   /// Drops the mark of one record (the exchange sent its clear, or the cell left the window).
   void drop_clear_mark(std::uint32_t record) noexcept {
