@@ -38,7 +38,8 @@
 //    for that receiver (they were committed as sent).
 //  - Cells a receiver cannot place (outside its windows) are dropped and counted; the receiver
 //    keeps no copy of them.
-//  - Free space (map/visibility/free_space.hpp) travels as entries after the cells: a drop-off
+//  - Free space (map/visibility/free_space.hpp) travels as entries after the cells (of the
+//    layers written: ExportOptions::finest_layer holds back a finer layer's entries too): a drop-off
 //    the sender's rays proved in a cell it holds no point in (sent once; a drop-off merged from
 //    a team mate is not sent on), and a clear of every cell its lines of sight emptied since the
 //    last export (the stage marks them: FreeSpace::clear_marked). A clear goes in the same delta
@@ -549,7 +550,7 @@ struct ExchangeAccess {
           const std::size_t entries_reserved = static_cast<std::size_t>(clears) * kFreeSpaceEntryBytes;
           if constexpr (kFreeSpace) {
             std::uint8_t& flags = sent.flags[first + slot];
-            if (marked && (flags & kClearingBit) == 0U &&
+            if (marked && !skipped && (flags & kClearingBit) == 0U &&
                 stack.free_space_.clear_marked(static_cast<std::uint32_t>(first + slot))) {
               if (clears >= kMaxDeltaEntries ||
                   w.position() + reserve + entries_reserved + kFreeSpaceEntryBytes > capacity) {
@@ -596,7 +597,7 @@ struct ExchangeAccess {
   /// point in (intact records; a drop-off merged from a team mate is not sent on), as many as
   /// fit (the rest wait: drops_pending). Coarsest layer first. Returns the entries written.
   static std::uint32_t write_section(StackType& stack, SentCells& sent, SnapshotWriter& w, std::size_t capacity,
-                                     std::uint32_t clears, ExportReport& report) noexcept {
+                                     std::uint32_t clears, std::int32_t finest_layer, ExportReport& report) noexcept {
     std::uint32_t entries = 0U;
     if constexpr (kFreeSpace) {
       std::uint8_t entry[kFreeSpaceEntryBytes] = {};
@@ -609,7 +610,7 @@ struct ExchangeAccess {
       };
       // Storage order (slot by slot): the global index is computed only for an entry written.
       for (int pass = clears > 0U ? 0 : 1; pass < 2; ++pass) {  // 0: the reserved clears, 1: drop-offs
-        for (int layer = kLayers - 1; layer >= 0; --layer) {
+        for (int layer = kLayers - 1; layer >= finest_layer; --layer) {
           const std::size_t first = record_offset(layer);
           const RingGrid<FreeSpaceCell>* record_grid = stack.free_space_.records(layer);
           if (record_grid == nullptr) {
@@ -672,6 +673,7 @@ struct ExchangeAccess {
       (void)w;
       (void)capacity;
       (void)clears;
+      (void)finest_layer;
       (void)report;
     }
     return entries;
@@ -1040,7 +1042,7 @@ class MapExchange {
     const std::uint32_t clears = Access::write_layers(*stack_, sent_, w, capacity, options, r);
     const std::size_t core_end = w.position();
     w.u32(0U);  // the core's CRC, written by delta_finish
-    const std::uint32_t entries = Access::write_section(*stack_, sent_, w, capacity, clears, r);
+    const std::uint32_t entries = Access::write_section(*stack_, sent_, w, capacity, clears, options.finest_layer, r);
     detail::delta_finish(w, core_end, entries);
     sequence_ = r.sequence;
     frames_at_export_ = stack_->accepted_frames();
