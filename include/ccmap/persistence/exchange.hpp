@@ -514,17 +514,46 @@ struct ExchangeAccess {
   /// hook and writes nothing (no cell counts as sent).
   ///
   /// A cell the free-space stage emptied since the last export (FreeSpace::clear_marked) sends a
-  /// clear in the free-space section, before or with its first gain after it: if the section
-  /// has room for the clear (reserved here, written by write_section), its sent copy becomes
-  /// empty (its gain is then all its points since) and its flags are reset; else the cell waits.
-  /// Returns the clears reserved.
+  /// clear in the free-space section, before or with its first gain after it: clears are
+  /// reserved first, as many as the buffer holds beside the layer headers (written by
+  /// write_section); a reserved one empties the cell's sent copy (its gain is then all its points
+  /// since) and resets its flags; a cell whose clear did not fit waits with it. Returns the
+  /// clears reserved.
   static std::uint32_t write_layers(StackType& stack, SentCells& sent, SnapshotWriter& w, std::size_t capacity,
                                     const ExportOptions& options, ExportReport& report) noexcept {
     CCMAP_ASSERT_OR_RETURN(settled(stack) && w.position() + static_cast<std::size_t>(kLayers) * kDeltaLayerHeaderBytes +
                                                      kDeltaTrailerBytes <= capacity, 0U);
     const StackParams& params = stack.params_;
+    // The clears first, as many as the buffer holds beside the layer headers (10 bytes each):
+    // those reserved empty their sent copies; a cell whose clear did not fit waits with it.
     std::uint32_t clears = 0U;
-    const bool marked = stack.free_space_.any_clear_marked();  // most exports: no cell cleared since the last
+    std::uint32_t left_out = 0U;
+    if constexpr (kFreeSpace) {
+      const std::size_t fixed = w.position() + static_cast<std::size_t>(kLayers) * kDeltaLayerHeaderBytes + kDeltaTrailerBytes;
+      const std::size_t room = (capacity - fixed) / kFreeSpaceEntryBytes;
+      const std::size_t most = room < kMaxDeltaEntries ? room : kMaxDeltaEntries;
+      stack.free_space_.for_each_clear_mark([&](std::uint32_t record) {
+        int layer = kLayers - 1;
+        while (layer > 0 && record < record_offset(layer)) {
+          --layer;
+        }
+        if (layer < options.finest_layer) {
+          return;  // not written: the mark waits with the cell
+        }
+        if (clears >= most) {
+          ++left_out;
+          return;
+        }
+        const std::size_t slot = record - record_offset(layer);
+        with_layer(stack, &sent, layer, [&](auto&, auto* copies) {
+          using Cell = std::remove_reference_t<decltype(*copies)>;
+          copies[slot] = Cell{};
+        });
+        sent.flags[record] = kClearingBit;  // own and drop-sent reset: the cell starts again
+        ++clears;
+      });
+    }
+    const std::size_t entries_reserved = static_cast<std::size_t>(clears) * kFreeSpaceEntryBytes;
     for (int layer = kLayers - 1; layer >= 0; --layer) {
       const bool skipped = layer < options.finest_layer;
       const float width = stack.layers_.widths[layer];
@@ -547,19 +576,11 @@ struct ExchangeAccess {
           }
           const std::size_t slot = grid::buffer_offset(index, side);
           Cell& copy = copies[slot];
-          const std::size_t entries_reserved = static_cast<std::size_t>(clears) * kFreeSpaceEntryBytes;
           if constexpr (kFreeSpace) {
-            std::uint8_t& flags = sent.flags[first + slot];
-            if (marked && !skipped && (flags & kClearingBit) == 0U &&
+            if (left_out > 0U && (sent.flags[first + slot] & kClearingBit) == 0U &&
                 stack.free_space_.clear_marked(static_cast<std::uint32_t>(first + slot))) {
-              if (clears >= kMaxDeltaEntries ||
-                  w.position() + reserve + entries_reserved + kFreeSpaceEntryBytes > capacity) {
-                ++report.cells_pending;  // the clear does not fit: the cell waits with it
-                return;
-              }
-              ++clears;
-              flags = kClearingBit;  // own and drop-sent reset: the cell starts again
-              copy = Cell{};
+              ++report.cells_pending;  // its clear did not fit: the cell waits with it
+              return;
             }
           }
           Cell gain{};
@@ -571,7 +592,7 @@ struct ExchangeAccess {
           const auto skip = static_cast<std::uint32_t>(position - previous - 1);
           const std::size_t bytes = varint_bytes(skip) + sizeof(Cell);
           if (skipped || exchange_weight(gain) < options.weight_floor ||
-              w.position() + bytes + reserve + static_cast<std::size_t>(clears) * kFreeSpaceEntryBytes > capacity) {
+              w.position() + bytes + reserve + entries_reserved > capacity) {
             ++report.cells_pending;
             return;
           }

@@ -131,7 +131,8 @@ class FreeSpace<Config, false> {
   [[nodiscard]] std::uint32_t scrub(std::uint32_t) noexcept { return 0U; }
   void hash_bindings(StateHasher&) const noexcept {}
   [[nodiscard]] bool clear_marked(std::uint32_t) const noexcept { return false; }
-  [[nodiscard]] bool any_clear_marked() const noexcept { return false; }
+  template <typename Fn>
+  void for_each_clear_mark(Fn&&) const noexcept {}
   void drop_clear_mark(std::uint32_t) noexcept {}
   void clear_all_marks() noexcept {}
   [[nodiscard]] bool record_at(int, CellIndex, FreeSpaceCell* out) const noexcept {
@@ -320,13 +321,20 @@ class FreeSpace<Config, true> {
     const std::uint32_t bit = 1U << (record % 32U);
     return (clear_marks_[0][record / 32U] & clear_marks_[1][record / 32U] & bit) != 0U;
   }
-  /// True if any record is marked (clear_marked): an export with none skips the per-cell test.
-  [[nodiscard]] bool any_clear_marked() const noexcept {
-    std::uint32_t any = 0U;
-    for (std::size_t i = 0; i < (kRecordCount + 31U) / 32U; ++i) {
-      any |= clear_marks_[0][i] & clear_marks_[1][i];
+  /// Calls fn(record) for every marked record (clear_marked), in record order.
+  template <typename Fn>
+  void for_each_clear_mark(Fn&& fn) const noexcept {
+    for (std::uint32_t i = 0; i < (kRecordCount + 31U) / 32U; ++i) {
+      std::uint32_t word = clear_marks_[0][i] & clear_marks_[1][i];
+      while (word != 0U) {
+        const auto bit = static_cast<std::uint32_t>(__builtin_ctz(word));
+        const std::uint32_t record = 32U * i + bit;
+        if (record < kRecordCount) {
+          fn(record);
+        }
+        word &= word - 1U;
+      }
     }
-    return any != 0U;
   }
   /// Drops the mark of one record (the exchange sent its clear, or the cell left the window).
   void drop_clear_mark(std::uint32_t record) noexcept {
