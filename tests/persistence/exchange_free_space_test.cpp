@@ -10,6 +10,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "ccmap/persistence/exchange.hpp"
@@ -207,17 +208,27 @@ int count_drop_agreement(const Map& a, const Map& b, float shift_m, float dz_m, 
   return drops;
 }
 
-TEST(ExchangeFreeSpace, ATeamMateThatNeverLookedThereLearnsTheDitchCellByCell) {
-  Rover a(1U);
-  see_ditch(a);
+/// A rover that saw the ditch, and its first delta.
+struct DitchDelta {
+  Rover a{1U};
   ExportReport sent{};
-  const Bytes delta = a.export_delta(&sent);
-  EXPECT_GT(sent.drops_written, 0U);
+  Bytes delta;
   DeltaInfo info{};
-  ASSERT_EQ(Exchange::peek_delta(delta.data(), delta.size(), &info), Status::kOk);
-  EXPECT_EQ(info.free_space_entries, sent.drops_written + sent.clears_written);
-  // B shares the origin; B2 lies 16 finest cells (0.64 m, one coarsest cell) east and 0.25 m
-  // higher in the team frame: the same drop-offs, 0.64 m west in its map, 0.25 m higher.
+  DitchDelta() {
+    see_ditch(a);
+    delta = a.export_delta(&sent);
+    EXPECT_EQ(Exchange::peek_delta(delta.data(), delta.size(), &info), Status::kOk);
+  }
+};
+
+TEST(ExchangeFreeSpace, ATeamMateThatNeverLookedThereLearnsTheDitchCellByCell) {
+  DitchDelta d;
+  Rover& a = d.a;
+  const Bytes& delta = d.delta;
+  EXPECT_GT(d.sent.drops_written, 0U);
+  EXPECT_EQ(d.info.free_space_entries, d.sent.drops_written + d.sent.clears_written);
+  // B shares the origin; B2's origin lies 16 finest cells (0.64 m, one coarsest cell) east and
+  // 0.25 m lower in the team frame: the same drop-offs, 0.64 m west and 0.25 m higher in its map.
   for (const bool offset : {false, true}) {
     Rover b(2U, CellIndex{offset ? 16 : 0, 0}, offset ? -0.25F : 0.0F);
     const MergeReport r = b.merge(delta);
@@ -335,90 +346,76 @@ TEST(ExchangeFreeSpace, AGhostATeamMateClearedIsClearedWhereOnlyTeamMatesHadSeen
   }
 }
 
-TEST(ExchangeFreeSpace, AReceiversOwnObservationsSurviveATeamMatesClearUntilItsOwnRaysAgree) {
-  // A and B both see the box; then A (alone) sees it gone and clears it. B still holds points of
-  // its own there: A's clears do not empty B's cells (B's weights only grow by A's new ground),
-  // they raise B's evidence; B's box stays while B still sees it, and the first frame in which B's
-  // own lines of sight pass through the empty place clears it, where a twin of B without A's
-  // deltas needs the whole rule (three frames).
-  Rover a(1U);
-  Rover b(2U);
-  Rover twin(3U);
-  const AnalyticScene empty;
-  for (int k = 0; k < 4; ++k) {
-    a.see(box_scene(), static_cast<std::uint64_t>(k) + 1U);
-    b.see(box_scene(), static_cast<std::uint64_t>(k) + 11U);
-    twin.see(box_scene(), static_cast<std::uint64_t>(k) + 11U);
-  }
-  b.merge(a.export_delta());
+/// A and B both saw the box (B's twin the same frames as B, and no delta); B merged A's delta.
+/// Then the box goes for A alone: A sees the empty place for 8 frames, and B merges A's delta
+/// after each (the weights of B's cells over the box are checked never to drop).
+struct BoxSeenByBoth {
+  Rover a{1U}, b{2U}, twin{3U};
   std::uint32_t sent_clears = 0, cleared = 0, deferred = 0;
-  for (int k = 0; k < 8; ++k) {
-    a.see(empty, static_cast<std::uint64_t>(k) + 100U);
-    ExportReport e{};
-    const std::vector<float> before = weights_over_box(*b.map);
-    const MergeReport m = b.merge(a.export_delta(&e));
-    sent_clears += e.clears_written;
-    cleared += m.cells_cleared;
-    deferred += m.clears_deferred;
-    const std::vector<float> after = weights_over_box(*b.map);
-    for (std::size_t i = 0; i < before.size(); ++i) {
-      ASSERT_GE(after[i], before[i]) << "a team mate's clear took points of B's own (cell " << i << ")";
+  BoxSeenByBoth() {
+    for (int k = 0; k < 4; ++k) {
+      a.see(box_scene(), static_cast<std::uint64_t>(k) + 1U);
+      b.see(box_scene(), static_cast<std::uint64_t>(k) + 11U);
+      twin.see(box_scene(), static_cast<std::uint64_t>(k) + 11U);
+    }
+    b.merge(a.export_delta());
+    for (int k = 0; k < 8; ++k) {
+      a.see(AnalyticScene{}, static_cast<std::uint64_t>(k) + 100U);
+      ExportReport e{};
+      const std::vector<float> before = weights_over_box(*b.map);
+      const MergeReport m = b.merge(a.export_delta(&e));
+      sent_clears += e.clears_written;
+      cleared += m.cells_cleared;
+      deferred += m.clears_deferred;
+      const std::vector<float> after = weights_over_box(*b.map);
+      for (std::size_t i = 0; i < before.size(); ++i) {
+        EXPECT_GE(after[i], before[i]) << "a team mate's clear took points of B's own (cell " << i << ")";
+      }
     }
   }
-  ASSERT_GT(sent_clears, 0U);
-  EXPECT_EQ(cleared, 0U) << "B's own observations were emptied by a team mate's record alone";
-  EXPECT_GT(deferred, 0U);
-  EXPECT_TRUE(any_obstacle(*b.map)) << "B lost its own box to a team mate's clears";
-  // B goes on seeing the box: its points confirm it, it stays.
-  for (int k = 0; k < 3; ++k) {
-    b.see(box_scene(), static_cast<std::uint64_t>(k) + 200U);
+  /// B and its twin see the empty place for one frame: the cells each cleared.
+  std::pair<std::uint32_t, std::uint32_t> one_empty_frame() {
+    return {b.see(AnalyticScene{}, 300U).cleared_cells, twin.see(AnalyticScene{}, 300U).cleared_cells};
   }
-  EXPECT_TRUE(any_obstacle(*b.map)) << "B's box vanished while B saw it";
-  // Now B's place empties too. Its twin (no deltas) saw the same frames.
+};
+
+TEST(ExchangeFreeSpace, AReceiversOwnObservationsSurviveATeamMatesClearWithoutItsOwnEvidence) {
+  // B still holds points of its own over the box: A's clears do not empty B's cells (B's weights
+  // only grow, by A's new ground), they raise B's evidence; B's box stays while B sees it, and its
+  // confirmations then forget A's clears (one empty frame clears nothing, as for its twin).
+  BoxSeenByBoth t;
+  ASSERT_GT(t.sent_clears, 0U);
+  EXPECT_EQ(t.cleared, 0U) << "B's own observations were emptied by a team mate's record alone";
+  EXPECT_GT(t.deferred, 0U);
+  EXPECT_TRUE(any_obstacle(*t.b.map)) << "B lost its own box to a team mate's clears";
   for (int k = 0; k < 3; ++k) {
-    twin.see(box_scene(), static_cast<std::uint64_t>(k) + 200U);
+    t.b.see(box_scene(), static_cast<std::uint64_t>(k) + 200U);
+    t.twin.see(box_scene(), static_cast<std::uint64_t>(k) + 200U);
   }
-  const FrameCounters cb = b.see(empty, 300U);
-  const FrameCounters ct = twin.see(empty, 300U);
-  EXPECT_EQ(ct.cleared_cells, 0U) << "one frame cleared the twin's box: the evidence rule asks for more";
-  // B's confirmations while it saw the box forgot A's clears: B, too, needs its own evidence.
-  EXPECT_EQ(cb.cleared_cells, 0U) << "A's clears outlived B's own confirmations of the box";
+  EXPECT_TRUE(any_obstacle(*t.b.map)) << "B's box vanished while B saw it";
+  const auto [b_cleared, twin_cleared] = t.one_empty_frame();
+  EXPECT_EQ(twin_cleared, 0U) << "one frame cleared the twin's box: the evidence rule asks for more";
+  EXPECT_EQ(b_cleared, 0U) << "A's clears outlived B's own confirmations of the box";
 }
 
 TEST(ExchangeFreeSpace, ATeamMatesClearPlusOneFrameOfTheReceiversOwnRaysEmptiesTheCell) {
-  Rover a(1U);
-  Rover b(2U);
-  Rover twin(3U);
-  const AnalyticScene empty;
-  for (int k = 0; k < 4; ++k) {
-    a.see(box_scene(), static_cast<std::uint64_t>(k) + 1U);
-    b.see(box_scene(), static_cast<std::uint64_t>(k) + 11U);
-    twin.see(box_scene(), static_cast<std::uint64_t>(k) + 11U);
-  }
-  b.merge(a.export_delta());
-  std::uint32_t deferred = 0;
-  for (int k = 0; k < 8; ++k) {
-    a.see(empty, static_cast<std::uint64_t>(k) + 100U);
-    deferred += b.merge(a.export_delta()).clears_deferred;
-  }
-  ASSERT_GT(deferred, 0U);
-  const FrameCounters cb = b.see(empty, 300U);
-  const FrameCounters ct = twin.see(empty, 300U);
-  EXPECT_EQ(ct.cleared_cells, 0U) << "one frame of its own cleared the twin's box";
-  EXPECT_GT(cb.cleared_cells, 0U) << "B's first frame of its own evidence, after A's clears, cleared nothing";
+  // The first frame in which B's own lines of sight pass through the empty place clears cells,
+  // where its twin without A's deltas needs the whole rule (three frames).
+  BoxSeenByBoth t;
+  ASSERT_GT(t.deferred, 0U);
+  const auto [b_cleared, twin_cleared] = t.one_empty_frame();
+  EXPECT_EQ(twin_cleared, 0U) << "one frame of its own cleared the twin's box";
+  EXPECT_GT(b_cleared, 0U) << "B's first frame of its own evidence, after A's clears, cleared nothing";
 }
 
 // ---- damaged sections ----
 
 TEST(ExchangeFreeSpace, AFlippedBitInAnEntryIsRefusedAloneAndTheRestMerges) {
-  Rover a(1U);
-  see_ditch(a);
-  ExportReport sent{};
-  const Bytes delta = a.export_delta(&sent);
+  DitchDelta d;
+  const Bytes& delta = d.delta;
+  const ExportReport& sent = d.sent;
   ASSERT_GE(sent.drops_written, 3U);
-  DeltaInfo info{};
-  ASSERT_EQ(Exchange::peek_delta(delta.data(), delta.size(), &info), Status::kOk);
-  const std::size_t section = delta.size() - info.free_space_entries * kEntryBytes;
+  const std::size_t section = delta.size() - d.info.free_space_entries * kEntryBytes;
   // The reference: every drop-off merged from the intact delta.
   Rover clean(2U);
   const MergeReport all = clean.merge(delta);
