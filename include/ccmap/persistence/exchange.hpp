@@ -707,7 +707,8 @@ struct ExchangeAccess {
   /// centres (may be nullptr): the sender's window centre of each layer, as read.
   [[nodiscard]] static Status merge_delta_cells(StackType& stack, SentCells* sent, SnapshotReader& r,
                                                 std::int64_t offset_x, std::int64_t offset_y, float dz_m, bool commit,
-                                                MergeReport& report, CellIndex* centres = nullptr) noexcept {
+                                                MergeReport& report, CellIndex* centres = nullptr,
+                                                bool clears = false) noexcept {
     const StackParams& params = stack.params_;
     Status status = Status::kOk;
     for (int layer = kLayers - 1; layer >= 0 && status == Status::kOk; --layer) {
@@ -750,7 +751,7 @@ struct ExchangeAccess {
           const std::int64_t y = min_y + static_cast<std::int64_t>(position / static_cast<std::uint64_t>(side));
           ++position;
           status = merge_one(stack.layers_, grid, copies, kept, x + (offset_x >> layer), y + (offset_y >> layer),
-                             received, dz_m, params, width, commit, report);
+                             received, dz_m, params, width, commit, report, clears);
           if (status != Status::kOk) {
             return;
           }
@@ -783,11 +784,23 @@ struct ExchangeAccess {
           }
           status = merge_one(stack.layers_, grid, copies, kept, static_cast<std::int64_t>(index.x) + (offset_x >> layer),
                              static_cast<std::int64_t>(index.y) + (offset_y >> layer), cell, dz_m, params, width,
-                             commit, report);
+                             commit, report, false);
         }
       });
     });
     return status;
+  }
+
+  /// True if an entry of the section may be a clear (its kind field, unchecked: a damaged entry
+  /// may only make this true, the safe side).
+  [[nodiscard]] static bool may_clear(const std::uint8_t* section, std::size_t available, std::uint32_t announced) noexcept {
+    const std::size_t present = available / kFreeSpaceEntryBytes;
+    const std::size_t n = present < announced ? present : announced;
+    bool any = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      any = any || (section[i * kFreeSpaceEntryBytes + 3U] >> 4U) == static_cast<std::uint8_t>(FreeSpaceEntryKind::kCleared);
+    }
+    return any;
   }
 
   /// The free-space section of a delta whose core merged checks (pass 1 accepted it): entries
@@ -904,11 +917,12 @@ struct ExchangeAccess {
 
   /// One received cell at this map's global index (x, y) of a layer. A sent copy outside the
   /// layer's KeptWindow counts as empty (what settle() makes it before the commit pass), so the
-  /// validation pass computes exactly what the commit pass writes.
+  /// validation pass computes exactly what the commit pass writes. clears: the delta may empty
+  /// cells before the commit (merge_section), so the validation also merges into an empty cell.
   template <typename Grid, typename Cell>
   [[nodiscard]] static Status merge_one(Layers& layers, Grid& grid, Cell* copies, const KeptWindow& kept, std::int64_t x,
                                         std::int64_t y, const Cell& received, float dz_m, const StackParams& params,
-                                        float width, bool commit, MergeReport& report) noexcept {
+                                        float width, bool commit, MergeReport& report, bool clears) noexcept {
     constexpr std::int64_t kLimit = grid::kMaxCellIndex;
     const bool representable = x >= -kLimit && x <= kLimit && y >= -kLimit && y <= kLimit;
     const CellIndex index{static_cast<std::int32_t>(representable ? x : 0), static_cast<std::int32_t>(representable ? y : 0)};
@@ -923,6 +937,12 @@ struct ExchangeAccess {
     }
     Cell* copy = copies != nullptr ? &copies[grid::buffer_offset(index, grid.side())] : nullptr;
     Cell merged_copy = (copy != nullptr && kept.contains(index)) ? *copy : Cell{};
+    // A team mate's clear (merge_section) may empty the cell and its copy before the commit:
+    // the received cell must merge into an empty one too, so the commit cannot fail after it.
+    Cell alone{};
+    if (clears && !commit && !exchange_merge(alone, received, dz_m, params, width)) {
+      return Status::kOutOfRange;
+    }
     if (copy != nullptr && !exchange_merge(merged_copy, received, dz_m, params, width)) {
       return Status::kOutOfRange;
     }
@@ -1181,7 +1201,10 @@ class MapExchange {
     const float dz = sender.origin_z_m - params_.origin_z_m;
     const std::size_t cells_begin = reader.position();
     CellIndex centres[StackType::kLayerCount]{};
-    status = Access::merge_delta_cells(*stack_, &sent_, reader, offset_x, offset_y, dz, false, r, centres);
+    const std::uint8_t* section = data + sender.core_size;
+    const std::size_t available = size - sender.core_size;
+    const bool clears = Access::may_clear(section, available, sender.entries);
+    status = Access::merge_delta_cells(*stack_, &sent_, reader, offset_x, offset_y, dz, false, r, centres, clears);
     if (status == Status::kOk && (!reader.ok() || reader.position() != sender.core_size - detail::kDeltaTrailerBytes)) {
       status = Status::kCorrupt;
     }
@@ -1190,8 +1213,6 @@ class MapExchange {
     }
     Access::settle(*stack_, sent_);  // after validation: a refused delta changes nothing at all
     // The free-space section: entries checked one by one, a bad one refused alone (MergeReport).
-    const std::uint8_t* section = data + sender.core_size;
-    const std::size_t available = size - sender.core_size;
     Access::merge_section(*stack_, &sent_, 0, section, available, sender.entries, centres, offset_x, offset_y, dz, r);
     reader.seek(cells_begin);
     (void)Access::merge_delta_cells(*stack_, &sent_, reader, offset_x, offset_y, dz, true, r);
