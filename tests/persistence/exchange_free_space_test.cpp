@@ -346,6 +346,38 @@ TEST(ExchangeFreeSpace, AGhostATeamMateClearedIsClearedWhereOnlyTeamMatesHadSeen
   }
 }
 
+TEST(ExchangeFreeSpace, AClearWithoutRoomWaitsWithItsCellAndGoesInALaterDelta) {
+  Rover a(1U);
+  Rover b(2U);
+  for (int k = 0; k < 4; ++k) {
+    a.see(box_scene(), static_cast<std::uint64_t>(k) + 1U);
+  }
+  b.merge(a.export_delta());
+  std::uint32_t cleared_by_a = 0;
+  for (int k = 0; k < 8; ++k) {
+    cleared_by_a += a.see(AnalyticScene{}, static_cast<std::uint64_t>(k) + 100U).cleared_cells;
+  }
+  ASSERT_GT(cleared_by_a, 0U);
+  // Room for the header and the layer headers only: no clear fits, every cleared cell waits.
+  Bytes small(Exchange::min_delta_size() + kEntryBytes - 1U);
+  std::size_t n = 0;
+  ExportReport tight{};
+  ASSERT_EQ(a.exchange->export_delta(small.data(), small.size(), ExportOptions{0.0F, 0}, &n, &tight), Status::kOk);
+  small.resize(n);
+  EXPECT_EQ(tight.clears_written, 0U);
+  EXPECT_EQ(tight.cells_written, 0U);
+  EXPECT_GT(tight.cells_pending, 0U);
+  EXPECT_EQ(b.merge(small).cells_cleared, 0U);
+  EXPECT_TRUE(any_obstacle(*b.map));
+  // The next delta with room carries every clear, and B's copy of the box goes.
+  ExportReport full{};
+  const MergeReport m = b.merge(a.export_delta(&full));
+  EXPECT_GT(full.clears_written, 0U);
+  EXPECT_LE(full.clears_written, cleared_by_a) << "a clear for a cell A never emptied (one mark per cell)";
+  EXPECT_GT(m.cells_cleared, 0U);
+  EXPECT_FALSE(any_obstacle(*b.map));
+}
+
 /// A and B both saw the box (B's twin the same frames as B, and no delta); B merged A's delta.
 /// Then the box goes for A alone: A sees the empty place for 8 frames, and B merges A's delta
 /// after each (the weights of B's cells over the box are checked never to drop).
