@@ -56,9 +56,10 @@
 //    to free_space_clear_frames - 1, so that one frame of the receiver's own contradicting rays
 //    empties it and a point of its own on the surface (a confirmation) forgets the clear. Limits:
 //    a clear whose cell left the sender's window before the next export is not sent; "own
-//    points" is known from the sent copy and a per-cell flag (a gain exported, or the cell
-//    differing from its sent copy at a merge), so a cell the motion pass rescaled counts as
-//    own (the safe side).
+//    points" is known from a per-cell flag (set when a gain of the cell is exported) and from
+//    the cell differing from its sent copy (unsent points), so a cell the motion pass rescaled
+//    counts as own (the safe side). A delta that may hold a clear has each received cell also
+//    merged into an empty one in the validation pass, so the commit after the clears cannot fail.
 //  - Exported cells can be limited by a weight floor, by layer and by the buffer: cells whose
 //    gain weighs less than the floor, of layers finer than ExportOptions::finest_layer, or for
 //    which the buffer has no room, stay pending (not sent, not lost; a later export sends their
