@@ -123,9 +123,9 @@ int32_t ccmap_preset_available(ccmap_preset preset);
  * lists them). The unions give every target's maximum fundamental alignment (16 on
  * x86-64 and aarch64), more than ccmap_storage_align() asks for. */
 #define CCMAP_CADRE_STORAGE_SIZE 868352u          /* 848 KiB */
-#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3342336u    /* 3264 KiB */
-#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3637248u /* 3552 KiB */
-#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1511424u    /* 1476 KiB */
+#define CCMAP_SINGLE_CCM_STORAGE_SIZE 3358720u    /* 3280 KiB */
+#define CCMAP_SINGLE_KALMAN_STORAGE_SIZE 3653632u /* 3568 KiB */
+#define CCMAP_SINGLE_OMG_STORAGE_SIZE 1523712u    /* 1488 KiB */
 #define CCMAP_STORAGE_ALIGN 16u
 
 #define CCMAP_DEFINE_STORAGE_(name, size) \
@@ -838,16 +838,16 @@ ccmap_status ccmap_product_decode(const void* data, size_t size, ccmap_product_h
  * lives in caller storage like the map. Sizes: upper bounds with headroom, exact figures from
  * ccmap_exchange_storage_size(). */
 #define CCMAP_CADRE_EXCHANGE_STORAGE_SIZE 475136u          /* 464 KiB */
-#define CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE 2686976u    /* 2624 KiB */
-#define CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE 802816u  /* 784 KiB */
-#define CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE 802816u     /* 784 KiB */
+#define CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE 2703360u    /* 2640 KiB */
+#define CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE 868352u  /* 848 KiB */
+#define CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE 868352u     /* 848 KiB */
 CCMAP_DEFINE_STORAGE_(ccmap_cadre_exchange_storage, CCMAP_CADRE_EXCHANGE_STORAGE_SIZE);
 CCMAP_DEFINE_STORAGE_(ccmap_single_ccm_exchange_storage, CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE);
 CCMAP_DEFINE_STORAGE_(ccmap_single_kalman_exchange_storage, CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE);
 CCMAP_DEFINE_STORAGE_(ccmap_single_omg_exchange_storage, CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE);
 
 /* Largest delta of a preset (every cell) and the smallest (no cell); 0 for a bad preset. */
-#define CCMAP_CADRE_DELTA_MAX_SIZE 473240u
+#define CCMAP_CADRE_DELTA_MAX_SIZE 616600u
 size_t ccmap_delta_max_size(ccmap_preset preset);
 size_t ccmap_delta_min_size(ccmap_preset preset);
 
@@ -881,6 +881,9 @@ typedef struct ccmap_export_report {
   uint32_t cells_saturated;  /* of those, sent whole: weight limit or variance floor engaged */
   uint32_t cells_pending;    /* changed, not written (below the floor or no room): sent later */
   uint64_t bytes;
+  uint32_t drops_written;    /* free-space entries (delta format 3): drop-offs */
+  uint32_t clears_written;   /* free-space entries: cells this map's lines of sight emptied */
+  uint32_t drops_pending;    /* drop-offs not written for want of room: sent later */
 } ccmap_export_report;
 
 /* Writes a delta of what the map gained since the last export (coarsest layer first, as many
@@ -899,6 +902,13 @@ typedef struct ccmap_merge_report {
   uint32_t cells_merged;
   uint32_t cells_outside;  /* outside this map's windows: dropped */
   uint32_t deltas_missed;  /* sequence numbers of this sender lost before this delta */
+  /* The delta's free-space section (exchange.hpp gives the receiver's rule for clears): */
+  uint32_t drops_merged;     /* drop-offs folded into this map's records */
+  uint32_t cells_cleared;    /* cells a team mate's clear emptied here */
+  uint32_t clears_deferred;  /* clears of cells holding this map's own points: evidence raised only */
+  uint32_t entries_outside;  /* outside this map's windows: dropped */
+  uint32_t entries_refused;  /* failed their check or a field check, or missing (truncated) */
+  ccmap_status free_space_status; /* CCMAP_OK, or CCMAP_CORRUPT for a damaged section (good entries merged) */
 } ccmap_merge_report;
 
 /* Folds another rover's delta into the map, all-or-nothing: CCMAP_NOT_INITIALISED (as for
@@ -936,6 +946,13 @@ typedef struct ccmap_exchange_counters {
   uint64_t cells_exported;
   uint64_t cells_merged;
   uint64_t cells_outside;
+  uint64_t drops_exported;
+  uint64_t clears_exported;
+  uint64_t drops_merged;
+  uint64_t cells_cleared;
+  uint64_t clears_deferred;
+  uint64_t entries_refused;
+  uint32_t sections_damaged; /* merged deltas whose free-space section was damaged */
 } ccmap_exchange_counters;
 /* CCMAP_INVALID_ARGUMENT: NULL out, a bad handle. An exchange never bound answers zeros. */
 ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_exchange_counters* out);

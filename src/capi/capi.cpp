@@ -207,13 +207,13 @@ static_assert(MapExchange<CadreConfig>::max_delta_size() == CCMAP_CADRE_DELTA_MA
 // The smallest CADRE delta, as persistence/exchange.hpp documents it (header, five layer headers, CRC).
 static_assert(MapExchange<CadreConfig>::min_delta_size() == 152U, "the empty CADRE delta is documented as 152 bytes");
 // The KiB figures beside the storage constants in ccmap.h.
-static_assert(CCMAP_CADRE_STORAGE_SIZE == 848U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 3264U * 1024U &&
-                  CCMAP_SINGLE_KALMAN_STORAGE_SIZE == 3552U * 1024U && CCMAP_SINGLE_OMG_STORAGE_SIZE == 1476U * 1024U,
+static_assert(CCMAP_CADRE_STORAGE_SIZE == 848U * 1024U && CCMAP_SINGLE_CCM_STORAGE_SIZE == 3280U * 1024U &&
+                  CCMAP_SINGLE_KALMAN_STORAGE_SIZE == 3568U * 1024U && CCMAP_SINGLE_OMG_STORAGE_SIZE == 1488U * 1024U,
               "ccmap.h: a map storage constant and its KiB comment disagree");
 static_assert(CCMAP_CADRE_EXCHANGE_STORAGE_SIZE == 464U * 1024U &&
-                  CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE == 2624U * 1024U &&
-                  CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE == 784U * 1024U &&
-                  CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE == 784U * 1024U,
+                  CCMAP_SINGLE_CCM_EXCHANGE_STORAGE_SIZE == 2640U * 1024U &&
+                  CCMAP_SINGLE_KALMAN_EXCHANGE_STORAGE_SIZE == 848U * 1024U &&
+                  CCMAP_SINGLE_OMG_EXCHANGE_STORAGE_SIZE == 848U * 1024U,
               "ccmap.h: an exchange storage constant and its KiB comment disagree");
 
 ccmap_status to_c(Status status) noexcept { return static_cast<ccmap_status>(status); }
@@ -434,7 +434,10 @@ ccmap_status place_handle(void* storage, std::size_t size, ccmap_preset preset, 
 
 void merge_report_to_c(const MergeReport& r, ccmap_merge_report* out) noexcept {
   if (out != nullptr) {
-    *out = ccmap_merge_report{r.sender_id, r.sequence, r.cells_merged, r.cells_outside, r.deltas_missed};
+    *out = ccmap_merge_report{r.sender_id,     r.sequence,        r.cells_merged,
+                              r.cells_outside, r.deltas_missed,   r.drops_merged,
+                              r.cells_cleared, r.clears_deferred, r.entries_outside,
+                              r.entries_refused, to_c(r.free_space_status)};
   }
 }
 
@@ -1022,8 +1025,10 @@ ccmap_status ccmap_exchange_export(ccmap_exchange* exchange, uint8_t* buffer, si
     ccmap::ExportReport r{};
     const Status status = ex.export_delta(buffer, capacity, ccmap::ExportOptions{weight_floor, finest_layer}, written, &r);
     if (report != nullptr) {
-      *report = ccmap_export_report{r.sequence, r.cells_written, r.cells_saturated, r.cells_pending,
-                                    static_cast<std::uint64_t>(r.bytes)};
+      *report = ccmap_export_report{r.sequence,      r.cells_written,
+                                    r.cells_saturated, r.cells_pending,
+                                    static_cast<std::uint64_t>(r.bytes), r.drops_written,
+                                    r.clears_written, r.drops_pending};
     }
     return ccmap::to_c(status);
   });
@@ -1074,7 +1079,8 @@ ccmap_status ccmap_exchange_get_counters(const ccmap_exchange* exchange, ccmap_e
     *out = ccmap_exchange_counters{c.deltas_exported,   c.deltas_merged,      c.snapshots_merged, c.refused,
                                    c.refused_corrupt,   c.refused_duplicate,  c.refused_misaligned, c.deltas_missed,
                                    c.bytes_exported,    c.bytes_merged,       c.cells_exported,   c.cells_merged,
-                                   c.cells_outside};
+                                   c.cells_outside,     c.drops_exported,     c.clears_exported,  c.drops_merged,
+                                   c.cells_cleared,     c.clears_deferred,    c.entries_refused,  c.sections_damaged};
     return CCMAP_OK;
   });
 }

@@ -11,7 +11,8 @@ namespace ccmap::detail {
 namespace {
 
 constexpr std::uint8_t kDeltaMagic[4] = {0x43U, 0x43U, 0x4DU, 0x44U};  // "CCMD"
-constexpr std::size_t kDeltaSizeAt = 8U;
+constexpr std::size_t kDeltaEntriesAt = 6U;  // version 3: free-space entries (version 2: reserved 0)
+constexpr std::size_t kDeltaSizeAt = 8U;     // version 3: the core's size (version 2: the delta's)
 
 /// True if two cells (packed floats) have the same bits: a cell is unchanged since it was sent.
 template <typename Cell>
@@ -187,8 +188,8 @@ void delta_write_header(SnapshotWriter& w, const SnapshotFingerprint& f, const D
     w.u8(b);
   }
   w.u16(kDeltaFormatVersion);
-  w.u16(0U);
-  w.u32(0U);  // size, patched by delta_finish
+  w.u16(0U);  // free-space entries, patched by delta_finish
+  w.u32(0U);  // the core's size, patched by delta_finish
   snapshot_write_fingerprint(w, f);
   w.f32(sender.finest_cell_width_m);
   w.u32(sender.rover_id);
@@ -201,21 +202,51 @@ void delta_write_header(SnapshotWriter& w, const SnapshotFingerprint& f, const D
   w.f32(sender.origin_z_m);
 }
 
-void delta_finish(SnapshotWriter& w) noexcept {
-  const auto total = static_cast<std::uint32_t>(w.position() + kDeltaTrailerBytes);
+void delta_finish(SnapshotWriter& w, std::size_t core_end, std::uint32_t entries) noexcept {
+  std::uint8_t* data = w.data();
+  const auto core = static_cast<std::uint32_t>(core_end + kDeltaTrailerBytes);
+  data[kDeltaEntriesAt] = static_cast<std::uint8_t>(entries & 0xFFU);
+  data[kDeltaEntriesAt + 1U] = static_cast<std::uint8_t>((entries >> 8U) & 0xFFU);
   for (unsigned byte = 0U; byte < 4U; ++byte) {
-    w.data()[kDeltaSizeAt + byte] = static_cast<std::uint8_t>((total >> (8U * byte)) & 0xFFU);
+    data[kDeltaSizeAt + byte] = static_cast<std::uint8_t>((core >> (8U * byte)) & 0xFFU);
   }
-  snapshot_write_trailer(w);
+  const std::uint32_t crc = crc32_update(0U, data, core_end);
+  for (unsigned byte = 0U; byte < 4U; ++byte) {
+    data[core_end + byte] = static_cast<std::uint8_t>((crc >> (8U * byte)) & 0xFFU);
+  }
 }
 
 Status delta_read_header(const std::uint8_t* data, std::size_t size, const SnapshotFingerprint& expected,
                          SnapshotReader& r, DeltaSender* sender) noexcept {
-  const Status envelope = check_envelope(data, size, kDeltaMagic, kDeltaFormatVersion,
-                                         kDeltaHeaderBytes + kDeltaTrailerBytes);
-  if (envelope != Status::kOk) {
-    return envelope;
+  if (data == nullptr) {
+    return Status::kInvalidArgument;
   }
+  constexpr std::size_t kMinCore = kDeltaHeaderBytes + kDeltaTrailerBytes;
+  if (size < kMinCore) {
+    return Status::kCorrupt;
+  }
+  SnapshotReader e(data, size);
+  for (const std::uint8_t b : kDeltaMagic) {
+    if (e.u8() != b) {
+      return Status::kCorrupt;
+    }
+  }
+  const std::uint16_t version = e.u16();
+  if (version != kDeltaFormatVersion && version != kDeltaOldestFormatVersion) {
+    return Status::kVersionMismatch;
+  }
+  const std::uint16_t entries = e.u16();  // version 2: reserved, 0
+  const std::uint32_t core = e.u32();
+  // Version 2 has no free-space section: its size field is the whole delta.
+  if (core < kMinCore || core > size || (version == kDeltaOldestFormatVersion && (entries != 0U || core != size))) {
+    return Status::kCorrupt;
+  }
+  e.seek(core - kDeltaTrailerBytes);
+  const std::uint32_t stored_crc = e.u32();
+  if (!e.ok() || crc32_update(0U, data, core - kDeltaTrailerBytes) != stored_crc) {
+    return Status::kCorrupt;
+  }
+  r = SnapshotReader(data, core - kDeltaTrailerBytes);
   r.seek(kSnapshotHeaderBytes);  // past the envelope's magic, version, reserved and size
   const Status shape = snapshot_check_fingerprint(r, expected);
   if (shape != Status::kOk) {
@@ -234,6 +265,8 @@ Status delta_read_header(const std::uint8_t* data, std::size_t size, const Snaps
   if (!r.ok() || !std::isfinite(s.origin_z_m) || !height_in_range(s.origin_z_m) || s.sequence == 0U) {
     return Status::kCorrupt;
   }
+  s.core_size = core;
+  s.entries = entries;
   *sender = s;
   return Status::kOk;
 }

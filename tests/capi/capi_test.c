@@ -574,6 +574,9 @@ static void test_exchange(void) {
   CHECK_STATUS(ccmap_exchange_merge_delta(ex_a, delta, delta_size, &mr), CCMAP_DUPLICATE); /* its own */
   CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_OK);
   CHECK(mr.sender_id == 1u && mr.sequence == 1u && mr.cells_merged == er.cells_written && mr.cells_outside == 0u);
+  /* The free-space section (delta format 3): every entry the export wrote merged or was placed. */
+  CHECK(mr.free_space_status == CCMAP_OK && mr.entries_refused == 0u &&
+        mr.drops_merged + mr.entries_outside <= er.drops_written);
   CHECK_STATUS(ccmap_exchange_merge_delta(ex_b, delta, delta_size, &mr), CCMAP_DUPLICATE); /* twice */
   CHECK_STATUS(ccmap_exchange_export(ex_b, delta, delta_capacity, 0.0f, 0, &written, &er), CCMAP_OK);
   CHECK(er.cells_pending == 0u);

@@ -42,6 +42,11 @@ TEST(GhostsExperiment, AtTheDefaultDropOffsShowBeforeTheStoppingDistanceAndNothi
     EXPECT_LT(d.rim_hazard_range_m[0], 0.0) << d.name << ": a hazard at the rim without free space";
     EXPECT_GT(d.first_drop_range_m[1], kStoppingDistanceM)
         << d.name << ": no drop-off in the swath before the rover was within its stopping distance";
+    // Map exchange: a team mate parked 1 m from the rim, which never looks at it, holds the
+    // drop-off from the rover's deltas as soon as the rover does (they travel every frame).
+    EXPECT_GT(d.drops_sent, 0U) << d.name;
+    EXPECT_EQ(d.team_drop_range_m[0], d.first_drop_range_m[1])
+        << d.name << ": the team mate 1 m from the rim did not learn the drop-off with the rover";
   }
 }
 

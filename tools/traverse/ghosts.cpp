@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
+#include "ccmap/persistence/exchange.hpp"
 #include "ccmap/map/visibility/sight_table.hpp"
 #include "ccmap/planner/path_query.hpp"
 #include "experiments/canvas.hpp"
@@ -472,6 +473,33 @@ void run_drop_case(const GhostConfig& cfg, DropCase* dc, bool crater, double wid
   const sim::StereoCamera camera(sp);
   std::unique_ptr<GhostMap> maps[2] = {make_map(map_params(cfg, false), error), make_map(map_params(cfg, true), error)};
   if (!maps[0] || !maps[1]) return;
+  // The team mates: never a frame of their own, the AFTER rover's delta after every frame.
+  using GhostExchange = MapExchange<WithEveryLineOfSight<CadreConfig>>;
+  auto sender = std::make_unique<GhostExchange>();
+  std::unique_ptr<GhostMap> mates[3];
+  std::unique_ptr<GhostExchange> mate_exchanges[3];
+  if (sender->init(*maps[1], ExchangeParams{1U, 1U, CellIndex{0, 0}, 0.0F}) != Status::kOk) {
+    *error = "drop-off case: the exchange refused the map";
+    return;
+  }
+  for (int t = 0; t < 3; ++t) {
+    mates[t] = make_map(map_params(cfg, true), error);
+    mate_exchanges[t] = std::make_unique<GhostExchange>();
+    if (!mates[t] || mate_exchanges[t]->init(*mates[t], ExchangeParams{static_cast<std::uint32_t>(t) + 2U, 1U,
+                                                                          CellIndex{0, 0}, 0.0F}) != Status::kOk) {
+      *error = "drop-off case: a team mate's map or exchange refused";
+      return;
+    }
+  }
+  std::vector<std::uint8_t> delta(GhostExchange::max_delta_size());
+  auto drop_in_swath = [&](const GhostMap& m) {
+    for (double qx = dc->rim_x; qx <= dc->rim_x + (crater ? 2.0 : width_m); qx += 0.02) {
+      for (double qy = 14.7; qy <= 15.3; qy += 0.02) {
+        if (m.query(static_cast<float>(qx), static_cast<float>(qy)).cell_class == CellClass::kDropOff) return true;
+      }
+    }
+    return false;
+  };
   const double far_edge = crater ? dc->rim_x + 2.0 : dc->rim_x + width_m;
   int picture_frame = -1;
   for (int f = 0;; ++f) {
@@ -516,6 +544,23 @@ void run_drop_case(const GhostConfig& cfg, DropCase* dc, bool crater, double wid
       }
       if (p.status == Status::kOk && p.unknown_found && dc->first_unknown_range_m[k] < 0.0) {
         dc->first_unknown_range_m[k] = range;
+      }
+    }
+    std::size_t written = 0;
+    ExportReport sent{};
+    if (sender->export_delta(delta.data(), delta.size(), ExportOptions{0.0F, 0}, &written, &sent) != Status::kOk) {
+      *error = "drop-off case: export failed";
+      return;
+    }
+    dc->drops_sent += sent.drops_written;
+    for (int t = 0; t < 3; ++t) {
+      if (mates[t]->move_to(static_cast<float>(dc->rim_x - kTeamMateRangeM[t]), static_cast<float>(y)) != Status::kOk ||
+          mate_exchanges[t]->merge_delta(delta.data(), written, nullptr) != Status::kOk) {
+        *error = "drop-off case: a team mate refused the delta";
+        return;
+      }
+      if (dc->team_drop_range_m[t] < 0.0 && drop_in_swath(*mates[t])) {
+        dc->team_drop_range_m[t] = range;
       }
     }
     if (f == picture_frame && !cfg.out_dir.empty()) {
@@ -668,6 +713,15 @@ std::string ghost_report(const GhostResult& r, const GhostConfig& c) {
     }
   }
   s += d.str();
+  s += "\nThe same drop-offs at team mates that never look at them (map exchange: the AFTER rover's delta after\n"
+       "every frame; each mate parked on the rover's line at a range from the near rim): the rover's range to the\n"
+       "rim when the mate's stack query first answers drop-off in the swath\n\n";
+  experiments::Table m({"obstacle", "drop-off entries sent", "mate 1 m from the rim", "2 m", "4 m"});
+  for (const DropCase& dc : r.drops) {
+    m.add_row({dc.name, format("%llu", static_cast<unsigned long long>(dc.drops_sent)), range_text(dc.team_drop_range_m[0]),
+               range_text(dc.team_drop_range_m[1]), range_text(dc.team_drop_range_m[2])});
+  }
+  s += m.str();
   const ShadowResult& sh = r.shadows;
   s += format("\nFalse drop-offs over 8 m of lunar ground with %d rocks of 8 cm or more (no negative obstacle)\n\n",
               sh.rocks);

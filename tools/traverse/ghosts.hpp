@@ -96,7 +96,17 @@ struct DropCase {
   double rim_hazard_range_m[2] = {-1.0, -1.0};
   std::string rim_hazard_class[2] = {"none", "none"};
   double first_unknown_range_m[2] = {-1.0, -1.0}; ///< the same for the first footprint over 10 % unknown
+  /// Team mates that never look at it: stacks parked kTeamMateRangeM metres before the near rim
+  /// on the rover's line (their windows centred there), merging the AFTER rover's delta (map
+  /// exchange, persistence/exchange.hpp) after every frame. The rover's camera-to-rim range when
+  /// a team mate's stack query first answers drop-off in the swath (-1: never), and the
+  /// drop-off entries the rover sent.
+  double team_drop_range_m[3] = {-1.0, -1.0, -1.0};
+  std::uint64_t drops_sent = 0;
 };
+
+/// Where the team mates of a drop-off case are parked: their range to the near rim (m).
+inline constexpr double kTeamMateRangeM[3] = {1.0, 2.0, 4.0};
 
 struct ShadowResult {
   double area_near_rocks_m2 = 0.0, area_open_m2 = 0.0;

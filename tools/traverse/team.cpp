@@ -149,6 +149,28 @@ TeamResult run_team(const TeamConfig& cfg) {
     }
   }
   std::vector<std::uint8_t> packet(cfg.packet_bytes > 0 ? cfg.packet_bytes : Exchange::max_delta_size());
+  std::vector<sim::Pose2> at(rovers.size());  // each rover's last frame's pose
+  // A drop-off the team map answers and the map alone does not: learned from a team mate.
+  auto learned_drop = [&](Rover& rover, std::size_t step) {
+    const sim::Pose2& pose = at[static_cast<std::size_t>(rover.id - 1)];
+    double nearest = 1e9;
+    std::size_t points = 0;
+    for (double dx = -10.24; dx < 10.24; dx += 0.08) {
+      for (double dy = -10.24; dy < 10.24; dy += 0.08) {
+        const auto x = static_cast<float>(pose.x + dx), y = static_cast<float>(pose.y + dy);
+        if (rover.team->query(x, y).cell_class == CellClass::kDropOff &&
+            rover.alone->query(x, y).cell_class != CellClass::kDropOff) {
+          ++points;
+          nearest = std::min(nearest, std::hypot(dx, dy));
+        }
+      }
+    }
+    if (points > 0) {
+      rover.result.first_learned_drop_frame = step;
+      rover.result.first_learned_drop_range_m = nearest;
+      rover.result.first_learned_drop_points = points;
+    }
+  };
   auto exchange_all = [&](std::size_t step) {
     for (Rover& sender : rovers) {
       std::size_t written = 0;
@@ -165,15 +187,33 @@ TeamResult run_team(const TeamConfig& cfg) {
       sender.result.cells_sent += report.cells_written;
       sender.result.cells_saturated += report.cells_saturated;
       sender.result.cells_pending_at_end = report.cells_pending;
+      sender.result.drops_sent += report.drops_written;
+      sender.result.clears_sent += report.clears_written;
+      std::size_t size = written;
+      DeltaInfo info{};
+      if (!cfg.free_space_exchange && Exchange::peek_delta(packet.data(), written, &info) == Status::kOk) {
+        // The core alone, as a delta without entries: entry count 0, the core's CRC again.
+        size = written - static_cast<std::size_t>(info.free_space_entries) * detail::kFreeSpaceEntryBytes;
+        packet[6] = 0U;
+        packet[7] = 0U;
+        const std::uint32_t crc = crc32_update(0U, packet.data(), size - 4U);
+        for (unsigned b = 0U; b < 4U; ++b) packet[size - 4U + b] = static_cast<std::uint8_t>(crc >> (8U * b));
+      }
       for (Rover& receiver : rovers) {
         if (receiver.id == sender.id) continue;
         MergeReport merged{};
         const clock_t m0 = std::clock();
-        const Status s = receiver.exchange->merge_delta(packet.data(), written, &merged);
+        const Status s = receiver.exchange->merge_delta(packet.data(), size, &merged);
         receiver.result.merge_ms += cpu_ms(m0);
         receiver.result.deltas_refused += s == Status::kOk ? 0U : 1U;
         receiver.result.cells_merged += merged.cells_merged;
         receiver.result.cells_outside += merged.cells_outside;
+        receiver.result.drops_merged += merged.drops_merged;
+        receiver.result.cells_cleared += merged.cells_cleared;
+        receiver.result.clears_deferred += merged.clears_deferred;
+        if (receiver.result.first_learned_drop_frame == 0U) {
+          learned_drop(receiver, step);
+        }
       }
       if (cfg.log != nullptr) {
         std::fprintf(cfg.log, "step %3zu  rover %d sends delta %u: %6zu bytes, %5u cells (%u saturated, %u pending)\n",
@@ -189,6 +229,7 @@ TeamResult run_team(const TeamConfig& cfg) {
     for (Rover& rover : rovers) {
       if (k >= rover.path.size()) continue;
       const sim::Pose2& pose = rover.path[k].pose;
+      at[static_cast<std::size_t>(rover.id - 1)] = pose;
       const sim::StereoFrame frame =
           camera.capture(raster, pose, pose, cfg.seed * 1000003ULL + static_cast<std::uint64_t>(rover.id) * 7919ULL + k);
       points.clear();
@@ -236,7 +277,8 @@ std::string team_report(const TeamResult& r, const TeamConfig& cfg) {
   using experiments::Table;
   Table t({"rover", "path", "frames", "known alone", "known with team", "hazard found alone", "with team",
            "false obstacle alone", "with team", "sent", "deltas", "cells sent (saturated)", "per delta",
-           "merged cells (outside)", "export / merge CPU"});
+           "merged cells (outside)", "export / merge CPU", "drop-off alone (false)", "with team (false)",
+           "drops / clears sent", "drops merged, cleared (deferred)", "first drop learned: frame, range"});
   for (const RoverResult& v : r.rovers) {
     const double found_alone = v.alone.truth_hazard_known - v.alone.missed;
     const double found_team = v.team.truth_hazard_known - v.team.missed;
@@ -247,7 +289,15 @@ std::string team_report(const TeamResult& r, const TeamConfig& cfg) {
                format("%.2f m2", v.team.false_obstacle), format("%.1f kB", 1e-3 * static_cast<double>(v.bytes_sent)),
                format("%zu", v.deltas_sent), format("%zu (%zu)", v.cells_sent, v.cells_saturated),
                format("%.1f kB", v.deltas_sent > 0 ? 1e-3 * static_cast<double>(v.bytes_sent) / static_cast<double>(v.deltas_sent) : 0.0),
-               format("%zu (%zu)", v.cells_merged, v.cells_outside), format("%.0f / %.0f ms", v.export_ms, v.merge_ms)});
+               format("%zu (%zu)", v.cells_merged, v.cells_outside), format("%.0f / %.0f ms", v.export_ms, v.merge_ms),
+               format("%.2f m2 (%.2f)", v.alone.drop_truth_hazard + v.alone.drop_truth_free, v.alone.drop_truth_free),
+               format("%.2f m2 (%.2f)", v.team.drop_truth_hazard + v.team.drop_truth_free, v.team.drop_truth_free),
+               format("%zu / %zu", v.drops_sent, v.clears_sent),
+               format("%zu, %zu (%zu)", v.drops_merged, v.cells_cleared, v.clears_deferred),
+               v.first_learned_drop_frame > 0
+                   ? format("%zu, %.2f m (%zu points)", v.first_learned_drop_frame, v.first_learned_drop_range_m,
+                            v.first_learned_drop_points)
+                   : std::string("never")});
   }
   std::string out =
       format("%d rovers, seed %llu, stride %d, a frame every %.2f m, an exchange every %d frames%s%s%s; areas over "
@@ -255,7 +305,8 @@ std::string team_report(const TeamResult& r, const TeamConfig& cfg) {
              cfg.rovers, static_cast<unsigned long long>(cfg.seed), cfg.pixel_stride, cfg.frame_spacing_m,
              cfg.exchange_every, cfg.weight_floor > 0.0F ? format(", weight floor %.0f", static_cast<double>(cfg.weight_floor)).c_str() : "",
              cfg.finest_layer > 0 ? format(", layers %d-4 only", cfg.finest_layer).c_str() : "",
-             cfg.packet_bytes > 0 ? format(", deltas of at most %zu bytes", cfg.packet_bytes).c_str() : "",
+             (std::string(cfg.packet_bytes > 0 ? format(", deltas of at most %zu bytes", cfg.packet_bytes).c_str() : "") +
+              (cfg.free_space_exchange ? "" : ", deltas merged without their free-space entries")).c_str(),
              100.0 * cfg.query_step_m);
   out += t.str();
   out += format("(a whole CADRE snapshot is %zu bytes; hazard found = known truth-hazard area marked obstacle or steep)\n",

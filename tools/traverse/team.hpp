@@ -32,6 +32,9 @@ struct TeamConfig {
   double query_step_m = 0.04;     ///< raster of the stack-query evaluation and the picture
   std::string out_dir;            ///< the picture goes here; empty = none
   std::FILE* log = nullptr;       ///< a line per exchange and the report; nullptr = quiet
+  /// false: every delta is merged as its core alone (cells; its free-space section dropped and
+  /// the header's entry count set to 0), the team as it was before deltas carried free space.
+  bool free_space_exchange = true;
   /// Two rovers, stride 8, a frame every 0.6 m: what the CI test runs.
   static TeamConfig quick() {
     TeamConfig c;
@@ -51,6 +54,15 @@ struct RoverResult {
   DetectionAreas team;            ///< its map with the team's deltas merged
   std::size_t deltas_sent = 0, bytes_sent = 0, cells_sent = 0, cells_saturated = 0, cells_pending_at_end = 0;
   std::size_t cells_merged = 0, cells_outside = 0, deltas_refused = 0;
+  /// Free-space entries (delta format 3): sent, and of the team mates' merged here.
+  std::size_t drops_sent = 0, clears_sent = 0, drops_merged = 0, cells_cleared = 0, clears_deferred = 0;
+  /// The first exchange after which this rover's team map answers drop-off (stack query, 8 cm
+  /// raster over its 64 cm window) where its own map alone does not: the frame, and the
+  /// distance from the rover's camera position then to the nearest such point (m); 0 frames:
+  /// never.
+  std::size_t first_learned_drop_frame = 0;
+  double first_learned_drop_range_m = 0.0;
+  std::size_t first_learned_drop_points = 0;
   double export_ms = 0.0, merge_ms = 0.0;  ///< host CPU, all exchanges
 };
 

@@ -3,7 +3,7 @@
 // final map knows and the hazard area it finds, alone and with the team, and what it sent.
 // See team.hpp for the definitions.
 //   ccmap_team [--rovers 2|3] [--seed N] [--stride K] [--spacing M] [--every N] [--floor W]
-//              [--finest LAYER] [--packet BYTES] [--out DIR] [--quick]
+//              [--finest LAYER] [--packet BYTES] [--out DIR] [--cells-only] [--quick]
 // (ccmap_team --help lists them; a refused command line is one line on stderr and exit 2).
 #include <cstdint>
 #include <cstdio>
@@ -40,6 +40,8 @@ int main(int argc, char** argv) {
                          "largest delta in bytes (default: no limit); the rest waits")
       ->default_str("");
   app.add_option("--out", out_dir, "the picture")->type_name("DIR")->capture_default_str();
+  bool cells_only = false;
+  app.add_flag("--cells-only", cells_only, "merge every delta without its free-space entries (drop-offs, clears)");
   app.add_flag("--quick", quick, "2 rovers, stride 8, a frame every 0.6 m, an exchange every 3 (the CI test)");
   if (const int code = ccmap::tools::parse_args(app, argc, argv); code >= 0) return code;
   cfg.weight_floor = static_cast<float>(weight_floor);
@@ -51,6 +53,7 @@ int main(int argc, char** argv) {
     cfg.exchange_every = q.exchange_every;
   }
   cfg.out_dir = out_dir;
+  cfg.free_space_exchange = !cells_only;
   cfg.log = stdout;
   const ccmap::traverse::TeamResult result = ccmap::traverse::run_team(cfg);
   if (!result.ok()) {

@@ -38,6 +38,28 @@
 //    for that receiver (they were committed as sent).
 //  - Cells a receiver cannot place (outside its windows) are dropped and counted; the receiver
 //    keeps no copy of them.
+//  - Free space (map/visibility/free_space.hpp) travels as entries after the cells (of the
+//    layers written: ExportOptions::finest_layer holds back a finer layer's entries too): a drop-off
+//    the sender's rays proved in a cell it holds no point in (sent once; a drop-off merged from
+//    a team mate is not sent on), and a clear of every cell its lines of sight emptied since the
+//    last export (the stage marks them: FreeSpace::clear_marked). A clear goes in the same delta
+//    as the cell's first gain after it or before it (a cleared cell's sent copy becomes empty,
+//    so that gain is everything since the clear); a clear without room waits with its cell.
+//    The receiver folds a drop-off into its record of an unobserved cell (its bound lowered to
+//    the sender's, moved by the origins' z offset and rounded up, its drop rays raised: both
+//    idempotent); a cell it observed answers with its own points. It applies a clear before the
+//    cells (a gain after a clear is new ground) under this rule: the cell is emptied (with its
+//    sent copy and record) when it holds no point of the receiver's own (everything in it came
+//    from team mates, whose data the sender's lines of sight overruled as its own), or when the
+//    receiver's own lines of sight contradicted it too (its record's evidence >= 1: a frame
+//    since the surface was last confirmed); otherwise the cell stays and its evidence is raised
+//    to free_space_clear_frames - 1, so that one frame of the receiver's own contradicting rays
+//    empties it and a point of its own on the surface (a confirmation) forgets the clear. Limits:
+//    a clear whose cell left the sender's window before the next export is not sent; "own
+//    points" is known from a per-cell flag (set when a gain of the cell is exported) and from
+//    the cell differing from its sent copy (unsent points), so a cell the motion pass rescaled
+//    counts as own (the safe side). A delta that may hold a clear has each received cell also
+//    merged into an empty one in the validation pass, so the commit after the clears cannot fail.
 //  - Exported cells can be limited by a weight floor, by layer and by the buffer: cells whose
 //    gain weighs less than the floor, of layers finer than ExportOptions::finest_layer, or for
 //    which the buffer has no room, stay pending (not sent, not lost; a later export sends their
@@ -50,11 +72,12 @@
 // and stay nested (kMisaligned otherwise). A cell then keeps its mean relative to its centre,
 // and only the heights move by the origins' z offset.
 //
-// Delta format (version 2). Little-endian, field by field (the snapshot's writer and reader),
-// floats as IEEE-754 binary32 bits; sizes in bytes:
+// Delta format (version 3). Little-endian, field by field (the snapshot's writer and reader),
+// floats as IEEE-754 binary32 bits; a core (header, layers, CRC-32) and a free-space section of
+// entries that carry their own checks; sizes in bytes:
 //   header       4  magic "CCMD" (0x43 0x43 0x4D 0x44)
-//                2  format version (kDeltaFormatVersion), 2 reserved 0
-//                4  total size, trailer included
+//                2  format version (kDeltaFormatVersion), 2 free-space entries n (after the core)
+//                4  size of the core, its CRC included (the delta is that plus 10 n bytes)
 //               40  preset fingerprint, as in snapshots (fine kind, layer count, sides, cell bytes)
 //                4  finest cell width (m)
 //   sender       4  rover id, 4 session, 4 sequence (1, 2, ... per session)
@@ -69,19 +92,31 @@
 //                   one (the first: its position), as a LEB128 varint (1 byte below 128), then
 //                   the cell in the snapshot's cell codec (snapshot_write_cell: CCM 40 bytes
 //                   for CcmCell with s_xy, 36 for CcmPaperCell; Kalman and OMG 12 bytes)
-//   trailer      4  CRC-32 (IEEE 802.3 / zlib) of every byte before it
+//   core's CRC   4  CRC-32 (IEEE 802.3 / zlib) of every byte of the core before it
+//   section   10 n  free-space entries, clears first, then drop-offs, coarsest layer first
+//                   (map/visibility/free_space_cell.hpp gives their 10 bytes: position in the
+//                   layer's window above, layer, kind, bound, drop rays, CRC-16 of the entry)
 // Size: 88 + 12 per layer + 4 bytes of frame (152 for CADRE: src/capi/capi.cpp asserts it), and
 // per cell the varint (1 byte for a gap below 128 positions, 2 below 16,384: every gap of a
 // 64 x 64 layer, 3 in a 256 x 256 one) and 40 bytes (CCM, full cell; 36 paper cell) or 12
-// (Kalman, OMG); docs/integration.md gives typical exchanges. Version history: 1 carried the
-// 9-float CCM cell only; 2 (the cell kinds, as snapshot version 2) is refused by a version-1
-// reader and refuses version 1 with kVersionMismatch.
+// (Kalman, OMG), and 10 per free-space entry (at most kMaxDeltaEntries); docs/integration.md
+// gives typical exchanges. Version history: 1 carried the 9-float CCM cell only; 2 the cell
+// kinds (as snapshot version 2); 3 the free-space section in the header's reserved field and
+// after the core. A version-2 delta merges as a version-3 one without entries (its size field is
+// the whole delta: bytes beyond it are kCorrupt); version 1 and versions after 3 are refused with
+// kVersionMismatch; a version-2 reader refuses version 3 with kVersionMismatch.
 //
 // Statuses of merge_delta, all before anything is written (on any refusal the map and the sent
-// copy are bitwise unchanged; the refusal is counted in counters()):
+// copy are bitwise unchanged; the refusal is counted in counters()). They judge the core; the
+// free-space section never refuses a delta whose core merges: each entry is checked alone (its
+// CRC-16, its fields, its layer and position) and a bad one is refused and counted
+// (MergeReport::entries_refused, free_space_status kCorrupt, counters().sections_damaged), as
+// are entries the header announces but the bytes do not hold, while the cells and every good
+// entry merge; bytes beyond the announced entries make the section damaged (kCorrupt status in
+// the report) and are ignored:
 //   kNotInitialised   exchange not initialised, or its stack re-initialised since (init again)
 //   kInvalidArgument  data == nullptr
-//   kCorrupt          truncated, trailing bytes, wrong magic, CRC mismatch, or content no export
+//   kCorrupt          a core truncated or with trailing bytes, wrong magic, CRC mismatch, or content no export
 //                     writes (an odd window centre, a cell position outside the window, a
 //                     non-finite or negative statistic, a zero weight, a mean outside its cell);
 //                     or the stack's own state failed its integrity check (Stack::state_status:
@@ -104,6 +139,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <type_traits>
 
 #include "ccmap/cell/ccm_cell.hpp"
@@ -116,8 +152,10 @@
 
 namespace ccmap {
 
-/// Format version written by this library; merge_delta accepts exactly this version.
-inline constexpr std::uint16_t kDeltaFormatVersion = 2U;
+/// Format version written by this library; merge_delta accepts it and kDeltaOldestFormatVersion.
+inline constexpr std::uint16_t kDeltaFormatVersion = 3U;
+/// The oldest version merge_delta accepts: version 2 is version 3 without free-space entries.
+inline constexpr std::uint16_t kDeltaOldestFormatVersion = 2U;
 
 /// Who this map is in the team and where its map frame lies in the team frame.
 struct ExchangeParams {
@@ -146,6 +184,9 @@ struct ExportReport {
   std::uint32_t cells_written;
   std::uint32_t cells_saturated;  ///< of those, sent whole (limiter or floor engaged: see the file comment)
   std::uint32_t cells_pending;    ///< changed, not written: gain below the floor, or no room in the buffer
+  std::uint32_t drops_written;    ///< free-space entries: drop-offs
+  std::uint32_t clears_written;   ///< free-space entries: cells this map's lines of sight emptied
+  std::uint32_t drops_pending;    ///< drop-offs not written for want of room (sent later)
   std::size_t bytes;
 };
 
@@ -156,6 +197,15 @@ struct MergeReport {
   std::uint32_t cells_merged;    ///< folded into this map
   std::uint32_t cells_outside;   ///< outside this map's windows: dropped
   std::uint32_t deltas_missed;   ///< sequence numbers of this sender skipped before this delta (lost)
+  // The free-space section (delta format 3; zero for a snapshot and a version-2 delta):
+  std::uint32_t drops_merged;     ///< drop-offs folded into this map's records (cells it observed: none)
+  std::uint32_t cells_cleared;    ///< cells a team mate's clear emptied here (the rule in the file comment)
+  std::uint32_t clears_deferred;  ///< clears of cells holding this map's own points: evidence raised only
+  std::uint32_t entries_outside;  ///< entries outside this map's windows: dropped
+  std::uint32_t entries_refused;  ///< entries that failed their check or a field check, or were missing
+  /// kOk if the section was whole and every entry passed its checks; kCorrupt otherwise (the
+  /// good entries merged all the same, the cells too).
+  Status free_space_status;
 };
 
 /// The header of a delta (peek_delta).
@@ -169,6 +219,7 @@ struct DeltaInfo {
   float origin_z_m;
   float finest_cell_width_m;
   std::uint32_t cells;        ///< cells in the delta, all layers
+  std::uint32_t free_space_entries;  ///< entries the header announces (version 2: 0)
 };
 
 /// Life-time counters of an exchange (reset by init).
@@ -186,6 +237,13 @@ struct ExchangeCounters {
   std::uint64_t cells_exported;
   std::uint64_t cells_merged;
   std::uint64_t cells_outside;
+  std::uint64_t drops_exported;
+  std::uint64_t clears_exported;
+  std::uint64_t drops_merged;
+  std::uint64_t cells_cleared;       ///< by team mates' clears
+  std::uint64_t clears_deferred;
+  std::uint64_t entries_refused;     ///< free-space entries refused (MergeReport::entries_refused)
+  std::uint32_t sections_damaged;    ///< deltas merged whose free-space section was not whole or held a refused entry
 };
 
 namespace detail {
@@ -193,6 +251,8 @@ namespace detail {
 inline constexpr std::size_t kDeltaHeaderBytes = 12U + kSnapshotFingerprintBytes + 4U + std::size_t{5} * 4U + 12U;
 inline constexpr std::size_t kDeltaLayerHeaderBytes = 12U;
 inline constexpr std::size_t kDeltaTrailerBytes = 4U;
+/// Free-space entries a delta can hold (the header's 16-bit count).
+inline constexpr std::uint32_t kMaxDeltaEntries = 65535U;
 static_assert(kDeltaHeaderBytes == 88U, "the delta header is documented as 88 bytes");
 
 /// Bytes of the LEB128 varint of v (1..5).
@@ -251,20 +311,25 @@ void delta_write_varint(SnapshotWriter& w, std::uint32_t v) noexcept;
 /// False (and the reader !ok()) for more than 5 bytes or a value beyond 32 bits.
 [[nodiscard]] bool delta_read_varint(SnapshotReader& r, std::uint32_t* v) noexcept;
 
-/// The header fields after the fingerprint.
+/// The header fields after the fingerprint, and the core's size and the entries announced.
 struct DeltaSender {
   float finest_cell_width_m;
   std::uint32_t rover_id, session, sequence, frames_from, frames_to;
   CellIndex origin_cells;
   float origin_z_m;
+  std::uint32_t core_size;  ///< bytes of the header, the cells and the CRC (version 2: the delta)
+  std::uint32_t entries;    ///< free-space entries after the core
 };
-/// Writes magic, version, a size placeholder, the fingerprint and the sender fields.
+/// Writes magic, version, placeholders for the entry count and the core's size, the fingerprint
+/// and the sender fields.
 void delta_write_header(SnapshotWriter& w, const SnapshotFingerprint& f, const DeltaSender& sender) noexcept;
-/// Patches the size field and appends the CRC-32 trailer (w.position() is the size without it).
-void delta_finish(SnapshotWriter& w) noexcept;
-/// Magic, version, size field, CRC; then the fingerprint (kVersionMismatch if it is not
-/// `expected`) and the sender fields (kCorrupt for a non-finite z or non-zero reserved field).
-/// Leaves r after the header.
+/// Patches the entry count and the core's size (core_end + 4) and writes the core's CRC-32 at
+/// core_end (the writer has already passed the 4 bytes there and the section).
+void delta_finish(SnapshotWriter& w, std::size_t core_end, std::uint32_t entries) noexcept;
+/// Magic, version (3, or 2: no section), the core's size (at most `size`; version 2: `size`),
+/// the core's CRC; then the fingerprint (kVersionMismatch if it is not `expected`) and the
+/// sender fields (kCorrupt for a non-finite z or non-zero reserved field). Replaces r by a
+/// reader of the core without its CRC, positioned after the header.
 [[nodiscard]] Status delta_read_header(const std::uint8_t* data, std::size_t size, const SnapshotFingerprint& expected,
                                        SnapshotReader& r, DeltaSender* sender) noexcept;
 
@@ -292,10 +357,27 @@ struct ExchangeAccess {
   using FineCell = typename Layers::FineCell;
   static constexpr int kLayers = Layers::kLayerCount;
 
-  /// The sent copies, in the stack's slot layout (slot of global index i: buffer_offset(i, side)).
+  static constexpr bool kFreeSpace = kConfigFreeSpace<Config>;
+  /// Cells of every layer (one free-space record each), in record order: layer 0's, then 1's...
+  static constexpr std::size_t kCellCount =
+      (Layers::kHasFine ? Layers::kFineCellCount : 0U) + (Layers::kCcmLayerCount > 0 ? Layers::kCcmCellCount : 0U);
+  /// Per cell: what this exchange knows of it beyond the sent copy (free space only).
+  static constexpr std::size_t kFlagCount = kFreeSpace ? kCellCount : 1U;
+  /// Any of these bits set: the cell holds points of this map's own (a gain of it was exported,
+  /// or it differed from its sent copy at a merge). Four bits, so that an upset can only set
+  /// the flag (the safe side: a team mate's clear then does not empty the cell at once).
+  static constexpr std::uint8_t kOwnBits = 0x0FU;
+  /// The record's drop-off was sent (or merged from a team mate: not sent on).
+  static constexpr std::uint8_t kDropSentBit = 0x10U;
+  /// A clear of the cell is in the delta being written (between write_layers and write_section).
+  static constexpr std::uint8_t kClearingBit = 0x20U;
+
+  /// The sent copies, in the stack's slot layout (slot of global index i: buffer_offset(i, side)),
+  /// and the per-cell flags (record order).
   struct SentCells {
     FineCell fine[Layers::kFineCellCount];
     typename Layers::CcmCellType ccm[Layers::kCcmCellCount];
+    std::uint8_t flags[kFlagCount];
   };
 
   [[nodiscard]] static std::uint32_t next_generation(StackType& stack) noexcept {
@@ -326,6 +408,15 @@ struct ExchangeAccess {
     }
   }
 
+  /// First record (and flag) of `layer`: the cells of the layers before it.
+  [[nodiscard]] static constexpr std::size_t record_offset(int layer) noexcept {
+    std::size_t offset = 0U;
+    for (int k = 0; k < layer; ++k) {
+      offset += Layers::capacity(k);
+    }
+    return offset;
+  }
+
   static void clear(SentCells& sent) noexcept {
     for (FineCell& c : sent.fine) {
       c = FineCell{};
@@ -333,7 +424,13 @@ struct ExchangeAccess {
     for (typename Layers::CcmCellType& c : sent.ccm) {
       c = typename Layers::CcmCellType{};
     }
+    for (std::uint8_t& f : sent.flags) {
+      f = 0U;
+    }
   }
+
+  /// Binding: no cell counts as cleared before it (the stage's marks dropped).
+  static void drop_all_marks(StackType& stack) noexcept { stack.free_space_.clear_all_marks(); }
 
   /// Validates a snapshot and merges it (two passes: nothing changes unless all of it merges)
   /// into the stack and, if sent != nullptr, the sent copies.
@@ -378,12 +475,19 @@ struct ExchangeAccess {
   static void settle(StackType& stack, SentCells& sent) noexcept {
     for (int layer = 0; layer < kLayers; ++layer) {
       KeptWindow& kept = stack.layers_.kept[layer];
-      with_layer(stack, &sent, layer, [&kept](auto& grid, auto* copies) {
+      const std::size_t first = record_offset(layer);
+      with_layer(stack, &sent, layer, [&](auto& grid, auto* copies) {
         using Cell = std::remove_reference_t<decltype(*copies)>;
         const std::int32_t side = grid.side();
         grid.for_each([&](CellIndex index, const Cell&) {
           if (!kept.contains(index)) {
-            copies[grid::buffer_offset(index, side)] = Cell{};
+            const std::size_t slot = grid::buffer_offset(index, side);
+            copies[slot] = Cell{};
+            if constexpr (kFreeSpace) {
+              // The slot holds another cell now: its flags and the stage's clear mark go with the old one.
+              sent.flags[first + slot] = 0U;
+              stack.free_space_.drop_clear_mark(static_cast<std::uint32_t>(first + slot));
+            }
           }
         });
         kept.mark(grid.window_min(), side);
@@ -409,14 +513,52 @@ struct ExchangeAccess {
   /// of what it wrote. Precondition: settle() ran, the writer has room for the layer headers
   /// and the trailer (capacity checked by the caller); a violation is reported to the assert
   /// hook and writes nothing (no cell counts as sent).
-  static void write_layers(StackType& stack, SentCells& sent, SnapshotWriter& w, std::size_t capacity,
-                           const ExportOptions& options, ExportReport& report) noexcept {
+  ///
+  /// A cell the free-space stage emptied since the last export (FreeSpace::clear_marked) sends a
+  /// clear in the free-space section, before or with its first gain after it: clears are
+  /// reserved first, as many as the buffer holds beside the layer headers (written by
+  /// write_section); a reserved one empties the cell's sent copy (its gain is then all its points
+  /// since) and resets its flags; a cell whose clear did not fit waits with it. Returns the
+  /// clears reserved.
+  static std::uint32_t write_layers(StackType& stack, SentCells& sent, SnapshotWriter& w, std::size_t capacity,
+                                    const ExportOptions& options, ExportReport& report) noexcept {
     CCMAP_ASSERT_OR_RETURN(settled(stack) && w.position() + static_cast<std::size_t>(kLayers) * kDeltaLayerHeaderBytes +
-                                                     kDeltaTrailerBytes <= capacity, );
+                                                     kDeltaTrailerBytes <= capacity, 0U);
     const StackParams& params = stack.params_;
+    // The clears first, as many as the buffer holds beside the layer headers (10 bytes each):
+    // those reserved empty their sent copies; a cell whose clear did not fit waits with it.
+    std::uint32_t clears = 0U;
+    std::uint32_t left_out = 0U;
+    if constexpr (kFreeSpace) {
+      const std::size_t fixed = w.position() + static_cast<std::size_t>(kLayers) * kDeltaLayerHeaderBytes + kDeltaTrailerBytes;
+      const std::size_t room = (capacity - fixed) / kFreeSpaceEntryBytes;
+      const std::size_t most = room < kMaxDeltaEntries ? room : kMaxDeltaEntries;
+      stack.free_space_.for_each_clear_mark([&](std::uint32_t record) {
+        int layer = kLayers - 1;
+        while (layer > 0 && record < record_offset(layer)) {
+          --layer;
+        }
+        if (layer < options.finest_layer) {
+          return;  // not written: the mark waits with the cell
+        }
+        if (clears >= most) {
+          ++left_out;
+          return;
+        }
+        const std::size_t slot = record - record_offset(layer);
+        with_layer(stack, &sent, layer, [&](auto&, auto* copies) {
+          using Cell = std::remove_reference_t<decltype(*copies)>;
+          copies[slot] = Cell{};
+        });
+        sent.flags[record] = kClearingBit;  // own and drop-sent reset: the cell starts again
+        ++clears;
+      });
+    }
+    const std::size_t entries_reserved = static_cast<std::size_t>(clears) * kFreeSpaceEntryBytes;
     for (int layer = kLayers - 1; layer >= 0; --layer) {
       const bool skipped = layer < options.finest_layer;
       const float width = stack.layers_.widths[layer];
+      const std::size_t first = record_offset(layer);
       // Room that must stay free for the headers of the layers still to come and the trailer.
       const std::size_t reserve = static_cast<std::size_t>(layer) * kDeltaLayerHeaderBytes + kDeltaTrailerBytes;
       with_layer(stack, &sent, layer, [&](auto& grid, auto* copies) {
@@ -433,7 +575,15 @@ struct ExchangeAccess {
             ++report.cells_pending;
             return;
           }
-          Cell& copy = copies[grid::buffer_offset(index, side)];
+          const std::size_t slot = grid::buffer_offset(index, side);
+          Cell& copy = copies[slot];
+          if constexpr (kFreeSpace) {
+            if (left_out > 0U && (sent.flags[first + slot] & kClearingBit) == 0U &&
+                stack.free_space_.clear_marked(static_cast<std::uint32_t>(first + slot))) {
+              ++report.cells_pending;  // its clear did not fit: the cell waits with it
+              return;
+            }
+          }
           Cell gain{};
           const GainKind kind = exchange_gain(cell, copy, params, width, &gain);
           if (kind == GainKind::kNone) {
@@ -442,13 +592,17 @@ struct ExchangeAccess {
           const std::int64_t position = static_cast<std::int64_t>(index.y - min.y) * side + (index.x - min.x);
           const auto skip = static_cast<std::uint32_t>(position - previous - 1);
           const std::size_t bytes = varint_bytes(skip) + sizeof(Cell);
-          if (skipped || exchange_weight(gain) < options.weight_floor || w.position() + bytes + reserve > capacity) {
+          if (skipped || exchange_weight(gain) < options.weight_floor ||
+              w.position() + bytes + reserve + entries_reserved > capacity) {
             ++report.cells_pending;
             return;
           }
           delta_write_varint(w, skip);
           snapshot_write_cell(w, gain);
           copy = cell;
+          if constexpr (kFreeSpace) {
+            sent.flags[first + slot] |= kOwnBits;  // a gain is this map's own points
+          }
           previous = position;
           ++count;
           report.cells_saturated += kind == GainKind::kSaturated ? 1U : 0U;
@@ -457,15 +611,105 @@ struct ExchangeAccess {
         report.cells_written += count;
       });
     }
+    return clears;
+  }
+
+  /// The free-space section after the core (the writer after the core's CRC placeholder): the
+  /// clears write_layers reserved, then the drop-offs not yet sent of cells this map holds no
+  /// point in (intact records; a drop-off merged from a team mate is not sent on), as many as
+  /// fit (the rest wait: drops_pending). Coarsest layer first. Returns the entries written.
+  static std::uint32_t write_section(StackType& stack, SentCells& sent, SnapshotWriter& w, std::size_t capacity,
+                                     std::uint32_t clears, std::int32_t finest_layer, ExportReport& report) noexcept {
+    std::uint32_t entries = 0U;
+    if constexpr (kFreeSpace) {
+      std::uint8_t entry[kFreeSpaceEntryBytes] = {};
+      const auto put = [&](const FreeSpaceEntry& e) {
+        encode_free_space_entry(e, entry);
+        for (const std::uint8_t b : entry) {
+          w.u8(b);
+        }
+        ++entries;
+      };
+      // Storage order (slot by slot): the global index is computed only for an entry written.
+      for (int pass = clears > 0U ? 0 : 1; pass < 2; ++pass) {  // 0: the reserved clears, 1: drop-offs
+        for (int layer = kLayers - 1; layer >= finest_layer; --layer) {
+          const std::size_t first = record_offset(layer);
+          const RingGrid<FreeSpaceCell>* record_grid = stack.free_space_.records(layer);
+          if (record_grid == nullptr) {
+            continue;  // not reached: every layer has its records
+          }
+          const FreeSpaceCell* records = record_grid->storage();
+          with_layer(stack, &sent, layer, [&](auto& grid, auto*) {
+            const std::int32_t side = grid.side();
+            const CellIndex min = grid.window_min();
+            const auto* cells = grid.storage();
+            const auto mask = static_cast<std::uint32_t>(side - 1);
+            const auto slots = static_cast<std::uint32_t>(side) * static_cast<std::uint32_t>(side);
+            const auto index_of = [&](std::uint32_t slot) {
+              const std::uint32_t dx = ((slot & mask) - static_cast<std::uint32_t>(min.x)) & mask;
+              const std::uint32_t dy = ((slot / static_cast<std::uint32_t>(side)) - static_cast<std::uint32_t>(min.y)) & mask;
+              return CellIndex{min.x + static_cast<std::int32_t>(dx), min.y + static_cast<std::int32_t>(dy)};
+            };
+            const auto position_of = [&](CellIndex index) {
+              return static_cast<std::uint32_t>((index.y - min.y) * side + (index.x - min.x));
+            };
+            for (std::uint32_t slot = 0; slot < slots; ++slot) {
+              std::uint8_t& flags = sent.flags[first + slot];
+              if (pass == 0) {
+                if ((flags & kClearingBit) != 0U) {
+                  const CellIndex index = index_of(slot);
+                  put(FreeSpaceEntry{FreeSpaceEntryKind::kCleared, static_cast<std::uint8_t>(layer), position_of(index),
+                                     0U, 0U});
+                  flags = static_cast<std::uint8_t>(flags & ~kClearingBit);
+                  stack.free_space_.drop_clear_mark(static_cast<std::uint32_t>(first + slot));
+                  ++report.clears_written;
+                }
+                continue;
+              }
+              if (!is_drop(records[slot])) {
+                continue;  // (the flag of a record that was reset went with it: a clear or a move resets it)
+              }
+              const auto& cell = cells[slot];
+              if ((flags & kDropSentBit) != 0U || cell.weight > 0.0F || distrust_mark(cell)) {
+                continue;  // sent, or observed here, or distrusted
+              }
+              const CellIndex index = index_of(slot);
+              FreeSpaceCell rec{};
+              if (!stack.free_space_.record_at(layer, index, &rec)) {
+                continue;  // an upset's record: the scrub resets it
+              }
+              if (entries >= kMaxDeltaEntries || w.position() + kFreeSpaceEntryBytes > capacity) {
+                ++report.drops_pending;
+                continue;
+              }
+              put(drop_entry_of(rec, layer, position_of(index)));
+              flags |= kDropSentBit;
+              ++report.drops_written;
+            }
+          });
+        }
+      }
+    } else {
+      (void)stack;
+      (void)sent;
+      (void)w;
+      (void)capacity;
+      (void)clears;
+      (void)finest_layer;
+      (void)report;
+    }
+    return entries;
   }
 
   /// Pass 1 (commit == false: reads, merges into copies only, returns the first refusal) or
   /// pass 2 (commit: merges into the map and the sent copies) over the cells of a delta whose
   /// header validated; r is positioned after the header. offset: sender origin - this origin,
   /// finest cells, a multiple of the coarsest layer's factor.
+  /// centres (may be nullptr): the sender's window centre of each layer, as read.
   [[nodiscard]] static Status merge_delta_cells(StackType& stack, SentCells* sent, SnapshotReader& r,
                                                 std::int64_t offset_x, std::int64_t offset_y, float dz_m, bool commit,
-                                                MergeReport& report) noexcept {
+                                                MergeReport& report, CellIndex* centres = nullptr,
+                                                bool clears = false) noexcept {
     const StackParams& params = stack.params_;
     Status status = Status::kOk;
     for (int layer = kLayers - 1; layer >= 0 && status == Status::kOk; --layer) {
@@ -478,6 +722,9 @@ struct ExchangeAccess {
         if (!snapshot_read_centre(r, &centre)) {
           status = Status::kCorrupt;
           return;
+        }
+        if (centres != nullptr) {
+          centres[layer] = centre;
         }
         const std::uint32_t count = r.u32();
         const std::uint64_t cells = static_cast<std::uint64_t>(side) * static_cast<std::uint64_t>(side);
@@ -505,7 +752,7 @@ struct ExchangeAccess {
           const std::int64_t y = min_y + static_cast<std::int64_t>(position / static_cast<std::uint64_t>(side));
           ++position;
           status = merge_one(stack.layers_, grid, copies, kept, x + (offset_x >> layer), y + (offset_y >> layer),
-                             received, dz_m, params, width, commit, report);
+                             received, dz_m, params, width, commit, report, clears);
           if (status != Status::kOk) {
             return;
           }
@@ -538,14 +785,131 @@ struct ExchangeAccess {
           }
           status = merge_one(stack.layers_, grid, copies, kept, static_cast<std::int64_t>(index.x) + (offset_x >> layer),
                              static_cast<std::int64_t>(index.y) + (offset_y >> layer), cell, dz_m, params, width,
-                             commit, report);
+                             commit, report, false);
         }
       });
     });
     return status;
   }
 
+  /// True if an entry of the section may be a clear (its kind field, unchecked: a damaged entry
+  /// may only make this true, the safe side).
+  [[nodiscard]] static bool may_clear(const std::uint8_t* section, std::size_t available, std::uint32_t announced) noexcept {
+    const std::size_t present = available / kFreeSpaceEntryBytes;
+    const std::size_t n = present < announced ? present : announced;
+    bool any = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      any = any || (section[i * kFreeSpaceEntryBytes + 3U] >> 4U) == static_cast<std::uint8_t>(FreeSpaceEntryKind::kCleared);
+    }
+    return any;
+  }
+
+  /// The free-space section of a delta whose core merged checks (pass 1 accepted it): entries
+  /// [0, announced) of 10 bytes from `section` (`available` bytes). Pass 0 applies the clears
+  /// (before the cells commit: a gain sent after a clear is new ground), pass 1 the drop-offs
+  /// (after: a cell the delta fills is observed) and counts what was refused. centres: the
+  /// sender's window centres; offset: sender - this map (finest cells); dz_m: heights.
+  ///
+  /// A team mate's clear empties this map's cell (and its sent copy and record: never sent on)
+  /// when the cell holds no point of this map's own (kOwnBits clear and the cell equal to its
+  /// sent copy: everything in it came from team mates, whose data the sender's lines of sight
+  /// overruled as its own), or when this map's own lines of sight contradicted it too (its
+  /// intact record's evidence >= 1: at least one frame since its surface was last confirmed).
+  /// Otherwise the cell stays, and its evidence is raised to free_space_clear_frames - 1: one
+  /// frame of this map's own contradicting rays then empties it, and a point of its own on the
+  /// surface (a confirmation) forgets it. A distrusted or upset cell is left to the scrub.
+  static void merge_section(StackType& stack, SentCells* sent, int pass, const std::uint8_t* section,
+                            std::size_t available, std::uint32_t announced, const CellIndex* centres,
+                            std::int64_t offset_x, std::int64_t offset_y, float dz_m, MergeReport& report) noexcept {
+    const std::size_t present = available / kFreeSpaceEntryBytes;
+    const std::uint32_t n = present < announced ? static_cast<std::uint32_t>(present) : announced;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      FreeSpaceEntry e{};
+      const bool valid = decode_free_space_entry(section + static_cast<std::size_t>(i) * kFreeSpaceEntryBytes, &e) &&
+                         e.layer < kLayers &&
+                         e.position < static_cast<std::uint32_t>(Layers::capacity(e.layer));
+      if (!valid) {
+        report.entries_refused += pass == 1 ? 1U : 0U;
+        continue;
+      }
+      const bool clear = e.kind == FreeSpaceEntryKind::kCleared;
+      if (clear != (pass == 0)) {
+        continue;
+      }
+      const int layer = e.layer;
+      const std::int32_t side = Layers::side(layer);
+      const std::int64_t x = static_cast<std::int64_t>(centres[layer].x) - side / 2 +
+                             static_cast<std::int64_t>(e.position % static_cast<std::uint32_t>(side)) + (offset_x >> layer);
+      const std::int64_t y = static_cast<std::int64_t>(centres[layer].y) - side / 2 +
+                             static_cast<std::int64_t>(e.position / static_cast<std::uint32_t>(side)) + (offset_y >> layer);
+      constexpr std::int64_t kLimit = grid::kMaxCellIndex;
+      const std::size_t first = record_offset(layer);
+      with_layer(stack, sent, layer, [&](auto& grid, auto* copies) {
+        using Cell = std::remove_reference_t<decltype(grid.cell_unchecked(CellIndex{}))>;
+        const CellIndex index{static_cast<std::int32_t>(x >= -kLimit && x <= kLimit ? x : 0),
+                              static_cast<std::int32_t>(y >= -kLimit && y <= kLimit ? y : 0)};
+        if (x < -kLimit || x > kLimit || y < -kLimit || y > kLimit || !grid.contains(index)) {
+          ++report.entries_outside;
+          return;
+        }
+        const std::size_t slot = grid::buffer_offset(index, side);
+        Cell& cell = grid.cell_unchecked(index);
+        if (!(cell.weight > 0.0F) || !cell_intact(stack.layers_, cell)) {
+          if (!clear && !distrust_mark(cell) && cell_intact(stack.layers_, cell)) {
+            stack.free_space_.merge_drop_at(layer, index, e.bound_code != 0U ? bound_m(FreeSpaceCell{e.bound_code, 0U, 0U}) + dz_m
+                                                                           : std::numeric_limits<float>::quiet_NaN(),
+                                            e.drop_rays);
+            if constexpr (kFreeSpace) {
+              if (sent != nullptr) {
+                sent->flags[first + slot] |= kDropSentBit;  // not sent on
+              }
+            }
+            ++report.drops_merged;
+          }
+          return;  // a clear of an empty, distrusted or upset cell: nothing to empty
+        }
+        if (!clear) {
+          return;  // observed here: this map's points answer, not a team mate's bound
+        }
+        bool own = copies != nullptr && !same_cell_bits(cell, copies[slot]);
+        if constexpr (kFreeSpace) {
+          own = own || (sent != nullptr && (sent->flags[first + slot] & kOwnBits) != 0U);
+        }
+        FreeSpaceCell rec{};
+        const bool agrees = stack.free_space_.record_at(layer, index, &rec) && rec.evidence >= 1U;
+        if (own && !agrees) {
+          const std::uint32_t frames = stack.free_space_.clear_frames();
+          stack.free_space_.raise_evidence_at(layer, index, frames > 1U ? frames - 1U : 0U);
+          ++report.clears_deferred;
+          return;
+        }
+        write_cell(stack.layers_, cell, [](Cell& written) { written = Cell{}; });  // the check follows
+        if (copies != nullptr) {
+          copies[slot] = Cell{};
+        }
+        if constexpr (kFreeSpace) {
+          if (sent != nullptr) {
+            sent->flags[first + slot] = 0U;
+          }
+        }
+        stack.free_space_.reset_record_at(layer, index);
+        ++report.cells_cleared;
+      });
+    }
+    if (pass == 1) {
+      report.entries_refused += announced - n;  // announced, not there (truncated)
+      const bool whole = available == static_cast<std::size_t>(announced) * kFreeSpaceEntryBytes;
+      report.free_space_status = whole && report.entries_refused == 0U ? Status::kOk : Status::kCorrupt;
+    }
+  }
+
  private:
+  /// True if two cells (packed floats) have the same bits.
+  template <typename Cell>
+  [[nodiscard]] static bool same_cell_bits(const Cell& a, const Cell& b) noexcept {
+    return std::memcmp(&a, &b, sizeof(Cell)) == 0;
+  }
+
   static void patch_u32(SnapshotWriter& w, std::size_t at, std::uint32_t v) noexcept {
     for (unsigned byte = 0U; byte < 4U; ++byte) {
       w.data()[at + byte] = static_cast<std::uint8_t>((v >> (8U * byte)) & 0xFFU);
@@ -554,11 +918,12 @@ struct ExchangeAccess {
 
   /// One received cell at this map's global index (x, y) of a layer. A sent copy outside the
   /// layer's KeptWindow counts as empty (what settle() makes it before the commit pass), so the
-  /// validation pass computes exactly what the commit pass writes.
+  /// validation pass computes exactly what the commit pass writes. clears: the delta may empty
+  /// cells before the commit (merge_section), so the validation also merges into an empty cell.
   template <typename Grid, typename Cell>
   [[nodiscard]] static Status merge_one(Layers& layers, Grid& grid, Cell* copies, const KeptWindow& kept, std::int64_t x,
                                         std::int64_t y, const Cell& received, float dz_m, const StackParams& params,
-                                        float width, bool commit, MergeReport& report) noexcept {
+                                        float width, bool commit, MergeReport& report, bool clears) noexcept {
     constexpr std::int64_t kLimit = grid::kMaxCellIndex;
     const bool representable = x >= -kLimit && x <= kLimit && y >= -kLimit && y <= kLimit;
     const CellIndex index{static_cast<std::int32_t>(representable ? x : 0), static_cast<std::int32_t>(representable ? y : 0)};
@@ -573,6 +938,12 @@ struct ExchangeAccess {
     }
     Cell* copy = copies != nullptr ? &copies[grid::buffer_offset(index, grid.side())] : nullptr;
     Cell merged_copy = (copy != nullptr && kept.contains(index)) ? *copy : Cell{};
+    // A team mate's clear (merge_section) may empty the cell and its copy before the commit:
+    // the received cell must merge into an empty one too, so the commit cannot fail after it.
+    Cell alone{};
+    if (clears && !commit && !exchange_merge(alone, received, dz_m, params, width)) {
+      return Status::kOutOfRange;
+    }
     if (copy != nullptr && !exchange_merge(merged_copy, received, dz_m, params, width)) {
       return Status::kOutOfRange;
     }
@@ -616,11 +987,21 @@ class MapExchange {
     // Every cell written: each gap is 0, one varint byte per cell. Leaving a cell out saves its
     // 13, 37 or 41 bytes and lengthens one gap's varint by less than a byte per skipped position
     // (a varint grows by a byte per factor 128), so no subset is larger.
+    // Free-space entries: a written cell holds points, so it is no drop-off: at most its clear
+    // (10 bytes) beside it; a cell not written at most a clear and a drop-off (20 bytes, less
+    // than a written cell and its clear). So at most 10 bytes per cell more, and at most
+    // kMaxDeltaEntries entries.
     std::size_t total = min_delta_size();
+    std::size_t cells = 0U;
     for (int layer = 0; layer < kLayerCount; ++layer) {
       const std::size_t cell_bytes =
           StackType::layer_is_ccm(layer) ? kCcmCellBytes : detail::kSnapshotFineCellBytes;
       total += StackType::layer_capacity(layer) * (cell_bytes + 1U);
+      cells += StackType::layer_capacity(layer);
+    }
+    if (Access::kFreeSpace) {
+      const std::size_t entries = cells < detail::kMaxDeltaEntries ? cells : detail::kMaxDeltaEntries;
+      total += entries * detail::kFreeSpaceEntryBytes;
     }
     return total;
   }
@@ -654,6 +1035,7 @@ class MapExchange {
     }
     counters_ = ExchangeCounters{};
     Access::clear(sent_);  // in place: a temporary would put the whole copy on the call stack
+    Access::drop_all_marks(stack);
     Access::settle(stack, sent_);
     return Status::kOk;
   }
@@ -697,10 +1079,13 @@ class MapExchange {
     r.sequence = sequence_ + 1U;
     const detail::DeltaSender sender{params.finest_cell_width_m, params_.rover_id, params_.session, r.sequence,
                                      frames_at_export_, stack_->accepted_frames(), params_.origin_cells,
-                                     params_.origin_z_m};
+                                     params_.origin_z_m, 0U, 0U};
     detail::delta_write_header(w, detail::SnapshotAccess<Config>::fingerprint(), sender);
-    Access::write_layers(*stack_, sent_, w, capacity, options, r);
-    detail::delta_finish(w);
+    const std::uint32_t clears = Access::write_layers(*stack_, sent_, w, capacity, options, r);
+    const std::size_t core_end = w.position();
+    w.u32(0U);  // the core's CRC, written by delta_finish
+    const std::uint32_t entries = Access::write_section(*stack_, sent_, w, capacity, clears, options.finest_layer, r);
+    detail::delta_finish(w, core_end, entries);
     sequence_ = r.sequence;
     frames_at_export_ = stack_->accepted_frames();
     r.bytes = w.position();
@@ -708,6 +1093,8 @@ class MapExchange {
     ++counters_.deltas_exported;
     counters_.bytes_exported += w.position();
     counters_.cells_exported += r.cells_written;
+    counters_.drops_exported += r.drops_written;
+    counters_.clears_exported += r.clears_written;
     if (report != nullptr) {
       *report = r;
     }
@@ -715,7 +1102,8 @@ class MapExchange {
   }
 
   /// Folds another rover's delta into the map (and into the sent copies, so that it is never
-  /// sent on). All-or-nothing: see the statuses in the file comment. report may be nullptr.
+  /// sent on). The core all-or-nothing, the free-space entries one by one: see the statuses in
+  /// the file comment. report may be nullptr.
   [[nodiscard]] Status merge_delta(const std::uint8_t* data, std::size_t size, MergeReport* report) noexcept {
     MergeReport r{};
     const Status status = merge_delta_impl(data, size, r);
@@ -741,7 +1129,7 @@ class MapExchange {
     if (data == nullptr || info == nullptr) {
       return Status::kInvalidArgument;
     }
-    detail::SnapshotReader r(data, size >= detail::kDeltaTrailerBytes ? size - detail::kDeltaTrailerBytes : 0U);
+    detail::SnapshotReader r(data, 0U);
     detail::DeltaSender sender{};
     const Status status =
         detail::delta_read_header(data, size, detail::SnapshotAccess<Config>::fingerprint(), r, &sender);
@@ -766,8 +1154,10 @@ class MapExchange {
     if (!r.ok()) {
       return Status::kCorrupt;
     }
-    *info = DeltaInfo{sender.rover_id, sender.session,      sender.sequence,           sender.frames_from,
-                      sender.frames_to, sender.origin_cells, sender.origin_z_m, sender.finest_cell_width_m, cells};
+    *info = DeltaInfo{sender.rover_id,   sender.session,    sender.sequence,
+                      sender.frames_from, sender.frames_to, sender.origin_cells,
+                      sender.origin_z_m, sender.finest_cell_width_m, cells,
+                      sender.entries};
     return Status::kOk;
   }
 
@@ -788,7 +1178,7 @@ class MapExchange {
     if (data == nullptr) {
       return Status::kInvalidArgument;
     }
-    detail::SnapshotReader reader(data, size >= detail::kDeltaTrailerBytes ? size - detail::kDeltaTrailerBytes : 0U);
+    detail::SnapshotReader reader(data, 0U);
     detail::DeltaSender sender{};
     Status status = detail::delta_read_header(data, size, detail::SnapshotAccess<Config>::fingerprint(), reader, &sender);
     if (status != Status::kOk) {
@@ -811,16 +1201,23 @@ class MapExchange {
     }
     const float dz = sender.origin_z_m - params_.origin_z_m;
     const std::size_t cells_begin = reader.position();
-    status = Access::merge_delta_cells(*stack_, &sent_, reader, offset_x, offset_y, dz, false, r);
-    if (status == Status::kOk && (!reader.ok() || reader.position() != size - detail::kDeltaTrailerBytes)) {
+    CellIndex centres[StackType::kLayerCount]{};
+    const std::uint8_t* section = data + sender.core_size;
+    const std::size_t available = size - sender.core_size;
+    const bool clears = Access::may_clear(section, available, sender.entries);
+    status = Access::merge_delta_cells(*stack_, &sent_, reader, offset_x, offset_y, dz, false, r, centres, clears);
+    if (status == Status::kOk && (!reader.ok() || reader.position() != sender.core_size - detail::kDeltaTrailerBytes)) {
       status = Status::kCorrupt;
     }
     if (status != Status::kOk) {
       return status;
     }
     Access::settle(*stack_, sent_);  // after validation: a refused delta changes nothing at all
+    // The free-space section: entries checked one by one, a bad one refused alone (MergeReport).
+    Access::merge_section(*stack_, &sent_, 0, section, available, sender.entries, centres, offset_x, offset_y, dz, r);
     reader.seek(cells_begin);
     (void)Access::merge_delta_cells(*stack_, &sent_, reader, offset_x, offset_y, dz, true, r);
+    Access::merge_section(*stack_, &sent_, 1, section, available, sender.entries, centres, offset_x, offset_y, dz, r);
     peers_[slot] = detail::PeerRecord{sender.rover_id, sender.session, sender.sequence, 1U};
     return Status::kOk;
   }
@@ -873,6 +1270,11 @@ class MapExchange {
       counters_.bytes_merged += size;
       counters_.cells_merged += r.cells_merged;
       counters_.cells_outside += r.cells_outside;
+      counters_.drops_merged += r.drops_merged;
+      counters_.cells_cleared += r.cells_cleared;
+      counters_.clears_deferred += r.clears_deferred;
+      counters_.entries_refused += r.entries_refused;
+      counters_.sections_damaged += r.free_space_status != Status::kOk ? 1U : 0U;
     } else if (status != Status::kNotInitialised) {
       ++counters_.refused;
       counters_.refused_corrupt += status == Status::kCorrupt ? 1U : 0U;

@@ -192,7 +192,7 @@ template <typename Config>
 struct DeltaCells {
   using S = Stack<Config>;
   const std::uint8_t* data;
-  std::size_t size;
+  std::size_t size;         ///< the core's size (DeltaSender::core_size), its CRC included
   std::size_t cells_begin;  ///< offset after the header
   float finest_width;
 
@@ -354,7 +354,7 @@ template <typename Config>
   if (data == nullptr) {
     return detail::refused_alignment(Status::kInvalidArgument);
   }
-  detail::SnapshotReader r(data, size >= detail::kDeltaTrailerBytes ? size - detail::kDeltaTrailerBytes : 0U);
+  detail::SnapshotReader r(data, 0U);
   detail::DeltaSender sender{};
   status = detail::delta_read_header(data, size, detail::SnapshotAccess<Config>::fingerprint(), r, &sender);
   if (status != Status::kOk) {
@@ -363,7 +363,8 @@ template <typename Config>
   if (!detail::same_float_bits(sender.finest_cell_width_m, ours.layer_cell_width(0))) {
     return detail::refused_alignment(Status::kMisaligned);
   }
-  const detail::DeltaCells<Config> source{data, size, r.position(), sender.finest_cell_width_m};
+  // The core only (the free-space section after it holds no cells).
+  const detail::DeltaCells<Config> source{data, sender.core_size, r.position(), sender.finest_cell_width_m};
   if (!source.read([](int, CellIndex, const auto&) {})) {
     return detail::refused_alignment(Status::kCorrupt);
   }

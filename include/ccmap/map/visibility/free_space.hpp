@@ -130,6 +130,19 @@ class FreeSpace<Config, false> {
   void reseal_records() noexcept {}
   [[nodiscard]] std::uint32_t scrub(std::uint32_t) noexcept { return 0U; }
   void hash_bindings(StateHasher&) const noexcept {}
+  [[nodiscard]] bool clear_marked(std::uint32_t) const noexcept { return false; }
+  template <typename Fn>
+  void for_each_clear_mark(Fn&&) const noexcept {}
+  void drop_clear_mark(std::uint32_t) noexcept {}
+  void clear_all_marks() noexcept {}
+  [[nodiscard]] bool record_at(int, CellIndex, FreeSpaceCell* out) const noexcept {
+    *out = FreeSpaceCell{};
+    return false;
+  }
+  void merge_drop_at(int, CellIndex, float, std::uint32_t) noexcept {}
+  void raise_evidence_at(int, CellIndex, std::uint32_t) noexcept {}
+  void reset_record_at(int, CellIndex) noexcept {}
+  [[nodiscard]] std::uint32_t clear_frames() const noexcept { return 0U; }
 };
 
 template <typename Config>
@@ -295,6 +308,88 @@ class FreeSpace<Config, true> {
   [[nodiscard]] std::uint32_t scrub(std::uint32_t count) noexcept {
     return scrub_record_slice(records_, checks_, static_cast<std::uint32_t>(kRecordCount), &scrub_cursor_, count);
   }
+
+  // ---- map exchange (persistence/exchange.hpp: free-space entries of a delta) ----
+  /// True if clear_cell emptied record `record`'s cell since the mark was last dropped (map
+  /// exchange sends the clear, persistence/exchange.hpp). The mark is two bits, one in each of
+  /// two arrays, and reads as set only when both are: an upset can lose a clear (the team mates
+  /// then keep the ghost, as without exchange) but not make one. Out of range: false.
+  [[nodiscard]] bool clear_marked(std::uint32_t record) const noexcept {
+    if (record >= kRecordCount) {
+      return false;
+    }
+    const std::uint32_t bit = 1U << (record % 32U);
+    return (clear_marks_[0][record / 32U] & clear_marks_[1][record / 32U] & bit) != 0U;
+  }
+  /// Calls fn(record) for every marked record (clear_marked), in record order.
+  template <typename Fn>
+  void for_each_clear_mark(Fn&& fn) const noexcept {
+    for (std::uint32_t i = 0; i < (kRecordCount + 31U) / 32U; ++i) {
+      std::uint32_t word = clear_marks_[0][i] & clear_marks_[1][i];
+      while (word != 0U) {
+        const auto bit = static_cast<std::uint32_t>(__builtin_ctz(word));
+        const std::uint32_t record = 32U * i + bit;
+        if (record < kRecordCount) {
+          fn(record);
+        }
+        word &= word - 1U;
+      }
+    }
+  }
+  /// Drops the mark of one record (the exchange sent its clear, or the cell left the window).
+  void drop_clear_mark(std::uint32_t record) noexcept {
+    if (record < kRecordCount) {
+      const std::uint32_t keep = ~(1U << (record % 32U));
+      clear_marks_[0][record / 32U] &= keep;
+      clear_marks_[1][record / 32U] &= keep;
+    }
+  }
+  /// Drops every mark (an exchange bound to the stack starts afresh).
+  void clear_all_marks() noexcept {
+    for (auto& half : clear_marks_) {
+      for (std::uint32_t& word : half) {
+        word = 0U;
+      }
+    }
+  }
+  /// The record of `layer` at `index` (inside the window) into *out; false if its check fails
+  /// (*out then no evidence) or the layer is bad.
+  [[nodiscard]] bool record_at(int layer, CellIndex index, FreeSpaceCell* out) const noexcept {
+    *out = FreeSpaceCell{};
+    if (layer < 0 || layer >= kLayerCount || !grids_[layer].contains(index)) {
+      return false;
+    }
+    const FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
+    if (!record_intact(rec)) {
+      return false;
+    }
+    *out = rec;
+    return true;
+  }
+  /// A team mate's drop-off into the record (merge_drop: bound_z_m in this map's frame, NaN for
+  /// none), through write_record: a record an upset changed stays detected.
+  void merge_drop_at(int layer, CellIndex index, float bound_z_m, std::uint32_t rays) noexcept {
+    if (layer >= 0 && layer < kLayerCount && grids_[layer].contains(index)) {
+      write_record(grids_[layer].cell_unchecked(index), [&](FreeSpaceCell& r) { merge_drop(r, bound_z_m, rays); });
+    }
+  }
+  /// Raises the record's evidence against its cell's surface to `evidence` (at most 255) if lower.
+  void raise_evidence_at(int layer, CellIndex index, std::uint32_t evidence) noexcept {
+    if (layer >= 0 && layer < kLayerCount && grids_[layer].contains(index)) {
+      const auto e = static_cast<std::uint8_t>(evidence < 255U ? evidence : 255U);
+      write_record(grids_[layer].cell_unchecked(index), [e](FreeSpaceCell& r) {
+        r.evidence = r.evidence > e ? r.evidence : e;
+      });
+    }
+  }
+  /// The record of a cell the exchange emptied: no evidence, as clear_cell leaves it.
+  void reset_record_at(int layer, CellIndex index) noexcept {
+    if (layer >= 0 && layer < kLayerCount && grids_[layer].contains(index)) {
+      reset_record(static_cast<std::uint32_t>(offset_[layer] + grid::buffer_offset(index, Layers::side(layer))));
+    }
+  }
+  /// free_space_clear_frames (the evidence that empties a cell).
+  [[nodiscard]] std::uint32_t clear_frames() const noexcept { return clear_frames_; }
 
   /// Integrity (map/detail/integrity.hpp): what the stack's seal covers of this stage, every value
   /// that indexes memory or sets how much work a frame does (the record grids' bindings and
@@ -840,6 +935,9 @@ class FreeSpace<Config, true> {
       }
     }
     reset_record(record);
+    const std::uint32_t bit = 1U << (record % 32U);  // map exchange sends the clear (clear_marked)
+    clear_marks_[0][record / 32U] |= bit;
+    clear_marks_[1][record / 32U] |= bit;
   }
 
   /// The one write of a record (every writer of this stage): write_delta (integrity.hpp) into
@@ -859,6 +957,9 @@ class FreeSpace<Config, true> {
   FreeSpaceCell records_[kRecordCount]{};
   CellCheck checks_[kRecordCount]{};  ///< checks_[i] belongs to records_[i] (integrity.hpp)
   std::uint32_t scrub_cursor_ = 0U;   ///< next record the scrub checks (clamped on use)
+  /// Cells clear_cell emptied, one bit per record in each half (clear_marked); map state read
+  /// and dropped by map exchange only (not in snapshots: a load retires the exchange).
+  std::uint32_t clear_marks_[2][(kRecordCount + 31U) / 32U]{};
   RingGrid<FreeSpaceCell> grids_[Layers::kLayerSlots]{};
   std::size_t offset_[Layers::kLayerSlots]{};
   // ---- derived at init, scratch of a frame (not map state) ----

@@ -21,9 +21,25 @@
 // The per-frame bits are valid only while the stamp equals the current frame's; a record not
 // touched for a multiple of 8 frames looks touched with stale bits, which at worst delays one
 // frame's evidence (documented limit, tested).
+//
+// Map exchange (persistence/exchange.hpp, delta format 3) carries what a team mate can use of
+// these records as free-space entries (FreeSpaceEntry, below): a drop-off (its bound and drop
+// rays) and a cleared cell (the sender's lines of sight emptied it). On the wire, 10 bytes,
+// little-endian, each entry with its own check so that a damaged one is refused alone:
+//   u32 where     bits 0-23 position in the layer's window, (y - min_y) side + (x - min_x) (the
+//                 window of the delta's layer header), bits 24-27 stack layer (0 the finest),
+//                 bits 28-31 kind (1 drop-off, 2 cleared; any other: refused)
+//   u16 bound     drop-off: the record's bound_code (0 = no bound; heights above the sender's
+//                 origin); cleared: 0
+//   u8  rays      drop-off: drop rays, kDropRays .. 3; cleared: 0
+//   u8  reserved  0
+//   u16 check     CRC-16/CCITT-FALSE (polynomial 0x1021, initial 0xFFFF, no reflection) of the 8
+//                 bytes before it: every error of up to 3 bits and every burst of up to 16 bits
+//                 in an entry is detected
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 namespace ccmap::detail {
@@ -131,6 +147,101 @@ inline std::uint32_t settle_frame(FreeSpaceCell& c) noexcept {
     ++c.evidence;
   }
   return c.evidence;
+}
+
+// ---- map exchange: free-space entries (the file comment gives the bytes) ----
+
+/// What a free-space entry says.
+enum class FreeSpaceEntryKind : std::uint8_t {
+  kDropOff = 1U,  ///< the sender's rays proved a drop-off in the cell (unobserved there)
+  kCleared = 2U,  ///< the sender's lines of sight emptied the cell (a ghost)
+};
+
+/// One decoded free-space entry of a delta.
+struct FreeSpaceEntry {
+  FreeSpaceEntryKind kind;
+  std::uint8_t layer;       ///< stack layer (0 the finest)
+  std::uint32_t position;   ///< in the layer's window, rows of increasing y (< 2^24)
+  std::uint16_t bound_code; ///< drop-off: the record's bound_code; cleared: 0
+  std::uint8_t drop_rays;   ///< drop-off: kDropRays .. 3; cleared: 0
+};
+
+inline constexpr std::size_t kFreeSpaceEntryBytes = 10U;
+inline constexpr std::uint32_t kFreeSpaceEntryPositions = 1U << 24U;  ///< positions a layer may have
+inline constexpr std::uint32_t kFreeSpaceEntryLayers = 16U;
+
+/// CRC-16/CCITT-FALSE of n bytes (check("123456789") = 0x29B1).
+[[nodiscard]] inline std::uint16_t free_space_entry_crc(const std::uint8_t* bytes, std::size_t n) noexcept {
+  std::uint32_t crc = 0xFFFFU;
+  for (std::size_t i = 0; i < n; ++i) {
+    crc ^= static_cast<std::uint32_t>(bytes[i]) << 8U;
+    for (int bit = 0; bit < 8; ++bit) {
+      crc = (crc & 0x8000U) != 0U ? ((crc << 1U) ^ 0x1021U) : (crc << 1U);
+    }
+    crc &= 0xFFFFU;
+  }
+  return static_cast<std::uint16_t>(crc);
+}
+
+/// The entry of a drop-off record (is_drop) at `position` of `layer`.
+[[nodiscard]] inline FreeSpaceEntry drop_entry_of(const FreeSpaceCell& rec, int layer, std::uint32_t position) noexcept {
+  return FreeSpaceEntry{FreeSpaceEntryKind::kDropOff, static_cast<std::uint8_t>(layer), position, rec.bound_code,
+                        static_cast<std::uint8_t>(drop_rays(rec))};
+}
+
+/// Writes the 10 bytes of an entry (fields as the file comment; no validation: callers write
+/// entries of their own records).
+inline void encode_free_space_entry(const FreeSpaceEntry& e, std::uint8_t* out) noexcept {
+  const std::uint32_t where = (e.position & (kFreeSpaceEntryPositions - 1U)) |
+                              ((static_cast<std::uint32_t>(e.layer) & 0x0FU) << 24U) |
+                              (static_cast<std::uint32_t>(e.kind) << 28U);
+  for (unsigned b = 0U; b < 4U; ++b) {
+    out[b] = static_cast<std::uint8_t>((where >> (8U * b)) & 0xFFU);
+  }
+  out[4] = static_cast<std::uint8_t>(e.bound_code & 0xFFU);
+  out[5] = static_cast<std::uint8_t>(e.bound_code >> 8U);
+  out[6] = e.drop_rays;
+  out[7] = 0U;
+  const std::uint16_t crc = free_space_entry_crc(out, 8U);
+  out[8] = static_cast<std::uint8_t>(crc & 0xFFU);
+  out[9] = static_cast<std::uint8_t>(crc >> 8U);
+}
+
+/// Reads 10 bytes into *e; false (e unchanged) for a check mismatch or anything an export does
+/// not write: another kind, a non-zero reserved byte, a drop-off with fewer than kDropRays or
+/// more than 3 rays, a cleared entry with a bound or rays. The layer and position are checked
+/// against the receiver's stack by the caller.
+[[nodiscard]] inline bool decode_free_space_entry(const std::uint8_t* in, FreeSpaceEntry* e) noexcept {
+  const auto crc = static_cast<std::uint16_t>(in[8] | (in[9] << 8U));
+  if (free_space_entry_crc(in, 8U) != crc || in[7] != 0U) {
+    return false;
+  }
+  std::uint32_t where = 0U;
+  for (unsigned b = 0U; b < 4U; ++b) {
+    where |= static_cast<std::uint32_t>(in[b]) << (8U * b);
+  }
+  const std::uint32_t kind = where >> 28U;
+  const auto bound = static_cast<std::uint16_t>(in[4] | (in[5] << 8U));
+  const std::uint8_t rays = in[6];
+  const bool drop = kind == static_cast<std::uint32_t>(FreeSpaceEntryKind::kDropOff) && rays >= kDropRays && rays <= 3U;
+  const bool cleared = kind == static_cast<std::uint32_t>(FreeSpaceEntryKind::kCleared) && rays == 0U && bound == 0U;
+  if (!drop && !cleared) {
+    return false;
+  }
+  *e = FreeSpaceEntry{static_cast<FreeSpaceEntryKind>(kind), static_cast<std::uint8_t>((where >> 24U) & 0x0FU),
+                      where & (kFreeSpaceEntryPositions - 1U), bound, rays};
+  return true;
+}
+
+/// A team mate's drop-off folded into a record: the bound lowered to bound_z_m (this map's
+/// frame, rounded up as lower_bound; NaN: the entry had no bound) and the drop rays raised to
+/// `rays` (at most 3). Both are idempotent, so a drop-off merged twice is merged once.
+inline void merge_drop(FreeSpaceCell& c, float bound_z_m, std::uint32_t rays) noexcept {
+  lower_bound(c, bound_z_m);
+  const std::uint32_t r = rays < 3U ? rays : 3U;
+  if (r > drop_rays(c)) {
+    c.state = static_cast<std::uint8_t>((c.state & kNotDropMask) | (r << kDropShift));
+  }
 }
 
 }  // namespace ccmap::detail
