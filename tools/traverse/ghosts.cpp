@@ -17,7 +17,8 @@
 namespace ccmap::traverse {
 
 /// The ghost experiment's maps carry the viewshed table, so that `--rays 65535` casts every line
-/// of sight (docs/design.md 12); at any other count they are the CADRE stack (the table unused).
+/// of sight and `--stride K` those of one point in K (docs/design.md 12); at any other count they
+/// are the CADRE stack (the table unused).
 using GhostMap = Stack<WithEveryLineOfSight<CadreConfig>>;
 
 namespace {

@@ -1,11 +1,12 @@
 // Every line of sight of a frame at once (docs/design.md, "Free space from lines of sight",
 // "Every line of sight"): the viewshed table. The rays of one frame share their origin, so
-// instead of walking each, every routed point writes one entry: the lowest line-of-sight slope of
-// the points whose rays end in its (azimuth sector, range bin). One sweep per sector
-// then gives, for every bin, the lowest ray that reaches beyond it, and a map cell reads its
-// bound from the sectors that lie wholly inside its azimuth interval. Used by the free-space
-// stage (free_space.hpp) when StackParams::free_space_rays is kFreeSpaceEveryRay; the update path
-// feeds it chunk by chunk while the front's output is in L1 (map/update/update_path.hpp).
+// instead of walking each, every sampled routed point (every point, or one in 2, 4, 8, 16)
+// writes one entry: the lowest line-of-sight slope of the points whose rays end in its (azimuth
+// sector, range bin). One sweep per sector then gives, for every bin, the lowest ray that
+// reaches beyond it, and a map cell reads its bound from the sectors that lie wholly inside its
+// azimuth interval. Used by the free-space stage (free_space.hpp) when
+// StackParams::free_space_rays selects it (sight_stride_of_rays); the update path feeds it chunk
+// by chunk while the front's output is in L1 (map/update/update_path.hpp).
 //
 // Geometry (horizontal positions in finest cells from the sensor, heights in m):
 //  - azimuth: the diamond angle a in [0, 4) of (dx, dy) (monotonic in the true angle, one
@@ -25,9 +26,10 @@
 // nearest (descending ray) or farthest (rising ray) corner: never below the height at which such
 // a ray crosses the cell.
 //
-// Cost (docs/performance.md 13): a key pass over the front's chunk (NEON on aarch64), one
-// scattered minimum per point, a sweep over the table, then the cells: 37 aarch64 instructions
-// per point of a CADRE frame (21 of them the key pass), over the flight cycle's budget. No heap.
+// Cost (docs/performance.md 13): a key pass over the sampled points of the front's chunk (NEON on
+// aarch64), one scattered minimum per sampled point, a sweep over the table, then the cells the
+// frame's rays reach: per CADRE frame 17.9 M aarch64 instructions fed by every point, 3.9 M by
+// one in 8 (within the 4 M for the stage). No heap.
 #pragma once
 
 #include <cmath>
@@ -52,7 +54,9 @@ struct EveryLineOfSightTag {};
 /// A Config that carries the viewshed table (261 KB per stack, not in the presets: the C API's
 /// storage sizes and the presets' memory stay as they are): WithEveryLineOfSight<CadreConfig>.
 /// Its stack casts every line of sight when StackParams::free_space_rays is
-/// detail::kFreeSpaceEveryRay (65535), and samples rays at any other value, as the presets do.
+/// detail::kFreeSpaceEveryRay (65535), those of one point in k at
+/// detail::free_space_table_rays(k) = 65536 - k (k = 2, 4, 8, 16), and walks sampled rays at any
+/// other value, as the presets do.
 template <typename Base>
 struct WithEveryLineOfSight : Base, EveryLineOfSightTag {};
 
