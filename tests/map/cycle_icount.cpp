@@ -10,18 +10,16 @@
 //             the sensor-frame stack holds the same map as the cycle's)
 // On other targets the markers are empty and the program only checks the cycles.
 //
-//   ccmap_cycle_icount [cycles [full|paper|table K]]   default 3 (full 850 x 650 frames), full
-//   CCM cells; `paper` counts the same cycles with Stack<PaperCell<CadreConfig>> (the paper's
-//   9-float cell); `table K` with Stack<WithEveryLineOfSight<CadreConfig>> and free space from
-//   the viewshed table fed by one point in K (K = 1, 2, 4, 8, 16: free_space_rays =
-//   detail::free_space_table_rays(K); docs/performance.md 13)
+//   ccmap_cycle_icount [cycles [full|paper]]   default 3 (full 850 x 650 frames), full CCM cells;
+//   `paper` counts the same cycles with Stack<PaperCell<CadreConfig>> (the paper's 9-float cell)
+// The same cycles with free space from the viewshed table: ccmap_cycle_table_icount
+// (cycle_table_icount.cpp; a program of its own, so that this one's code stays as it is).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
 
 #include "ccmap/map/stack.hpp"
-#include "ccmap/map/visibility/sight_table.hpp"
 #include "ccmap/platform/platform.hpp"
 #include "support/flight_cycle.hpp"
 #include "support/icount_marker.hpp"
@@ -36,12 +34,20 @@ auto counted(Fn&& fn) {
   return result;
 }
 
+#ifdef CCMAP_CYCLE_TABLE
+int table_stride = 8;  ///< one point in table_stride feeds the viewshed table (cycle_table_icount.cpp)
+#endif
+
 template <typename Config>
-int run(int cycles, const ccmap::StackParams& params) {
+int run(int cycles) {
   // Heap, as the timing test: a count is of a binary, and the stack's placement changes code.
   const auto stack = std::make_unique<ccmap::Stack<Config>>();
   const auto sensor_only = std::make_unique<ccmap::Stack<Config>>();
   const auto map_only = std::make_unique<ccmap::Stack<Config>>();
+  ccmap::StackParams params = ccmap::default_stack_params(0.04F);
+#ifdef CCMAP_CYCLE_TABLE
+  params.free_space_rays = ccmap::detail::free_space_table_rays(table_stride);
+#endif
   for (auto* s : {stack.get(), sensor_only.get(), map_only.get()}) {
     if (s->init(params) != ccmap::Status::kOk) {
       std::fprintf(stderr, "ccmap_cycle_icount: init failed\n");
@@ -94,21 +100,14 @@ int run(int cycles, const ccmap::StackParams& params) {
 
 }  // namespace
 
+#ifndef CCMAP_CYCLE_TABLE
 int main(int argc, char** argv) {
   const int cycles = argc > 1 ? std::atoi(argv[1]) : 3;
   const bool paper = argc > 2 && std::strcmp(argv[2], "paper") == 0;
-  const bool table = argc == 4 && std::strcmp(argv[2], "table") == 0;
-  const int stride = table ? std::atoi(argv[3]) : 0;
-  if (cycles < 1 || cycles > 100 || argc > 4 || (argc == 4 && !table) ||
-      (table && ccmap::detail::sight_stride_of_rays(ccmap::detail::free_space_table_rays(stride)) != stride) ||
-      (argc == 3 && !paper && std::strcmp(argv[2], "full") != 0)) {
-    std::fprintf(stderr, "usage: ccmap_cycle_icount [cycles 1..100 [full|paper|table 1|2|4|8|16]]\n");
+  if (cycles < 1 || cycles > 100 || argc > 3 || (argc == 3 && !paper && std::strcmp(argv[2], "full") != 0)) {
+    std::fprintf(stderr, "usage: ccmap_cycle_icount [cycles 1..100 [full|paper]]\n");
     return 2;
   }
-  ccmap::StackParams params = ccmap::default_stack_params(0.04F);
-  if (table) {
-    params.free_space_rays = ccmap::detail::free_space_table_rays(stride);
-    return run<ccmap::WithEveryLineOfSight<ccmap::CadreConfig>>(cycles, params);
-  }
-  return paper ? run<ccmap::PaperCell<ccmap::CadreConfig>>(cycles, params) : run<ccmap::CadreConfig>(cycles, params);
+  return paper ? run<ccmap::PaperCell<ccmap::CadreConfig>>(cycles) : run<ccmap::CadreConfig>(cycles);
 }
+#endif
