@@ -13,7 +13,8 @@
 //   icount_free_space_example [frames width_px height_px [rays]]   default: 2 80 50, the CADRE
 //   default's lines of sight (3 850 650: the figures of docs/performance.md; `rays` measures the
 //   stage at another free_space_rays, 1..65535; 65535: every line of sight, the viewshed table,
-//   on the stack that carries it, WithEveryLineOfSight<CadreConfig>)
+//   on the stack that carries it, WithEveryLineOfSight<CadreConfig>; 65536 - k for k = 2, 4, 8,
+//   16: the table fed by every k-th point, detail::free_space_table_rays(k))
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -105,7 +106,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: icount_free_space_example [frames width_px height_px [rays]]\n");
     return 2;
   }
-  if (rays_per_frame == 65535) {
+  if (ccmap::detail::sight_stride_of_rays(static_cast<float>(rays_per_frame)) > 0) {
     return run<ccmap::Stack<ccmap::WithEveryLineOfSight<ccmap::CadreConfig>>>(frames, width_px, height_px,
                                                                               rays_per_frame);
   }

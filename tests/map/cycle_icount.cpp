@@ -12,6 +12,8 @@
 //
 //   ccmap_cycle_icount [cycles [full|paper]]   default 3 (full 850 x 650 frames), full CCM cells;
 //   `paper` counts the same cycles with Stack<PaperCell<CadreConfig>> (the paper's 9-float cell)
+// The same cycles with free space from the viewshed table: ccmap_cycle_table_icount
+// (cycle_table_icount.cpp; a program of its own, so that this one's code stays as it is).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -32,14 +34,22 @@ auto counted(Fn&& fn) {
   return result;
 }
 
+#ifdef CCMAP_CYCLE_TABLE
+int table_stride = 8;  ///< one point in table_stride feeds the viewshed table (cycle_table_icount.cpp)
+#endif
+
 template <typename Config>
 int run(int cycles) {
   // Heap, as the timing test: a count is of a binary, and the stack's placement changes code.
   const auto stack = std::make_unique<ccmap::Stack<Config>>();
   const auto sensor_only = std::make_unique<ccmap::Stack<Config>>();
   const auto map_only = std::make_unique<ccmap::Stack<Config>>();
+  ccmap::StackParams params = ccmap::default_stack_params(0.04F);
+#ifdef CCMAP_CYCLE_TABLE
+  params.free_space_rays = ccmap::detail::free_space_table_rays(table_stride);
+#endif
   for (auto* s : {stack.get(), sensor_only.get(), map_only.get()}) {
-    if (s->init(ccmap::default_stack_params(0.04F)) != ccmap::Status::kOk) {
+    if (s->init(params) != ccmap::Status::kOk) {
       std::fprintf(stderr, "ccmap_cycle_icount: init failed\n");
       return 1;
     }
@@ -90,6 +100,7 @@ int run(int cycles) {
 
 }  // namespace
 
+#ifndef CCMAP_CYCLE_TABLE
 int main(int argc, char** argv) {
   const int cycles = argc > 1 ? std::atoi(argv[1]) : 3;
   const bool paper = argc > 2 && std::strcmp(argv[2], "paper") == 0;
@@ -99,3 +110,4 @@ int main(int argc, char** argv) {
   }
   return paper ? run<ccmap::PaperCell<ccmap::CadreConfig>>(cycles) : run<ccmap::CadreConfig>(cycles);
 }
+#endif

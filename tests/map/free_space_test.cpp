@@ -44,6 +44,17 @@ using ccmap::test::SceneFrame;
 #endif
 using Map = Stack<CCMAP_FREE_SPACE_CONFIG>;
 
+#ifndef CCMAP_FREE_SPACE_CAMERA_SCALE
+#define CCMAP_FREE_SPACE_CAMERA_SCALE 1
+#endif
+/// The scenes' camera (120 x 90 pixels, times CCMAP_FREE_SPACE_CAMERA_SCALE each way).
+SceneCamera scene_camera() {
+  SceneCamera cam;
+  cam.cols *= CCMAP_FREE_SPACE_CAMERA_SCALE;
+  cam.rows *= CCMAP_FREE_SPACE_CAMERA_SCALE;
+  return cam;
+}
+
 StackParams params(bool free_space, bool gate) {
   StackParams p = ccmap::default_stack_params(0.04F);
   p.free_space_rays = free_space ? CCMAP_FREE_SPACE_RAYS : 0.0F;
@@ -101,7 +112,7 @@ TEST(FreeSpaceScenes, AVanishedBoxIsClearedWithinAFewFramesWhileThePaperUpdateKe
   const AnalyticScene empty;
   auto on = make_map(params(true, false));
   auto off = make_map(params(false, false));
-  SceneCamera cam;
+  SceneCamera cam = scene_camera();
   for (int k = 0; k < 4; ++k) {
     cam.seed = static_cast<std::uint64_t>(k) + 1U;
     const SceneFrame f = ccmap::test::render_scene(with_box, cam);
@@ -225,7 +236,7 @@ TEST(FreeSpaceScenes, OpenGroundWithUnclippedStereoNoiseLosesNoCellAndShowsNoDro
     std::uint32_t cleared = 0;
     std::uint32_t drops = 0;
     for (int k = 0; k < 12; ++k) {
-      SceneCamera cam;
+      SceneCamera cam = scene_camera();
       cam.x = 0.2 * k;
       cam.noise_per_range_sq = 1.0 / 300.0;
       cam.seed = static_cast<std::uint64_t>(k) + 7U;
@@ -255,7 +266,7 @@ AnalyticScene ditch_scene() {
 std::unique_ptr<Map> map_of_ditch() {
   auto m = make_map(params(true, true));
   for (int k = 0; k < 3; ++k) {
-    SceneCamera cam;
+    SceneCamera cam = scene_camera();
     cam.seed = static_cast<std::uint64_t>(k) + 1U;
     fold(*m, ccmap::test::render_scene(ditch_scene(), cam));
   }
@@ -343,7 +354,7 @@ TEST(FreeSpaceScenes, TheShadowOfARockIsUnknownNotADropOff) {
     auto map = make_map(params(true, true));
     std::uint32_t drops = 0;
     for (int k = 0; k < 4; ++k) {
-      SceneCamera cam;
+      SceneCamera cam = scene_camera();
       cam.seed = static_cast<std::uint64_t>(k) + 1U;
       drops += fold(*map, ccmap::test::render_scene(scene, cam)).drop_cells;
     }
@@ -406,7 +417,7 @@ TEST(FreeSpaceScenes, SwitchedOffAtRunTimeItIsTheStackCompiledWithoutIt) {
   auto compiled_out = std::make_unique<Stack<ccmap::WithFreeSpace<CadreConfig, false>>>();
   ASSERT_EQ(compiled_out->init(params(true, false)), Status::kOk) << "its free_space_rays is ignored";
   for (int k = 0; k < 6; ++k) {
-    SceneCamera cam;
+    SceneCamera cam = scene_camera();
     cam.seed = static_cast<std::uint64_t>(k) + 1U;
     const SceneFrame f = ccmap::test::render_scene(k < 3 ? with_box : AnalyticScene{}, cam);
     FrameCounters a{}, b{};

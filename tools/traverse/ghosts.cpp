@@ -18,7 +18,8 @@
 namespace ccmap::traverse {
 
 /// The ghost experiment's maps carry the viewshed table, so that `--rays 65535` casts every line
-/// of sight (docs/design.md 12); at any other count they are the CADRE stack (the table unused).
+/// of sight and `--stride K` those of one point in K (docs/design.md 12); at any other count they
+/// are the CADRE stack (the table unused).
 using GhostMap = Stack<WithEveryLineOfSight<CadreConfig>>;
 
 namespace {
@@ -86,6 +87,16 @@ StackParams map_params(const GhostConfig& config, bool free_space) {
   if (config.free_space_rays > 0) p.free_space_rays = static_cast<float>(config.free_space_rays);
   if (!free_space) p.free_space_rays = 0.0F;
   return p;
+}
+
+/// What AFTER casts per frame, in words: "128 lines of sight walked", "every line of sight",
+/// "one line of sight in 4" (the viewshed table fed by one point in 4).
+std::string rays_description(const GhostConfig& config) {
+  const float rays = map_params(config, true).free_space_rays;
+  const int stride = detail::sight_stride_of_rays(rays);
+  if (stride == 1) return "every line of sight";
+  if (stride > 1) return format("one line of sight in %d", stride);
+  return format("%d lines of sight walked", static_cast<int>(rays));
 }
 
 std::unique_ptr<GhostMap> make_map(const StackParams& p, std::string* error) {
@@ -423,7 +434,7 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
     draw_class_panel(img, 20, 30, scale, ras, *before[0], final_bodies, tracks,
                      format("ROVER 1 MAP, FRAME %d, WITHOUT FREE SPACE", cfg.team_frames - 1));
     draw_class_panel(img, 40 + panel_w, 30, scale, ras, *after[0], final_bodies, tracks,
-                     format("WITH FREE SPACE (%d RAYS PER FRAME)", static_cast<int>(map_params(cfg, true).free_space_rays)));
+                     "WITH FREE SPACE (" + rays_description(cfg) + " PER FRAME)");
     int x = 20;
     for (const char* c : {"traversable", "obstacle", "steep", "drop", "unknown"}) {
       std::uint8_t v[3];
@@ -676,7 +687,7 @@ GhostResult run_ghosts(const GhostConfig& config) {
 
 std::string ghost_report(const GhostResult& r, const GhostConfig& c) {
   std::string s;
-  s += format("AFTER: %d lines of sight per frame\n\n", static_cast<int>(map_params(c, true).free_space_rays));
+  s += "AFTER: " + rays_description(c) + " per frame\n\n";
   s += format("Team of three rovers, %d frames, pixel stride %d: ghosts (map obstacle or steep where a rover stood,\n"
               "no rover stands and the ground is free), per rover's map\n\n",
               c.team_frames, c.pixel_stride);

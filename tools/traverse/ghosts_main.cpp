@@ -3,10 +3,13 @@
 // approached, rock shadows on open ground.
 //   ccmap_ghosts [--seed N] [--quick] [--out DIR] [--gate K] [--change-points M] [--change-share S]
 //                [--rays N]   (AFTER's free_space_rays; default: the library's, StackParams)
+//                [--stride K] (AFTER casts the lines of sight of every K-th point, K = 1, 2, 4, 8, 16:
+//                              the viewshed table, free_space_rays = 65536 - K; 1 = every one)
 // (the experiments' options, experiments/common.hpp; --data and --paper-cell are accepted and unused).
 #include <cstdio>
 
 #include "ccmap/map/config.hpp"
+#include "ccmap/map/visibility/sight_table.hpp"
 
 #include "experiments/common.hpp"
 #include "parse_args.hpp"
@@ -25,7 +28,14 @@ int main(int argc, char** argv) {
   app->add_option("--rays", rays, "AFTER's lines of sight per frame (1..65535; default: the library's)")
       ->type_name("N")
       ->check(CLI::Range(1, 65535));
+  int stride = 0;
+  app->add_option("--stride", stride,
+                  "AFTER casts the lines of sight of every K-th point (the viewshed table; 1 = every one)")
+      ->type_name("K")
+      ->check(CLI::IsMember({1, 2, 4, 8, 16}))
+      ->excludes("--rays");
   if (const int rc = experiments::parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
+  if (stride > 0) rays = static_cast<int>(detail::free_space_table_rays(stride));
   traverse::GhostConfig cfg = args.quick ? traverse::GhostConfig::quick() : traverse::GhostConfig{};
   cfg.seed = args.seed;
   cfg.gate = args.gate;

@@ -215,7 +215,9 @@ struct StackParams {
   /// lines of sight walked per frame, from the sensor to an evenly spread subsample of the
   /// frame's points (a whole number in [0, 65535]; 0 switches the feature off at run time: no
   /// cell is cleared, no drop-off marked, the frame costs what it did without it). A stack whose
-  /// Config has kFreeSpace = false ignores it.
+  /// Config has kFreeSpace = false ignores it. On a stack that carries the viewshed table
+  /// (WithEveryLineOfSight, map/visibility/sight_table.hpp) 65535 casts every line of sight of
+  /// the frame and 65536 - k those of one point in k (k = 2, 4, 8, 16) instead of walking rays.
   float free_space_rays = 0.0F;
   /// Frames (a whole number in [1, 255]) in which rays must pass clearly below a cell's surface,
   /// with no ray ending on it in between, before the cell is cleared.

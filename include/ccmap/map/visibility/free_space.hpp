@@ -192,7 +192,8 @@ class FreeSpace<Config, true> {
     }
     max_inclination_ = params.max_inclination;
     rays_ = static_cast<std::uint32_t>(params.free_space_rays);
-    every_ = kSight && params.free_space_rays >= kFreeSpaceEveryRay;
+    sight_stride_ = kSight ? sight_stride_of_rays(params.free_space_rays) : 0;
+    every_ = sight_stride_ > 0;
     // Square-root bins up to the farthest window corner (finest cells from the sensor, which
     // lies near the windows' centre: the half diagonal, 0.71 of the side, and a margin).
     float reach = 1.0F;
@@ -227,7 +228,7 @@ class FreeSpace<Config, true> {
     }
   }
 
-  /// Every-line-of-sight mode (free_space_rays = kFreeSpaceEveryRay): empties the viewshed table
+  /// Table mode (free_space_rays >= free_space_table_rays(kSightMaxStride)): empties the viewshed table
   /// for the frame and returns it for the update path to fill chunk by chunk; nullptr otherwise.
   [[nodiscard]] SightTable* begin_sight(const FramePose& pose) noexcept {
     if constexpr (!kSight) {
@@ -251,6 +252,10 @@ class FreeSpace<Config, true> {
     k.view_axis[2] = view_axis_[2];
     k.view_axis_set = view_axis_set_;
     k.layers = kLayerCount;
+    k.stride = sight_stride_;
+    // The sampled groups move through their block frame by frame (strides 8 and 16), so that
+    // every point of a steady camera's image casts its line of sight every few frames.
+    k.phase = static_cast<std::int32_t>((frames_ * 9U) & 0x7FFFU);
     sight_.begin(k);
     sight_anchor_ = pose.anchor;
     return &sight_;
@@ -406,6 +411,7 @@ class FreeSpace<Config, true> {
     h.add(rays_);
     h.add(clear_frames_);
     hash_bool_bytes(h, every_);
+    h.add(sight_stride_);
     h.add(bin_scale_);
     h.add(sigma_c_);
     h.add(cell_width_);
@@ -464,6 +470,19 @@ class FreeSpace<Config, true> {
       return CellView{c.weight, c.height, 0.0F};
     } else {
       return CellView{0.0F, 0.0F, 0.0F};
+    }
+  }
+
+  /// The cell's weight as stored, unchecked: only to skip an empty cell early (view_of reads
+  /// the cell through its check before anything of it is used).
+  [[nodiscard]] float raw_weight(const Layers& layers, int layer, CellIndex index) const noexcept {
+    if (Layers::is_ccm(layer)) {
+      return layers.ccm_grid(layer).cell_unchecked(index).weight;
+    }
+    if constexpr (Layers::kHasFine) {
+      return layers.fine.cell_unchecked(index).weight;
+    } else {
+      return 0.0F;
     }
   }
 
@@ -565,19 +584,28 @@ class FreeSpace<Config, true> {
         const std::int32_t gy = min.y + j;
         const float y0 = static_cast<float>((std::int64_t{gy} * (std::int64_t{1} << layer)) - sight_anchor_.y) - k.sensor_u[1];
         const float y1 = y0 + cw;
-        for (std::int32_t i = 0; i < side; ++i) {
+        // Only the columns the frame's rays can reach (reach and view: SightTable::row_span).
+        const float bx = static_cast<float>((std::int64_t{min.x} * (std::int64_t{1} << layer)) - sight_anchor_.x) - k.sensor_u[0];
+        std::int32_t first = 0, last = -1;
+        if (!sight_.row_span(y0, y1, bx, cw, side, &first, &last)) {
+          continue;
+        }
+        for (std::int32_t i = first; i <= last; ++i) {
           const std::int32_t gx = min.x + i;
+          const CellIndex index{gx, gy};
+          const bool walk_layer = !finer_holds(layer, index);
+          if (!walk_layer && !(raw_weight(layers, layer, index) > 0.0F)) {
+            continue;  // a coarser layer's empty cell under a finer window: the finer record speaks
+          }
           const float x0 = static_cast<float>((std::int64_t{gx} * (std::int64_t{1} << layer)) - sight_anchor_.x) - k.sensor_u[0];
           const float x1 = x0 + cw;
           SightCell sc{};
           if (!sight_.read_cell(x0, x1, y0, y1, &sc)) {
             continue;
           }
-          const CellIndex index{gx, gy};
           const CellView cell = view_of(layers, layer, index);
-          const bool walk_layer = !finer_holds(layer, index);
           if (!(cell.weight > 0.0F) && !walk_layer) {
-            continue;  // a coarser layer's empty cell under a finer window: the finer record speaks
+            continue;  // empty after its check (an upset): as above
           }
           const int lo = sc.lo, hi = sc.hi, bin = sc.bin;
           const std::int32_t qmin = sc.qmin;
@@ -588,16 +616,12 @@ class FreeSpace<Config, true> {
           if (cell.weight > 0.0F) {
             // The sectors whose lowest ray passes clearly below the cell's top: two at least, and
             // every sector holding a ray (a rock over part of the cell stops the rays of the
-            // sectors it covers, which then pass over it or end on it).
-            int below = 0;
-            for (int s = lo; s < hi; ++s) {
-              const std::int32_t q = sight_.slope(bin, s);
-              if (q != kSightEmpty &&
-                  top_above(cell, layer, k.z0 + static_cast<float>(q) * unit_m * (q < 0 ? s_near : s_far))) {
-                ++below;
-              }
-            }
-            if (below >= 2 && below == covered) {
+            // sectors it covers, which then pass over it or end on it). The ray's height is
+            // non-decreasing in its slope and top_above non-increasing in the height, so every
+            // sector passes below exactly when the highest of them does.
+            const std::int32_t qmax = sc.qmax;
+            if (covered >= 2 &&
+                top_above(cell, layer, k.z0 + static_cast<float>(qmax) * unit_m * (qmax < 0 ? s_near : s_far))) {
               write_record(rec, [&](FreeSpaceCell& r) {
                 (void)touch(r, stamp_);
                 if (frame_contradictions(r) == 0U) {
@@ -975,7 +999,8 @@ class FreeSpace<Config, true> {
   std::int64_t origin_u_[2]{};
   float origin_z_ = 0.0F;
   float cell_width_ = 0.0F;  ///< w_0 (m)
-  bool every_ = false;       ///< every line of sight (free_space_rays = kFreeSpaceEveryRay)
+  bool every_ = false;       ///< the viewshed table (free_space_rays >= free_space_table_rays(kSightMaxStride))
+  std::int32_t sight_stride_ = 0;  ///< its stride: every sight_stride_-th point casts a ray (sight_stride_of_rays)
   float bin_scale_ = 0.0F;   ///< the viewshed table's square-root bins per sqrt(cell)
   float sigma_c_[3]{};       ///< kSightRangeSigmas sigma(r) = c0 + c1 r + c2 r^2 (m)
   CellIndex sight_anchor_{0, 0};
