@@ -38,6 +38,7 @@
 //                 in an entry is detected
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -239,9 +240,8 @@ inline void encode_free_space_entry(const FreeSpaceEntry& e, std::uint8_t* out) 
 inline void merge_drop(FreeSpaceCell& c, float bound_z_m, std::uint32_t rays) noexcept {
   lower_bound(c, bound_z_m);
   const std::uint32_t r = rays < 3U ? rays : 3U;
-  if (r > drop_rays(c)) {
-    c.state = static_cast<std::uint8_t>((c.state & kNotDropMask) | (r << kDropShift));
-  }
+  const std::uint32_t kept = drop_rays(c);
+  c.state = static_cast<std::uint8_t>((c.state & kNotDropMask) | (std::max(r, kept) << kDropShift));
 }
 
 }  // namespace ccmap::detail

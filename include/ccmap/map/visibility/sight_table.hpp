@@ -650,6 +650,7 @@ class SightTable {
 #if defined(__aarch64__)
   /// Values p[0], p[g], p[2 g], p[3 g], g = min(S, 4) (a group of sampled_point): one load.
   template <int S>
+  // cppcheck-suppress unusedPrivateFunction ; called as lanes<S>(chunk.fx + at) above, which cppcheck does not resolve
   static float32x4_t lanes(const float* p) noexcept {
     if constexpr (S == 1) {
       return vld1q_f32(p);
@@ -675,9 +676,6 @@ class SightTable {
   /// and how many do (on aarch64 eight sectors a turn, the last turn's lanes beyond hi masked;
   /// integer operations: the scalar loop's answer).
   void scan_sectors(SightCell* c) const noexcept {
-    std::int32_t qmin = kSightEmpty;
-    std::int32_t qmax = -32768;
-    int covered = 0;
     const std::int16_t* row = swept_ + static_cast<std::size_t>(c->bin) * kSightSectors;
 #if defined(__aarch64__)
     // The interval [lo, hi) taken modulo kSightSectors: at most two runs of the row.
@@ -705,10 +703,13 @@ class SightTable {
         count = vsubq_u16(count, has);
       }
     }
-    qmin = vminvq_s16(vmin);
-    qmax = vmaxvq_s16(vmax);
-    covered = static_cast<int>(vaddvq_u16(count));
+    c->qmin = vminvq_s16(vmin);
+    c->qmax = vmaxvq_s16(vmax);
+    c->covered = static_cast<int>(vaddvq_u16(count));
 #else
+    std::int32_t qmin = kSightEmpty;
+    std::int32_t qmax = -32768;
+    int covered = 0;
     for (int s = c->lo; s < c->hi; ++s) {
       const std::int32_t q = row[s & (kSightSectors - 1)];
       if (q != kSightEmpty) {
@@ -717,10 +718,10 @@ class SightTable {
         ++covered;
       }
     }
-#endif
     c->qmin = qmin;
     c->qmax = qmax;
     c->covered = covered;
+#endif
   }
 
   static float clamp_min(float a, float b) noexcept { return b < a ? b : a; }  // min; a NaN b leaves a
