@@ -525,18 +525,18 @@ class FreeSpace<Config, true> {
     // index 2^(layer + 8) + 2^(layer + 7); the difference is exact in int64, and in float for
     // any cell of a window (below 2^24 U).
     const std::int64_t cell_u = std::int64_t{256} << layer;
+    const std::int64_t half_u = std::int64_t{128} << layer;
     const float metres_per_u = cell_width_ * 0.00390625F;
-    const float ox = static_cast<float>(origin_u_[0] - (std::int64_t{v.index.x} * cell_u + cell_u / 2)) * metres_per_u;
-    const float oy = static_cast<float>(origin_u_[1] - (std::int64_t{v.index.y} * cell_u + cell_u / 2)) * metres_per_u;
+    const float ox = static_cast<float>(origin_u_[0] - (std::int64_t{v.index.x} * cell_u + half_u)) * metres_per_u;
+    const float oy = static_cast<float>(origin_u_[1] - (std::int64_t{v.index.y} * cell_u + half_u)) * metres_per_u;
     const float margin = consts_[layer].clear_margin_m;
-    for (const float t : {v.t_in, v.t_out}) {
+    // At the ray's fraction t of the walked segment: its top above the ray by the margin.
+    const auto top_above_ray = [&](float t) {
       const float plane = ccm_height_at(c, surface, ox + t * ray.dx_m, oy + t * ray.dy_m);
       const float gap = ray.z0 + t * ray.dz + margin - plane;  // the top must exceed plane + gap
-      if (gap < 0.0F || gap * gap < 3.0F * surface.normal_variance) {
-        return true;
-      }
-    }
-    return false;
+      return gap < 0.0F || gap * gap < 3.0F * surface.normal_variance;
+    };
+    return top_above_ray(v.t_in) || top_above_ray(v.t_out);
   }
 
   void run(Layers& layers, const StackParams& params, const FrontConfig& front, FrontChunk& chunk,
