@@ -1,9 +1,10 @@
 // Free space from lines of sight (map/visibility/free_space.hpp; docs/design.md, "Free space from
 // lines of sight") on analytic scenes seen by a camera cast in double precision
 // (tests/support/ray_scene.hpp: points only where a line of sight reaches): a box that vanishes,
-// open ground with stereo noise, a ditch seen from 17.5 cm, the shadows of rocks, refused input,
-// the records through moves and snapshots, the run-time and compile-time switches. The expected
-// answers come from the scenes' geometry, not from the library.
+// open ground with stereo noise, a ditch seen from 17.5 cm, the shadows of rocks, a rock's flank
+// beside the lines of sight, refused input, the records through moves and snapshots, the run-time
+// and compile-time switches. The expected answers come from the scenes' geometry, not from the
+// library.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -138,6 +139,54 @@ TEST(FreeSpaceScenes, AVanishedBoxIsClearedWithinAFewFramesWhileThePaperUpdateKe
       << "without free space the paper's update should still show the ghost after 8 frames "
          "(else this scene does not test clearing)";
 }
+
+#ifndef CCMAP_FREE_SPACE_NO_PLANE_TEST
+TEST(FreeSpaceScenes, RaysOverTheLowSideOfACellHoldingARockFlankClearNothingAndTheFlankGoneIsCleared) {
+  // A rock's flank beside the lines of sight: a staircase of 2 cm treads rising 3 cm each (a 56
+  // deg flank, 24 cm tall, above the camera's 17.5 cm), 60 cm deep, 1.5 m ahead, its foot y0 to
+  // the left of the view's axis. The 8 cm cells at its foot hold ground and flank: their top
+  // (mean + sqrt(3) sigma_zz) stands near the flank's upper treads, while lines of sight to the
+  // ground behind pass over their low side, above the terrain (the camera's rays are exact, so
+  // every line of sight clears the terrain by construction) but below that top by more than the
+  // clear margin. The scene never changes, so every cell emptied is real terrain lost (the
+  // analytic truth: none). Two feet of the flank (2 and 10 cm left of the axis), each its own map.
+  // Then the flank vanishes and the camera looks at its place: the lines of sight pass through
+  // where it stood, and cells of it are emptied after the evidence rule's frames
+  // (free_space_clear_frames), not before.
+  const StackParams p = params(true, true);
+  const auto clear_frames = static_cast<int>(p.free_space_clear_frames);
+  for (const double y0 : {0.02, 0.10}) {
+    AnalyticScene flank;
+    for (int k = 0; k < 8; ++k) {
+      flank.boxes.push_back(SceneBox{1.5, y0 + 0.02 * k, 2.1, y0 + 0.5, 0.03 * (k + 1)});
+    }
+    auto map = make_map(p);
+    SceneCamera cam = scene_camera();
+    std::uint32_t cleared = 0;
+    for (int k = 0; k < 12; ++k) {
+      cam.seed = static_cast<std::uint64_t>(k) + 1U;
+      cleared += fold(*map, ccmap::test::render_scene(flank, cam)).cleared_cells;
+    }
+    EXPECT_EQ(cleared, 0U) << "lines of sight over the low side of cells holding a rock flank (foot " << y0
+                           << " m left) emptied real terrain";
+    ASSERT_TRUE(any_class(*map, 1.5, y0, 2.1, y0 + 0.5, CellClass::kObstacle)) << "the flank is mapped as an obstacle";
+    // The flank gone: nothing emptied before clear_frames frames of lines of sight through it,
+    // cells of it emptied at that frame.
+    const AnalyticScene empty;
+    std::uint32_t ghost_cleared = 0;
+    for (int k = 0; k < clear_frames; ++k) {
+      cam.seed = static_cast<std::uint64_t>(k) + 100U;
+      ghost_cleared += fold(*map, ccmap::test::render_scene(empty, cam)).cleared_cells;
+      if (k + 1 < clear_frames) {
+        EXPECT_EQ(ghost_cleared, 0U) << "the vanished flank was emptied after " << k + 1
+                                     << " frames, faster than the evidence rule allows";
+      }
+    }
+    EXPECT_GT(ghost_cleared, 0U) << "lines of sight through the vanished flank (foot " << y0 << " m left) emptied no cell of it in "
+                                 << clear_frames << " frames";
+  }
+}
+#endif
 
 TEST(FreeSpaceScenes, RaysFromBehindTheSensorOrFromRefusedPointsClearNothing) {
   // A box behind the camera (mapped looking back), then frames whose every point would cast a

@@ -32,7 +32,10 @@
 //    sigma_k the largest range error the layer receives and V_k the outlier gate's floor variance
 //    (range error and the steepest traversable plane across the cell): the layer's obstacle
 //    height, more than the steepest traversable plane rises across a cell (0.36 w), and three
-//    range errors;
+//    range errors; and, in the sampled walk, for a CCM cell also where the ray crosses it: its
+//    least-squares plane plus sqrt(3) sigma_s stands above the ray by that margin at the ray's
+//    entry or exit (below_surface), so a ray over the low side of a cell that also holds a rock
+//    face contradicts nothing;
 //  - a point confirms the surface of its cell (and cancels the evidence against it) when it lies
 //    no more than kRangeSigmas sigma_k below the cell's mean.
 //
@@ -434,6 +437,8 @@ class FreeSpace<Config, true> {
     bool on_obstacle;    ///< the known cells rose faster than a traversable slope since the ground
     bool dirty;          ///< the ray passed below a known surface: it proves no bound beyond
     std::uint32_t run;   ///< unobserved cells since the last known stretch (entries of run_)
+    float dx_m;          ///< horizontal x change over the walked segment (m, map frame)
+    float dy_m;          ///< horizontal y change over the walked segment (m, map frame)
   };
 
   /// An unobserved cell of the current run (see mark_run).
@@ -495,6 +500,43 @@ class FreeSpace<Config, true> {
   [[nodiscard]] bool top_above(const CellView& cell, int layer, float z) const noexcept {
     const float gap = z + consts_[layer].clear_margin_m - cell.height;  // the top must exceed mean + gap
     return gap < 0.0F || gap * gap * cell.weight < 3.0F * cell.s_zz;
+  }
+
+  /// The walk's second test of a cell whose top stands above the ray (top_above): true if the
+  /// ray passes below the cell's own surface where it crosses the cell. A CCM cell's surface at
+  /// (x, y) is its least-squares plane (ccm_surface, ccm_height_at: z = mu_z + [a b] . (q - mu_xy),
+  /// q relative to the cell centre, m) spread by its residual sigma_s^2 (normal_variance); its
+  /// top there is the plane plus sqrt(3) sigma_s, compared with the ray's height plus the clear
+  /// margin as top_above compares the cell's top. The ray's height and the plane are both linear
+  /// along the ray, so their largest difference inside the cell is at the ray's entry or exit:
+  /// those two are tested. So a ray over the low part of a cell whose other part holds a rock
+  /// face (below the cell's top, above its ground there) contradicts nothing, while a vanished
+  /// surface (a box, a rover: its face or top where the ray passes) still does. It only narrows
+  /// top_above (it is asked only where top_above fired: an extrapolated plane adds no
+  /// contradiction). A constant cell is one surface (its height): top_above alone decides.
+  /// Float, no heap; a CCM cell pays ccm_surface (divisions by W and the 2 x 2 inverse) only here.
+  [[nodiscard]] bool below_surface(const Layers& layers, int layer, const RayVisit& v, const RayState& ray) const noexcept {
+    if (!Layers::is_ccm(layer)) {
+      return true;
+    }
+    const CcmCellType& c = layers.ccm_grid(layer).cell_unchecked(v.index);
+    const CcmSurface surface = ccm_surface(c);
+    // The sensor relative to the cell centre (m): the centre in U units is
+    // index 2^(layer + 8) + 2^(layer + 7); the difference is exact in int64, and in float for
+    // any cell of a window (below 2^24 U).
+    const std::int64_t cell_u = std::int64_t{256} << layer;
+    const std::int64_t half_u = std::int64_t{128} << layer;
+    const float metres_per_u = cell_width_ * 0.00390625F;
+    const float ox = static_cast<float>(origin_u_[0] - (std::int64_t{v.index.x} * cell_u + half_u)) * metres_per_u;
+    const float oy = static_cast<float>(origin_u_[1] - (std::int64_t{v.index.y} * cell_u + half_u)) * metres_per_u;
+    const float margin = consts_[layer].clear_margin_m;
+    // At the ray's fraction t of the walked segment: its top above the ray by the margin.
+    const auto top_above_ray = [&](float t) {
+      const float plane = ccm_height_at(c, surface, ox + t * ray.dx_m, oy + t * ray.dy_m);
+      const float gap = ray.z0 + t * ray.dz + margin - plane;  // the top must exceed plane + gap
+      return gap < 0.0F || gap * gap < 3.0F * surface.normal_variance;
+    };
+    return top_above_ray(v.t_in) || top_above_ray(v.t_out);
   }
 
   void run(Layers& layers, const StackParams& params, const FrontConfig& front, FrontChunk& chunk,
@@ -755,6 +797,8 @@ class FreeSpace<Config, true> {
     const float walked = fraction_walked(end_u, walk);
     ray.dz = full_dz * walked;
     ray.length_m = std::sqrt(full_dx * full_dx + full_dy * full_dy) * walked;
+    ray.dx_m = static_cast<float>(walk.delta[0]) * metres_per_u;
+    ray.dy_m = static_cast<float>(walk.delta[1]) * metres_per_u;
     walk_ray(windows_, walk, [&](const RayVisit& v) { visit(layers, v, ray, frame); });
   }
 
@@ -813,7 +857,7 @@ class FreeSpace<Config, true> {
     const float z_hi = z_in > z_out ? z_in : z_out;
     FreeSpaceCell& rec = grids_[layer].cell_unchecked(v.index);
     if (cell.weight > 0.0F) {
-      if (top_above(cell, layer, z_hi)) {
+      if (top_above(cell, layer, z_hi) && below_surface(layers, layer, v, ray)) {
         write_record(rec, [&](FreeSpaceCell& r) {
           (void)touch(r, stamp_);
           if (frame_contradictions(r) == 0U) {
