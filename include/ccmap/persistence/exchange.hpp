@@ -906,12 +906,10 @@ struct ExchangeAccess {
  private:
   /// True if two cells have the same bits: a cell is changed since it was sent if any bit is
   /// (so +0 and -0 differ and a NaN equals its own bits, which a value comparison would not say).
-  /// A cell is 4-byte fields (floats) only: no padding bytes take part in the comparison.
+  /// A cell is packed floats, no padding (each cell type asserts its size as its floats:
+  /// cell/ccm_cell.hpp, cell/constant_cell.hpp), so no padding byte takes part in the comparison.
   template <typename Cell>
   [[nodiscard]] static bool same_cell_bits(const Cell& a, const Cell& b) noexcept {
-    static_assert(std::is_trivially_copyable_v<Cell> && sizeof(Cell) % sizeof(float) == 0U &&
-                      alignof(Cell) == alignof(float),
-                  "a cell compared by its bits has 4-byte fields only (no padding)");
     // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c): the bits are what is compared (see above)
     return std::memcmp(&a, &b, sizeof(Cell)) == 0;
   }
