@@ -9,10 +9,10 @@
 //
 // The scenes are made for one 8 cm layer: it takes points only up to the range at which the
 // stereo noise reaches its IV-G bound (w / (4 sqrt 3) = 11.5 mm: 1.86 m for CADRE's stereo), so
-// the camera's rows end at 1.8 m and the ditch and box stand within it; a constant cell (Kalman,
-// OMG) is one surface, its height the mean of its points, so the box is seen from above (a
-// camera 0.5 m up) and is tall enough that its cells' heights stand the layer's clear margin
-// (0.06 m, its obstacle height) above the rays that pass over them once it is gone.
+// the ditch and the box stand within 1.3 m and the ditch camera's rows end at 1.8 m; a constant
+// cell (Kalman, OMG) is one surface, its height the mean of its points, so the box is seen from
+// above (a camera 0.5 m up) long enough that its cells stand the layer's clear margin (0.06 m,
+// its obstacle height) above the rays that pass over them once it is gone (kBoxFrames).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -187,6 +187,30 @@ TYPED_TEST(ExchangeFreeSpaceSingle, ATeamMateLearnsTheDitchCellByCellAndInsideTh
   ExportReport again{};
   (void)a.export_delta(&again);
   EXPECT_EQ(again.drops_written, 0U);
+}
+
+TYPED_TEST(ExchangeFreeSpaceSingle, ATeamMateBeyondTheWindowDropsTheDitchAndCountsIt) {
+  // B's origin lies 300 cells (24 m) east of A's: A's ditch, 1 m ahead of A, is 23 m west of B,
+  // beyond B's window (+-128 cells, 10.24 m): every cell and entry is dropped and counted.
+  Rover<TypeParam> a(1U);
+  see_ditch(a);
+  ExportReport sent{};
+  const Bytes delta = a.export_delta(&sent);
+  ASSERT_GE(sent.drops_written, 3U);
+  Rover<TypeParam> b(2U, CellIndex{300, 0});
+  const MergeReport r = b.merge(delta);
+  EXPECT_EQ(r.free_space_status, Status::kOk);
+  EXPECT_EQ(r.entries_outside, sent.drops_written + sent.clears_written);
+  EXPECT_EQ(r.drops_merged, 0U);
+  EXPECT_EQ(r.cells_outside, sent.cells_written);
+  EXPECT_EQ(r.cells_merged, 0U);
+  int drops = 0;  // B's whole window
+  for (float x = -10.24F + 0.5F * kWidth; x < 10.24F; x += kWidth) {
+    for (float y = -10.24F + 0.5F * kWidth; y < 10.24F; y += kWidth) {
+      drops += b.map->query_layer(0, x, y).cell_class == CellClass::kDropOff ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(drops, 0);
 }
 
 TYPED_TEST(ExchangeFreeSpaceSingle, DropOffsWithoutRoomWaitAndGoInTheNextDelta) {
