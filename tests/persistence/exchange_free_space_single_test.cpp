@@ -78,6 +78,14 @@ struct Rover {
   }
 };
 
+/// Drop-offs in the rover's next delta.
+template <typename Config>
+std::uint32_t drops_in_next_delta(Rover<Config>& r) {
+  ExportReport e{};
+  (void)r.export_delta(&e);
+  return e.drops_written;
+}
+
 // ---- the ditch: drop-offs ----
 
 /// A ditch 0.4 m deep across the view, its near edge 0.7 m ahead: from 0.175 m (CADRE's camera)
@@ -125,6 +133,18 @@ std::vector<DropCell> drop_cells(const Map& map, float shift_m) {
   return out;
 }
 
+/// A rover that saw the ditch, and its first delta.
+template <typename Config>
+struct DitchDelta {
+  Rover<Config> a{1U};
+  ExportReport sent{};
+  Bytes delta;
+  DitchDelta() {
+    see_ditch(a);
+    delta = a.export_delta(&sent);
+  }
+};
+
 template <typename Config>
 class ExchangeFreeSpaceSingle : public ::testing::Test {};
 
@@ -140,10 +160,10 @@ using Presets = ::testing::Types<SingleCcmConfig, SingleKalmanConfig, SingleOmgC
 TYPED_TEST_SUITE(ExchangeFreeSpaceSingle, Presets, PresetName);
 
 TYPED_TEST(ExchangeFreeSpaceSingle, ATeamMateLearnsTheDitchCellByCellAndInsideTheDitch) {
-  Rover<TypeParam> a(1U);
-  see_ditch(a);
-  ExportReport sent{};
-  const Bytes delta = a.export_delta(&sent);
+  DitchDelta<TypeParam> ditch;
+  Rover<TypeParam>& a = ditch.a;
+  const ExportReport& sent = ditch.sent;
+  const Bytes& delta = ditch.delta;
   DeltaInfo info{};
   ASSERT_EQ(MapExchange<TypeParam>::peek_delta(delta.data(), delta.size(), &info), Status::kOk);
   EXPECT_EQ(info.free_space_entries, sent.drops_written + sent.clears_written);
@@ -178,24 +198,17 @@ TYPED_TEST(ExchangeFreeSpaceSingle, ATeamMateLearnsTheDitchCellByCellAndInsideTh
       // The bound moves by the origins' height offset, rounded up to 2^-8 m.
       EXPECT_NEAR(learned[i].bound_m, own[i].bound_m + dz, 0.00390625F) << "drop-off at x = " << own[i].x;
     }
-    // Not sent on: B's own delta carries none of A's drop-offs.
-    ExportReport back{};
-    (void)b.export_delta(&back);
-    EXPECT_EQ(back.drops_written, 0U);
+    EXPECT_EQ(drops_in_next_delta(b), 0U) << "B sent A's drop-offs on";
   }
-  // Sent once: A's next delta (nothing new seen) carries none again.
-  ExportReport again{};
-  (void)a.export_delta(&again);
-  EXPECT_EQ(again.drops_written, 0U);
+  EXPECT_EQ(drops_in_next_delta(a), 0U) << "A sent its drop-offs twice (nothing new seen)";
 }
 
 TYPED_TEST(ExchangeFreeSpaceSingle, ATeamMateBeyondTheWindowDropsTheDitchAndCountsIt) {
   // B's origin lies 300 cells (24 m) east of A's: A's ditch, 1 m ahead of A, is 23 m west of B,
   // beyond B's window (+-128 cells, 10.24 m): every cell and entry is dropped and counted.
-  Rover<TypeParam> a(1U);
-  see_ditch(a);
-  ExportReport sent{};
-  const Bytes delta = a.export_delta(&sent);
+  DitchDelta<TypeParam> ditch;
+  const ExportReport& sent = ditch.sent;
+  const Bytes& delta = ditch.delta;
   ASSERT_GE(sent.drops_written, 3U);
   Rover<TypeParam> b(2U, CellIndex{300, 0});
   const MergeReport r = b.merge(delta);
@@ -246,10 +259,9 @@ TYPED_TEST(ExchangeFreeSpaceSingle, DropOffsWithoutRoomWaitAndGoInTheNextDelta) 
 }
 
 TYPED_TEST(ExchangeFreeSpaceSingle, AFlippedBitInAnEntryIsRefusedAloneAndCounted) {
-  Rover<TypeParam> a(1U);
-  see_ditch(a);
-  ExportReport sent{};
-  const Bytes delta = a.export_delta(&sent);
+  DitchDelta<TypeParam> ditch;
+  const ExportReport& sent = ditch.sent;
+  const Bytes& delta = ditch.delta;
   ASSERT_GE(sent.drops_written, 3U);
   Rover<TypeParam> clean(2U);
   const MergeReport all = clean.merge(delta);
