@@ -47,6 +47,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 
 #include "ccmap/cell/ccm_cell.hpp"
@@ -59,6 +60,7 @@
 #include "ccmap/map/types.hpp"
 #include "ccmap/map/update/front.hpp"
 #include "ccmap/map/update/gate.hpp"
+#include "ccmap/map/update/kalman_batch.hpp"
 #include "ccmap/map/visibility/free_space_cell.hpp"
 #include "ccmap/map/visibility/ray_walk.hpp"
 #include "ccmap/map/visibility/sight_table.hpp"
@@ -120,7 +122,7 @@ class FreeSpace<Config, false> {
   [[nodiscard]] Status init(const StackParams&, const float*, const Layers&) noexcept { return Status::kOk; }
   void set_constants(const StackParams&, const float*, const Layers&) noexcept {}
   void follow(int, CellIndex) noexcept {}
-  [[nodiscard]] SightTable* begin_sight(const FramePose&) noexcept { return nullptr; }
+  [[nodiscard]] const SightFeed* begin_sight(const FramePose&, const KalmanFrameSum*) noexcept { return nullptr; }
   void run_map(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, const float*,
                std::size_t, const FramePose&, FrameCounters&) noexcept {}
   void run_sensor(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, std::size_t,
@@ -232,15 +234,26 @@ class FreeSpace<Config, true> {
   }
 
   /// Table mode (free_space_rays >= free_space_table_rays(kSightMaxStride)): empties the viewshed table
-  /// for the frame and returns it for the update path to fill chunk by chunk; nullptr otherwise.
-  [[nodiscard]] SightTable* begin_sight(const FramePose& pose) noexcept {
+  /// and the cells' highest points for the frame and returns them for the update path to fill
+  /// chunk by chunk (SightFeed); nullptr otherwise. fine_sums: the update path's Kalman frame
+  /// batch (UpdatePath::frame_sums; nullptr without a Kalman finest layer), read by the
+  /// confirmations after the frame.
+  [[nodiscard]] const SightFeed* begin_sight(const FramePose& pose, const KalmanFrameSum* fine_sums) noexcept {
     if constexpr (!kSight) {
       (void)pose;
+      (void)fine_sums;
       return nullptr;
     } else {
     if (!every_) {
       return nullptr;
     }
+    for (float& top : tops_.top) {
+      top = -std::numeric_limits<float>::infinity();
+    }
+    fine_sums_ = fine_sums;
+    feed_.table = &sight_;
+    feed_.ccm_top = tops_.top + kTopFine;
+    feed_.fine_top = kTopFine > 0U ? tops_.top : nullptr;
     SightFrameConstants k{};
     k.sensor_u[0] = pose.anchor_fraction[0];
     k.sensor_u[1] = pose.anchor_fraction[1];
@@ -261,7 +274,7 @@ class FreeSpace<Config, true> {
     k.phase = static_cast<std::int32_t>((frames_ * 9U) & 0x7FFFU);
     sight_.begin(k);
     sight_anchor_ = pose.anchor;
-    return &sight_;
+    return &feed_;
     }
   }
   [[nodiscard]] CellIndex sight_anchor() const noexcept { return sight_anchor_; }
@@ -641,8 +654,12 @@ class FreeSpace<Config, true> {
           }
           const float x0 = static_cast<float>((std::int64_t{gx} * (std::int64_t{1} << layer)) - sight_anchor_.x) - k.sensor_u[0];
           const float x1 = x0 + cw;
+          FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
           SightCell sc{};
           if (!sight_.read_cell(x0, x1, y0, y1, &sc)) {
+            if (rec.evidence > 0U) {  // no bound here, but its points may confirm it
+              (void)confirm_cell(layer, index, view_of(layers, layer, index), rec);
+            }
             continue;
           }
           const CellView cell = view_of(layers, layer, index);
@@ -654,7 +671,6 @@ class FreeSpace<Config, true> {
           bool all = true;  // every sector holding a ray agrees (sectors without one say nothing)
           const int covered = sc.covered;
           const float s_near = sc.s_near, s_far = sc.s_far;
-          FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
           if (cell.weight > 0.0F) {
             // The sectors whose lowest ray passes clearly below the cell's top: two at least, and
             // every sector holding a ray (a rock over part of the cell stops the rays of the
@@ -662,8 +678,15 @@ class FreeSpace<Config, true> {
             // non-decreasing in its slope and top_above non-increasing in the height, so every
             // sector passes below exactly when the highest of them does.
             const std::int32_t qmax = sc.qmax;
-            if (covered >= 2 &&
-                top_above(cell, layer, k.z0 + static_cast<float>(qmax) * unit_m * (qmax < 0 ? s_near : s_far))) {
+            const bool contradicted =
+                covered >= 2 &&
+                top_above(cell, layer, k.z0 + static_cast<float>(qmax) * unit_m * (qmax < 0 ? s_near : s_far));
+            // A point of the frame on the cell's surface confirms it: no evidence this frame, and
+            // the evidence of earlier frames forgotten (as a walked ray's point, confirm_end).
+            if ((contradicted || rec.evidence > 0U) && confirm_cell(layer, index, cell, rec)) {
+              continue;
+            }
+            if (contradicted) {
               write_record(rec, [&](FreeSpaceCell& r) {
                 (void)touch(r, stamp_);
                 if (frame_contradictions(r) == 0U) {
@@ -714,6 +737,49 @@ class FreeSpace<Config, true> {
     } else {
       (void)layers;
       (void)frame;
+    }
+  }
+
+  /// Table mode: true if a point of this frame folded into the known cell `cell` (at `index` of
+  /// `layer`, its record `rec`) lies on its surface (on_surface, the rule of a walked ray's
+  /// point); the cell is then confirmed (confirm: no evidence this frame, the earlier frames'
+  /// forgotten). The frame's points of the cell: the highest of them, which the update path kept
+  /// for a CCM or OMG cell (SightFeed); for a Kalman cell the mean of its frame batch (the points
+  /// inside its gate), on the surface only if one of them is (so it confirms no cell its points
+  /// would not; a highest point per Kalman cell would cost every point of the frame). An
+  /// empty cell (or one that failed its check): false.
+  bool confirm_cell(int layer, CellIndex index, const CellView& cell, FreeSpaceCell& rec) noexcept {
+    if constexpr (kSight) {
+      if (!(cell.weight > 0.0F)) {
+        return false;
+      }
+      const std::size_t slot = grid::buffer_offset(index, Layers::side(layer));
+      float z = -std::numeric_limits<float>::infinity();
+      if (Layers::is_ccm(layer)) {
+        z = tops_.top[kTopFine + (offset_[layer] - kFineRecords) + slot];
+      } else if constexpr (kKalmanFine) {
+        if (fine_sums_ == nullptr || fine_sums_[slot].count == 0U) {
+          return false;
+        }
+        const KalmanFrameSum& sum = fine_sums_[slot];
+        z = static_cast<float>(sum.sum_height_q14) / (static_cast<float>(sum.count) * 16384.0F);
+      } else {
+        z = tops_.top[slot];
+      }
+      if (!on_surface(layer, cell, z)) {
+        return false;
+      }
+      write_record(rec, [this](FreeSpaceCell& r) {
+        (void)touch(r, stamp_);
+        confirm(r);
+      });
+      return true;
+    } else {
+      (void)layer;
+      (void)index;
+      (void)cell;
+      (void)rec;
+      return false;
     }
   }
 
@@ -816,9 +882,15 @@ class FreeSpace<Config, true> {
     return static_cast<float>(part) / static_cast<float>(full);
   }
 
+  /// True if a point at height z (m) lies on (or above) the surface of the known cell `cell` of
+  /// `layer`: not below the cell's mean by more than kRangeSigmas range errors of the layer (a
+  /// point on the ground beneath a vanished rover lies below it and confirms nothing).
+  [[nodiscard]] bool on_surface(int layer, const CellView& cell, float z) const noexcept {
+    return z > cell.height - consts_[layer].rise_margin_m * kRangeSigmas;
+  }
+
   /// The point confirms the surface of the cell it was folded into (the first layer from its
-  /// routed one whose window holds it) when it lies on or above it: above the cell's mean less
-  /// kRangeSigmas range errors of the layer.
+  /// routed one whose window holds it) when it lies on it (on_surface).
   void confirm_end(const Layers& layers, std::int32_t code, const RayState& ray, float z) noexcept {
     for (int layer = code; layer < kLayerCount; ++layer) {
       if (!windows_.contains(layer, ray.end[layer])) {
@@ -826,9 +898,7 @@ class FreeSpace<Config, true> {
       }
       const CellView cell = view_of(layers, layer, ray.end[layer]);
       if (cell.weight > 0.0F) {
-        // On its surface: not below the cell's mean by more than the range noise (a point on the
-        // ground beneath a vanished rover lies below it and confirms nothing).
-        if (z > cell.height - consts_[layer].rise_margin_m * kRangeSigmas) {
+        if (on_surface(layer, cell, z)) {
           write_record(grids_[layer].cell_unchecked(ray.end[layer]), [this](FreeSpaceCell& rec) {
             (void)touch(rec, stamp_);
             confirm(rec);
@@ -1050,6 +1120,17 @@ class FreeSpace<Config, true> {
   CellIndex sight_anchor_{0, 0};
   static constexpr bool kSight = kConfigEveryLineOfSight<Config>;
   std::conditional_t<kSight, SightTable, NoSightTable> sight_{};
+  // The table's confirmations (SightFeed): per CCM cell, and per finest cell of an OMG layer,
+  // the highest point of the frame (m); a Kalman finest layer's frame batch instead.
+  static constexpr bool kKalmanFine = Config::kFineKind == FineKind::kKalman;
+  static constexpr std::size_t kTopFine = (Layers::kHasFine && !kKalmanFine) ? kFineRecords : 0U;
+  static constexpr std::size_t kTopCount = kTopFine + kCcmRecords > 0U ? kTopFine + kCcmRecords : 1U;
+  struct FrameTops {
+    float top[kTopCount];
+  };
+  std::conditional_t<kSight, FrameTops, NoSightTable> tops_{};
+  SightFeed feed_{};
+  const KalmanFrameSum* fine_sums_ = nullptr;  ///< the update path's Kalman frame batch (begin_sight)
   std::uint32_t contradicted_[kMaxContradictedCells]{};
   RunCell run_[kMaxRunCells]{};
   std::uint32_t contradicted_count_ = 0U;

@@ -142,6 +142,19 @@ class SightTable;
 /// What a stack without the table carries in its place.
 struct NoSightTable {};
 
+/// What the update path feeds the free-space stage with in table mode (free_space.hpp,
+/// begin_sight): the table, chunk by chunk, and the frame's confirmations (docs/design.md 12):
+/// per cell, the highest point the frame folded into it (m, map frame; -infinity: none), which
+/// the stage compares with the cell's surface after the frame as a walked ray's point is
+/// (FreeSpace::on_surface). The CCM cells' highest points are kept per run of points of one
+/// cell (a register per point, a store per run); a Kalman finest layer needs none (its frame
+/// batch holds the frame's points: the stage reads their mean, KalmanFrameSum).
+struct SightFeed {
+  SightTable* table = nullptr;
+  float* ccm_top = nullptr;   ///< per CCM cell, in the layers' storage order (LayerSet::ccm_storage)
+  float* fine_top = nullptr;  ///< per finest cell of a piece-wise constant (OMG) layer; else nullptr
+};
+
 class SightTable {
  public:
   /// Empties the table for a new frame.
