@@ -186,8 +186,12 @@ class UpdatePath {
   };
 
   void set_tops(const SightFeed* sight) noexcept {
-    ccm_top_ = sight != nullptr ? sight->ccm_top : nullptr;
-    fine_top_ = sight != nullptr ? sight->fine_top : nullptr;
+    if constexpr (kTops) {
+      tops_.ccm = sight != nullptr ? sight->ccm_top : nullptr;
+      tops_.fine = sight != nullptr ? sight->fine_top : nullptr;
+    } else {
+      (void)sight;
+    }
   }
 
   /// One frame: the chunks in order (no budget) or in the budget's order until it is spent,
@@ -333,7 +337,10 @@ class UpdatePath {
     if constexpr (kGate) {
       judge = gate_.ccm_judge();
     }
-    float* const ccm_top = ccm_top_;  // kTops: SightFeed::ccm_top or nullptr
+    float* ccm_top = nullptr;  // kTops: SightFeed::ccm_top or nullptr (a register)
+    if constexpr (kTops) {
+      ccm_top = tops_.ccm;
+    }
     for (std::size_t j = 0; j < others; ++j) {
       apply<kGate>(layers, params, others_[j] & (kFrontChunkPoints - 1U), weights, unit_weights, c, runs, accepts,
                    judge, ccm_top);
@@ -449,7 +456,12 @@ class UpdatePath {
           }
         }
       }
-      const float z = chunk_.z[i];
+      // kTops: the height read once, for the run's first point and the update (the presets' path
+      // reads it in the update alone, as before: its code stays the same).
+      [[maybe_unused]] float z = 0.0F;
+      if constexpr (kTops) {
+        z = chunk_.z[i];
+      }
       if (hit.number != runs.ccm_number) {  // a run of another cell starts
         runs.ccm_number = hit.number;
         runs.checks.ccm.open(layers, cell);
@@ -471,7 +483,7 @@ class UpdatePath {
         ++c.used;
       }
       runs.checks.ccm.write([&](auto& written) {
-        ccm_update_unchecked(written, x, y, z, weight, params.weight_limit);
+        ccm_update_unchecked(written, x, y, kTops ? z : chunk_.z[i], weight, params.weight_limit);
       });
       return;
     }
@@ -493,8 +505,8 @@ class UpdatePath {
       runs.checks.fine.write(layers, cell,
                       [&](auto& written) { omg_update_unchecked(written, z, variance, weight, params.weight_limit); });
       if constexpr (kTops) {
-        if (fine_top_ != nullptr) {  // (not the presets' fine kind: one point at a time)
-          float& top = fine_top_[hit.number & (Layers::kFineCellCount - 1U)];
+        if (tops_.fine != nullptr) {  // (not the presets' fine kind: one point at a time)
+          float& top = tops_.fine[hit.number & (Layers::kFineCellCount - 1U)];
           top = std::fmax(top, z);
         }
       }
@@ -558,8 +570,14 @@ class UpdatePath {
   std::uint32_t point_budget_ = 0U;
   std::uint64_t time_budget_ns_ = 0U;
   bool constant_weight_ = false;
-  float* ccm_top_ = nullptr;   ///< kTops: SightFeed::ccm_top of the frame, or nullptr
-  float* fine_top_ = nullptr;  ///< kTops: SightFeed::fine_top of the frame, or nullptr
+  /// kTops: SightFeed::ccm_top and fine_top of the frame, or nullptr (an empty member in the
+  /// presets, which fits the padding after constant_weight_: their layout stays as it was).
+  struct Tops {
+    float* ccm = nullptr;
+    float* fine = nullptr;
+  };
+  struct NoTops {};
+  std::conditional_t<kTops, Tops, NoTops> tops_{};
   static constexpr GateConstants no_gate_{0.0F, 0.0F};
   /// Integrity: the front's Kalman slots are masked with this (the finest layer's cells: a power of two).
   static constexpr std::uint32_t kFineSlotMask = static_cast<std::uint32_t>((kKalman ? Layers::kFineCellCount : 1U) - 1U);

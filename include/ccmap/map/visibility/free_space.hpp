@@ -37,7 +37,9 @@
 //    entry or exit (below_surface), so a ray over the low side of a cell that also holds a rock
 //    face contradicts nothing;
 //  - a point confirms the surface of its cell (and cancels the evidence against it) when it lies
-//    no more than kRangeSigmas sigma_k below the cell's mean.
+//    no more than kRangeSigmas sigma_k below the cell's mean (on_surface): in the sampled walk
+//    the walked rays' points, with the viewshed table the points the frame folded in
+//    (SightFeed, confirm_cell).
 //
 // The coupling to the front is one adapter, ray_end_of(): the fields of a FrontChunk entry this
 // stage reads (routing code, finest cell and float position inside it, squared range), the
@@ -247,13 +249,13 @@ class FreeSpace<Config, true> {
     if (!every_) {
       return nullptr;
     }
-    for (float& top : tops_.top) {
+    for (float& top : sight_.tops) {
       top = -std::numeric_limits<float>::infinity();
     }
-    fine_sums_ = fine_sums;
-    feed_.table = &sight_;
-    feed_.ccm_top = tops_.top + kTopFine;
-    feed_.fine_top = kTopFine > 0U ? tops_.top : nullptr;
+    sight_.fine_sums = fine_sums;
+    sight_.feed.table = &sight_.table;
+    sight_.feed.ccm_top = sight_.tops + kTopFine;
+    sight_.feed.fine_top = kTopFine > 0U ? sight_.tops : nullptr;
     SightFrameConstants k{};
     k.sensor_u[0] = pose.anchor_fraction[0];
     k.sensor_u[1] = pose.anchor_fraction[1];
@@ -272,9 +274,9 @@ class FreeSpace<Config, true> {
     // The sampled groups move through their block frame by frame (strides 8 and 16), so that
     // every point of a steady camera's image casts its line of sight every few frames.
     k.phase = static_cast<std::int32_t>((frames_ * 9U) & 0x7FFFU);
-    sight_.begin(k);
+    sight_.table.begin(k);
     sight_anchor_ = pose.anchor;
-    return &feed_;
+    return &sight_.feed;
     }
   }
   [[nodiscard]] CellIndex sight_anchor() const noexcept { return sight_anchor_; }
@@ -585,9 +587,9 @@ class FreeSpace<Config, true> {
     }
     if constexpr (kSight) {
       if (every_) {
-        frame.free_rays_refused += sight_.refused();
+        frame.free_rays_refused += sight_.table.refused();
         if (!held) {
-          frame.free_rays_refused += sight_.points();
+          frame.free_rays_refused += sight_.table.points();
           return;
         }
         run_every(layers, frame);
@@ -619,17 +621,19 @@ class FreeSpace<Config, true> {
   /// azimuth interval whose rays reach beyond its farthest corner.
   ///  - a known cell is contradicted when every such sector (at least two) passes below its
   ///    top by the clear margin (so a rock covering part of the cell, whose sectors end on it or
-  ///    pass over it, is not), and counts the frame as kContradictionsPerFrame rays did;
+  ///    pass over it, is not), and counts the frame as kContradictionsPerFrame rays did, unless a
+  ///    point of the frame lies on its surface (confirm_cell: the cell is confirmed instead, as
+  ///    is every cell read here whose evidence is not zero);
   ///  - an unobserved cell of its walk layer (no finer window holds it) takes the lowest bound;
   ///    it is a drop-off when every such sector (at least kDropRays) passes more than the
   ///    layer's step below the ground that sector's points showed before the cell.
   void run_every(Layers& layers, FrameCounters& frame) noexcept {
     if constexpr (kSight) {
-    sight_.sweep();
-    sight_.track_ground(max_inclination_ * cell_width_, consts_[0].rise_margin_m);
-    const SightFrameConstants& k = sight_.constants();
+    sight_.table.sweep();
+    sight_.table.track_ground(max_inclination_ * cell_width_, consts_[0].rise_margin_m);
+    const SightFrameConstants& k = sight_.table.constants();
     const float unit_m = kSightSlopeUnit * cell_width_;  // height per slope unit per finest cell
-    frame.free_rays += sight_.points();
+    frame.free_rays += sight_.table.points();
     for (int layer = 0; layer < kLayerCount; ++layer) {
       const CellIndex min = windows_.min[layer];
       const std::int32_t side = windows_.side[layer];
@@ -642,7 +646,7 @@ class FreeSpace<Config, true> {
         // Only the columns the frame's rays can reach (reach and view: SightTable::row_span).
         const float bx = static_cast<float>((std::int64_t{min.x} * (std::int64_t{1} << layer)) - sight_anchor_.x) - k.sensor_u[0];
         std::int32_t first = 0, last = -1;
-        if (!sight_.row_span(y0, y1, bx, cw, side, &first, &last)) {
+        if (!sight_.table.row_span(y0, y1, bx, cw, side, &first, &last)) {
           continue;
         }
         for (std::int32_t i = first; i <= last; ++i) {
@@ -656,7 +660,7 @@ class FreeSpace<Config, true> {
           const float x1 = x0 + cw;
           FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
           SightCell sc{};
-          if (!sight_.read_cell(x0, x1, y0, y1, &sc)) {
+          if (!sight_.table.read_cell(x0, x1, y0, y1, &sc)) {
             if (rec.evidence > 0U) {  // no bound here, but its points may confirm it
               (void)confirm_cell(layer, index, view_of(layers, layer, index), rec);
             }
@@ -703,15 +707,15 @@ class FreeSpace<Config, true> {
             lower_bound(r, k.z0 + static_cast<float>(qmin) * unit_m * (qmin < 0 ? s_near : s_far));
           });
           // Drop-off: every covered sector below its own ground by more than the step.
-          const int near_bin = sight_.bin_of(s_near);
+          const int near_bin = sight_.table.bin_of(s_near);
           int proving = 0;
           for (int s = lo; s < hi && all; ++s) {
-            const std::int32_t q = sight_.slope(bin, s);
+            const std::int32_t q = sight_.table.slope(bin, s);
             if (q == kSightEmpty) {
               continue;
             }
             float ground = 0.0F;
-            if (!sight_.ground(near_bin, s, &ground)) {
+            if (!sight_.table.ground(near_bin, s, &ground)) {
               all = false;
               break;
             }
@@ -756,15 +760,15 @@ class FreeSpace<Config, true> {
       const std::size_t slot = grid::buffer_offset(index, Layers::side(layer));
       float z = -std::numeric_limits<float>::infinity();
       if (Layers::is_ccm(layer)) {
-        z = tops_.top[kTopFine + (offset_[layer] - kFineRecords) + slot];
+        z = sight_.tops[kTopFine + (offset_[layer] - kFineRecords) + slot];
       } else if constexpr (kKalmanFine) {
-        if (fine_sums_ == nullptr || fine_sums_[slot].count == 0U) {
+        if (sight_.fine_sums == nullptr || sight_.fine_sums[slot].count == 0U) {
           return false;
         }
-        const KalmanFrameSum& sum = fine_sums_[slot];
+        const KalmanFrameSum& sum = sight_.fine_sums[slot];
         z = static_cast<float>(sum.sum_height_q14) / (static_cast<float>(sum.count) * 16384.0F);
       } else {
-        z = tops_.top[slot];
+        z = sight_.tops[slot];
       }
       if (!on_surface(layer, cell, z)) {
         return false;
@@ -1119,18 +1123,19 @@ class FreeSpace<Config, true> {
   float sigma_c_[3]{};       ///< kSightRangeSigmas sigma(r) = c0 + c1 r + c2 r^2 (m)
   CellIndex sight_anchor_{0, 0};
   static constexpr bool kSight = kConfigEveryLineOfSight<Config>;
-  std::conditional_t<kSight, SightTable, NoSightTable> sight_{};
   // The table's confirmations (SightFeed): per CCM cell, and per finest cell of an OMG layer,
   // the highest point of the frame (m); a Kalman finest layer's frame batch instead.
   static constexpr bool kKalmanFine = Config::kFineKind == FineKind::kKalman;
   static constexpr std::size_t kTopFine = (Layers::kHasFine && !kKalmanFine) ? kFineRecords : 0U;
   static constexpr std::size_t kTopCount = kTopFine + kCcmRecords > 0U ? kTopFine + kCcmRecords : 1U;
-  struct FrameTops {
-    float top[kTopCount];
+  /// What table mode keeps: the table, the frame's highest points, what the update path is fed.
+  struct SightParts {
+    SightTable table;
+    float tops[kTopCount];
+    SightFeed feed;
+    const KalmanFrameSum* fine_sums;  ///< the update path's Kalman frame batch (begin_sight)
   };
-  std::conditional_t<kSight, FrameTops, NoSightTable> tops_{};
-  SightFeed feed_{};
-  const KalmanFrameSum* fine_sums_ = nullptr;  ///< the update path's Kalman frame batch (begin_sight)
+  std::conditional_t<kSight, SightParts, NoSightTable> sight_{};
   std::uint32_t contradicted_[kMaxContradictedCells]{};
   RunCell run_[kMaxRunCells]{};
   std::uint32_t contradicted_count_ = 0U;
