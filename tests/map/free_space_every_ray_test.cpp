@@ -10,8 +10,4 @@
 // The run marking of the sampled walk (the hidden cells between a rim and a proved drop-off) is
 // not done for every line of sight: the ditch's first cells behind the rim stay unknown.
 #define CCMAP_FREE_SPACE_NO_RUN_MARKING
-// The table's contradiction rule (every sector holding a ray passes below the cell's top) has no
-// plane test: on the rock-flank scene its lines of sight over the low side of the flank's cells
-// empty real 8 cm cells, so that scene is not run here.
-#define CCMAP_FREE_SPACE_NO_PLANE_TEST
 #include "free_space_test.cpp"  // NOLINT(bugprone-suspicious-include): the same scenes, another stack

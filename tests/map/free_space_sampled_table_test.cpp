@@ -12,8 +12,4 @@
 #define CCMAP_FREE_SPACE_CAMERA_SCALE 3
 // As for every line of sight: the table does no run marking.
 #define CCMAP_FREE_SPACE_NO_RUN_MARKING
-// The table's contradiction rule (every sector holding a ray passes below the cell's top) has no
-// plane test: on the rock-flank scene its lines of sight over the low side of the flank's cells
-// empty real 8 cm cells, so that scene is not run here.
-#define CCMAP_FREE_SPACE_NO_PLANE_TEST
 #include "free_space_test.cpp"  // NOLINT(bugprone-suspicious-include): the same scenes, another stack

@@ -140,7 +140,6 @@ TEST(FreeSpaceScenes, AVanishedBoxIsClearedWithinAFewFramesWhileThePaperUpdateKe
          "(else this scene does not test clearing)";
 }
 
-#ifndef CCMAP_FREE_SPACE_NO_PLANE_TEST
 TEST(FreeSpaceScenes, RaysOverTheLowSideOfACellHoldingARockFlankClearNothingAndTheFlankGoneIsCleared) {
   // A rock's flank beside the lines of sight: a staircase of 2 cm treads rising 3 cm each (a 56
   // deg flank, 24 cm tall, above the camera's 17.5 cm), 60 cm deep, 1.5 m ahead, its foot y0 to
@@ -186,7 +185,6 @@ TEST(FreeSpaceScenes, RaysOverTheLowSideOfACellHoldingARockFlankClearNothingAndT
                                  << clear_frames << " frames";
   }
 }
-#endif
 
 TEST(FreeSpaceScenes, RaysFromBehindTheSensorOrFromRefusedPointsClearNothing) {
   // A box behind the camera (mapped looking back), then frames whose every point would cast a

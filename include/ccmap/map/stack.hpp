@@ -354,7 +354,7 @@ class Stack {
     if (status != Status::kOk) {
       return status;
     }
-    update_.run_map(layers_, params_, points, weights, n, pose, frame, free_space_.begin_sight(pose));
+    update_.run_map(layers_, params_, points, weights, n, pose, frame, free_space_.begin_sight(pose, update_.frame_sums()));
     // [free-space hook 3/4] lines of sight over the updated layers.
     free_space_.run_map(layers_, params_, update_.front(), update_.scratch(), points, weights, n, pose, frame);
     finish_frame(frame, start, counters);
@@ -377,7 +377,7 @@ class Stack {
     if (status != Status::kOk) {
       return status;
     }
-    update_.run_sensor(layers_, params_, points, n, pose, frame, free_space_.begin_sight(pose));
+    update_.run_sensor(layers_, params_, points, n, pose, frame, free_space_.begin_sight(pose, update_.frame_sums()));
     // [free-space hook 4/4] lines of sight over the updated layers.
     free_space_.run_sensor(layers_, params_, update_.front(), update_.scratch(), points, n, pose, frame);
     finish_frame(frame, start, counters);

@@ -31,6 +31,7 @@
 // points' pools).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
@@ -67,6 +68,10 @@ class UpdatePath {
  public:
   using Layers = LayerSet<Config>;
   static constexpr bool kKalman = Config::kFineKind == FineKind::kKalman;
+  /// The Config carries the viewshed table: the CCM and OMG cells' highest points of the frame
+  /// are kept for its confirmations (SightFeed). Compiled out otherwise: the presets' path runs
+  /// no instruction of it.
+  static constexpr bool kTops = kConfigEveryLineOfSight<Config>;
   /// The outlier gate, or its null object when the Config compiles it out (gate.hpp).
   using Gate = OutlierGate<Config>;
   using Batch = KalmanBatch<kKalman ? Layers::kFineCellCount : 1U>;
@@ -121,16 +126,17 @@ class UpdatePath {
   }
 
   /// Folds map-frame points (weights may be nullptr: the noise model weighs them).
-  /// sight: the free-space stage's viewshed table to feed with every chunk's lines of sight
-  /// (map/visibility/sight_table.hpp), or nullptr.
+  /// sight: the free-space stage's viewshed table to feed with every chunk's lines of sight and
+  /// the cells' highest points to keep (map/visibility/sight_table.hpp, SightFeed), or nullptr.
   void run_map(Layers& layers, const StackParams& params, const PointXYZ* points, const float* weights, std::size_t n,
-               const FramePose& pose, FrameCounters& frame, SightTable* sight = nullptr) noexcept {
+               const FramePose& pose, FrameCounters& frame, const SightFeed* sight = nullptr) noexcept {
     const bool unit_weights = weights == nullptr && constant_weight_;
+    set_tops(sight);
     run(layers, params, n, pose, frame, [&](std::size_t begin, std::size_t count, const FineWindow& fine) {
       front_map_chunk(points + begin, count, pose, front_, fine, chunk_);
       const float* chunk_weights = weights != nullptr ? weights + begin : nullptr;
       if (sight != nullptr) {
-        sight->add_chunk(chunk_, count, nullptr, chunk_weights, pose.anchor);
+        sight->table->add_chunk(chunk_, count, nullptr, chunk_weights, pose.anchor);
       }
       return chunk_weights;
     }, unit_weights);
@@ -138,14 +144,26 @@ class UpdatePath {
 
   /// Folds sensor-frame points with the frame's pose (make_frame_pose with a rotation).
   void run_sensor(Layers& layers, const StackParams& params, const PointXYZ* points, std::size_t n,
-                  const FramePose& pose, FrameCounters& frame, SightTable* sight = nullptr) noexcept {
+                  const FramePose& pose, FrameCounters& frame, const SightFeed* sight = nullptr) noexcept {
+    set_tops(sight);
     run(layers, params, n, pose, frame, [&](std::size_t begin, std::size_t count, const FineWindow& fine) {
       front_sensor_chunk(points + begin, count, pose, front_, fine, chunk_);
       if (sight != nullptr) {
-        sight->add_chunk(chunk_, count, points + begin, nullptr, pose.anchor);
+        sight->table->add_chunk(chunk_, count, points + begin, nullptr, pose.anchor);
       }
       return static_cast<const float*>(nullptr);
     }, constant_weight_);
+  }
+
+  /// The Kalman finest layer's sums of the last frame, one record per cell in the layer's
+  /// storage order (valid from the end of a frame to the next frame's start: the free-space
+  /// stage's confirmations read them); nullptr without a Kalman finest layer.
+  [[nodiscard]] const KalmanFrameSum* frame_sums() const noexcept {
+    if constexpr (kKalman) {
+      return &batch_.sum(0U);
+    } else {
+      return nullptr;
+    }
   }
 
   /// The gate (its held cells and slots: Stack::held_cells, last_frame_held_cells).
@@ -166,6 +184,15 @@ class UpdatePath {
     CheckRuns<Layers> checks{};
     std::uint32_t ccm_number = 0xFFFFFFFFU;  ///< the CCM cell of the open run (none: no cell has it)
   };
+
+  void set_tops(const SightFeed* sight) noexcept {
+    if constexpr (kTops) {
+      tops_.ccm = sight != nullptr ? sight->ccm_top : nullptr;
+      tops_.fine = sight != nullptr ? sight->fine_top : nullptr;
+    } else {
+      (void)sight;
+    }
+  }
 
   /// One frame: the chunks in order (no budget) or in the budget's order until it is spent,
   /// then the end of the frame. front(begin, count, fine) fills chunk_ and returns the chunk's
@@ -310,9 +337,13 @@ class UpdatePath {
     if constexpr (kGate) {
       judge = gate_.ccm_judge();
     }
+    float* ccm_top = nullptr;  // kTops: SightFeed::ccm_top or nullptr (a register)
+    if constexpr (kTops) {
+      ccm_top = tops_.ccm;
+    }
     for (std::size_t j = 0; j < others; ++j) {
       apply<kGate>(layers, params, others_[j] & (kFrontChunkPoints - 1U), weights, unit_weights, c, runs, accepts,
-                   judge);
+                   judge, ccm_top);
     }
     runs.checks.close(layers);
     if constexpr (kGate) {
@@ -383,7 +414,8 @@ class UpdatePath {
   /// Every other entry: refusals, weights, the walk, one CCM, Kalman or OMG cell.
   template <bool kGate>
   __attribute__((always_inline)) void apply(Layers& layers, const StackParams& params, std::size_t i, const float* weights, bool unit_weights,
-             ChunkCounts& c, ChunkRuns& runs, Accepts& accepts, const Judge& judge) noexcept {
+             ChunkCounts& c, ChunkRuns& runs, Accepts& accepts, const Judge& judge,
+                                             float* ccm_top) noexcept {
     const std::int32_t code = chunk_.code[i];
     // Unsigned (integrity): a negative code, which the front never writes, is refused with them
     // (uncounted) rather than starting the walk below layer 0.
@@ -424,11 +456,25 @@ class UpdatePath {
           }
         }
       }
+      // kTops: the height read once, for the run's first point and the update (the presets' path
+      // reads it in the update alone, as before: its code stays the same).
+      [[maybe_unused]] float z = 0.0F;
+      if constexpr (kTops) {
+        z = chunk_.z[i];
+      }
       if (hit.number != runs.ccm_number) {  // a run of another cell starts
         runs.ccm_number = hit.number;
         runs.checks.ccm.open(layers, cell);
         if constexpr (kGate) {
           gate_.start_run(accepts, hit.number);
+        }
+        if constexpr (kTops) {
+          // The run's first point is the cell's highest of the frame if it is higher than the
+          // runs' before (SightFeed: the first point of each run, not every point, for the budget).
+          if (ccm_top != nullptr) {
+            float& top = ccm_top[hit.number];
+            top = std::fmax(top, z);
+          }
         }
       }
       if constexpr (kGate) {
@@ -437,7 +483,7 @@ class UpdatePath {
         ++c.used;
       }
       runs.checks.ccm.write([&](auto& written) {
-        ccm_update_unchecked(written, x, y, chunk_.z[i], weight, params.weight_limit);
+        ccm_update_unchecked(written, x, y, kTops ? z : chunk_.z[i], weight, params.weight_limit);
       });
       return;
     }
@@ -458,6 +504,12 @@ class UpdatePath {
       auto& cell = layers.fine_storage[hit.number];
       runs.checks.fine.write(layers, cell,
                       [&](auto& written) { omg_update_unchecked(written, z, variance, weight, params.weight_limit); });
+      if constexpr (kTops) {
+        if (tops_.fine != nullptr) {  // (not the presets' fine kind: one point at a time)
+          float& top = tops_.fine[hit.number & (Layers::kFineCellCount - 1U)];
+          top = std::fmax(top, z);
+        }
+      }
       ++c.used;
     }
   }
@@ -518,6 +570,14 @@ class UpdatePath {
   std::uint32_t point_budget_ = 0U;
   std::uint64_t time_budget_ns_ = 0U;
   bool constant_weight_ = false;
+  /// kTops: SightFeed::ccm_top and fine_top of the frame, or nullptr (an empty member in the
+  /// presets, which fits the padding after constant_weight_: their layout stays as it was).
+  struct Tops {
+    float* ccm = nullptr;
+    float* fine = nullptr;
+  };
+  struct NoTops {};
+  std::conditional_t<kTops, Tops, NoTops> tops_{};
   static constexpr GateConstants no_gate_{0.0F, 0.0F};
   /// Integrity: the front's Kalman slots are masked with this (the finest layer's cells: a power of two).
   static constexpr std::uint32_t kFineSlotMask = static_cast<std::uint32_t>((kKalman ? Layers::kFineCellCount : 1U) - 1U);

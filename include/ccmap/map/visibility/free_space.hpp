@@ -37,7 +37,9 @@
 //    entry or exit (below_surface), so a ray over the low side of a cell that also holds a rock
 //    face contradicts nothing;
 //  - a point confirms the surface of its cell (and cancels the evidence against it) when it lies
-//    no more than kRangeSigmas sigma_k below the cell's mean.
+//    no more than kRangeSigmas sigma_k below the cell's mean (on_surface): in the sampled walk
+//    the walked rays' points, with the viewshed table the points the frame folded in
+//    (SightFeed, confirm_cell).
 //
 // The coupling to the front is one adapter, ray_end_of(): the fields of a FrontChunk entry this
 // stage reads (routing code, finest cell and float position inside it, squared range), the
@@ -47,6 +49,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 
 #include "ccmap/cell/ccm_cell.hpp"
@@ -59,6 +62,7 @@
 #include "ccmap/map/types.hpp"
 #include "ccmap/map/update/front.hpp"
 #include "ccmap/map/update/gate.hpp"
+#include "ccmap/map/update/kalman_batch.hpp"
 #include "ccmap/map/visibility/free_space_cell.hpp"
 #include "ccmap/map/visibility/ray_walk.hpp"
 #include "ccmap/map/visibility/sight_table.hpp"
@@ -120,7 +124,7 @@ class FreeSpace<Config, false> {
   [[nodiscard]] Status init(const StackParams&, const float*, const Layers&) noexcept { return Status::kOk; }
   void set_constants(const StackParams&, const float*, const Layers&) noexcept {}
   void follow(int, CellIndex) noexcept {}
-  [[nodiscard]] SightTable* begin_sight(const FramePose&) noexcept { return nullptr; }
+  [[nodiscard]] const SightFeed* begin_sight(const FramePose&, const KalmanFrameSum*) noexcept { return nullptr; }
   void run_map(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, const float*,
                std::size_t, const FramePose&, FrameCounters&) noexcept {}
   void run_sensor(Layers&, const StackParams&, const FrontConfig&, FrontChunk&, const PointXYZ*, std::size_t,
@@ -232,15 +236,26 @@ class FreeSpace<Config, true> {
   }
 
   /// Table mode (free_space_rays >= free_space_table_rays(kSightMaxStride)): empties the viewshed table
-  /// for the frame and returns it for the update path to fill chunk by chunk; nullptr otherwise.
-  [[nodiscard]] SightTable* begin_sight(const FramePose& pose) noexcept {
+  /// and the cells' highest points for the frame and returns them for the update path to fill
+  /// chunk by chunk (SightFeed); nullptr otherwise. fine_sums: the update path's Kalman frame
+  /// batch (UpdatePath::frame_sums; nullptr without a Kalman finest layer), read by the
+  /// confirmations after the frame.
+  [[nodiscard]] const SightFeed* begin_sight(const FramePose& pose, const KalmanFrameSum* fine_sums) noexcept {
     if constexpr (!kSight) {
       (void)pose;
+      (void)fine_sums;
       return nullptr;
     } else {
     if (!every_) {
       return nullptr;
     }
+    for (float& top : sight_.tops) {
+      top = -std::numeric_limits<float>::infinity();
+    }
+    sight_.fine_sums = fine_sums;
+    sight_.feed.table = &sight_.table;
+    sight_.feed.ccm_top = sight_.tops + kTopFine;
+    sight_.feed.fine_top = kTopFine > 0U ? sight_.tops : nullptr;
     SightFrameConstants k{};
     k.sensor_u[0] = pose.anchor_fraction[0];
     k.sensor_u[1] = pose.anchor_fraction[1];
@@ -259,9 +274,9 @@ class FreeSpace<Config, true> {
     // The sampled groups move through their block frame by frame (strides 8 and 16), so that
     // every point of a steady camera's image casts its line of sight every few frames.
     k.phase = static_cast<std::int32_t>((frames_ * 9U) & 0x7FFFU);
-    sight_.begin(k);
+    sight_.table.begin(k);
     sight_anchor_ = pose.anchor;
-    return &sight_;
+    return &sight_.feed;
     }
   }
   [[nodiscard]] CellIndex sight_anchor() const noexcept { return sight_anchor_; }
@@ -572,9 +587,9 @@ class FreeSpace<Config, true> {
     }
     if constexpr (kSight) {
       if (every_) {
-        frame.free_rays_refused += sight_.refused();
+        frame.free_rays_refused += sight_.table.refused();
         if (!held) {
-          frame.free_rays_refused += sight_.points();
+          frame.free_rays_refused += sight_.table.points();
           return;
         }
         run_every(layers, frame);
@@ -606,17 +621,19 @@ class FreeSpace<Config, true> {
   /// azimuth interval whose rays reach beyond its farthest corner.
   ///  - a known cell is contradicted when every such sector (at least two) passes below its
   ///    top by the clear margin (so a rock covering part of the cell, whose sectors end on it or
-  ///    pass over it, is not), and counts the frame as kContradictionsPerFrame rays did;
+  ///    pass over it, is not), and counts the frame as kContradictionsPerFrame rays did, unless a
+  ///    point of the frame lies on its surface (confirm_cell: the cell is confirmed instead, as
+  ///    is every cell read here whose evidence is not zero);
   ///  - an unobserved cell of its walk layer (no finer window holds it) takes the lowest bound;
   ///    it is a drop-off when every such sector (at least kDropRays) passes more than the
   ///    layer's step below the ground that sector's points showed before the cell.
   void run_every(Layers& layers, FrameCounters& frame) noexcept {
     if constexpr (kSight) {
-    sight_.sweep();
-    sight_.track_ground(max_inclination_ * cell_width_, consts_[0].rise_margin_m);
-    const SightFrameConstants& k = sight_.constants();
+    sight_.table.sweep();
+    sight_.table.track_ground(max_inclination_ * cell_width_, consts_[0].rise_margin_m);
+    const SightFrameConstants& k = sight_.table.constants();
     const float unit_m = kSightSlopeUnit * cell_width_;  // height per slope unit per finest cell
-    frame.free_rays += sight_.points();
+    frame.free_rays += sight_.table.points();
     for (int layer = 0; layer < kLayerCount; ++layer) {
       const CellIndex min = windows_.min[layer];
       const std::int32_t side = windows_.side[layer];
@@ -629,7 +646,7 @@ class FreeSpace<Config, true> {
         // Only the columns the frame's rays can reach (reach and view: SightTable::row_span).
         const float bx = static_cast<float>((std::int64_t{min.x} * (std::int64_t{1} << layer)) - sight_anchor_.x) - k.sensor_u[0];
         std::int32_t first = 0, last = -1;
-        if (!sight_.row_span(y0, y1, bx, cw, side, &first, &last)) {
+        if (!sight_.table.row_span(y0, y1, bx, cw, side, &first, &last)) {
           continue;
         }
         for (std::int32_t i = first; i <= last; ++i) {
@@ -641,8 +658,12 @@ class FreeSpace<Config, true> {
           }
           const float x0 = static_cast<float>((std::int64_t{gx} * (std::int64_t{1} << layer)) - sight_anchor_.x) - k.sensor_u[0];
           const float x1 = x0 + cw;
+          FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
           SightCell sc{};
-          if (!sight_.read_cell(x0, x1, y0, y1, &sc)) {
+          if (!sight_.table.read_cell(x0, x1, y0, y1, &sc)) {
+            if (rec.evidence > 0U) {  // no bound here, but its points may confirm it
+              (void)confirm_cell(layer, index, view_of(layers, layer, index), rec);
+            }
             continue;
           }
           const CellView cell = view_of(layers, layer, index);
@@ -654,7 +675,6 @@ class FreeSpace<Config, true> {
           bool all = true;  // every sector holding a ray agrees (sectors without one say nothing)
           const int covered = sc.covered;
           const float s_near = sc.s_near, s_far = sc.s_far;
-          FreeSpaceCell& rec = grids_[layer].cell_unchecked(index);
           if (cell.weight > 0.0F) {
             // The sectors whose lowest ray passes clearly below the cell's top: two at least, and
             // every sector holding a ray (a rock over part of the cell stops the rays of the
@@ -662,8 +682,15 @@ class FreeSpace<Config, true> {
             // non-decreasing in its slope and top_above non-increasing in the height, so every
             // sector passes below exactly when the highest of them does.
             const std::int32_t qmax = sc.qmax;
-            if (covered >= 2 &&
-                top_above(cell, layer, k.z0 + static_cast<float>(qmax) * unit_m * (qmax < 0 ? s_near : s_far))) {
+            const bool contradicted =
+                covered >= 2 &&
+                top_above(cell, layer, k.z0 + static_cast<float>(qmax) * unit_m * (qmax < 0 ? s_near : s_far));
+            // A point of the frame on the cell's surface confirms it: no evidence this frame, and
+            // the evidence of earlier frames forgotten (as a walked ray's point, confirm_end).
+            if ((contradicted || rec.evidence > 0U) && confirm_cell(layer, index, cell, rec)) {
+              continue;
+            }
+            if (contradicted) {
               write_record(rec, [&](FreeSpaceCell& r) {
                 (void)touch(r, stamp_);
                 if (frame_contradictions(r) == 0U) {
@@ -680,15 +707,15 @@ class FreeSpace<Config, true> {
             lower_bound(r, k.z0 + static_cast<float>(qmin) * unit_m * (qmin < 0 ? s_near : s_far));
           });
           // Drop-off: every covered sector below its own ground by more than the step.
-          const int near_bin = sight_.bin_of(s_near);
+          const int near_bin = sight_.table.bin_of(s_near);
           int proving = 0;
           for (int s = lo; s < hi && all; ++s) {
-            const std::int32_t q = sight_.slope(bin, s);
+            const std::int32_t q = sight_.table.slope(bin, s);
             if (q == kSightEmpty) {
               continue;
             }
             float ground = 0.0F;
-            if (!sight_.ground(near_bin, s, &ground)) {
+            if (!sight_.table.ground(near_bin, s, &ground)) {
               all = false;
               break;
             }
@@ -714,6 +741,49 @@ class FreeSpace<Config, true> {
     } else {
       (void)layers;
       (void)frame;
+    }
+  }
+
+  /// Table mode: true if a point of this frame folded into the known cell `cell` (at `index` of
+  /// `layer`, its record `rec`) lies on its surface (on_surface, the rule of a walked ray's
+  /// point); the cell is then confirmed (confirm: no evidence this frame, the earlier frames'
+  /// forgotten). The frame's points of the cell: the highest of them, which the update path kept
+  /// for a CCM or OMG cell (SightFeed); for a Kalman cell the mean of its frame batch (the points
+  /// inside its gate), on the surface only if one of them is (so it confirms no cell its points
+  /// would not; a highest point per Kalman cell would cost every point of the frame). An
+  /// empty cell (or one that failed its check): false.
+  bool confirm_cell(int layer, CellIndex index, const CellView& cell, FreeSpaceCell& rec) noexcept {
+    if constexpr (kSight) {
+      if (!(cell.weight > 0.0F)) {
+        return false;
+      }
+      const std::size_t slot = grid::buffer_offset(index, Layers::side(layer));
+      float z = -std::numeric_limits<float>::infinity();
+      if (Layers::is_ccm(layer)) {
+        z = sight_.tops[kTopFine + (offset_[layer] - kFineRecords) + slot];
+      } else if constexpr (kKalmanFine) {
+        if (sight_.fine_sums == nullptr || sight_.fine_sums[slot].count == 0U) {
+          return false;
+        }
+        const KalmanFrameSum& sum = sight_.fine_sums[slot];
+        z = static_cast<float>(sum.sum_height_q14) / (static_cast<float>(sum.count) * 16384.0F);
+      } else {
+        z = sight_.tops[slot];
+      }
+      if (!on_surface(layer, cell, z)) {
+        return false;
+      }
+      write_record(rec, [this](FreeSpaceCell& r) {
+        (void)touch(r, stamp_);
+        confirm(r);
+      });
+      return true;
+    } else {
+      (void)layer;
+      (void)index;
+      (void)cell;
+      (void)rec;
+      return false;
     }
   }
 
@@ -816,9 +886,15 @@ class FreeSpace<Config, true> {
     return static_cast<float>(part) / static_cast<float>(full);
   }
 
+  /// True if a point at height z (m) lies on (or above) the surface of the known cell `cell` of
+  /// `layer`: not below the cell's mean by more than kRangeSigmas range errors of the layer (a
+  /// point on the ground beneath a vanished rover lies below it and confirms nothing).
+  [[nodiscard]] bool on_surface(int layer, const CellView& cell, float z) const noexcept {
+    return z > cell.height - consts_[layer].rise_margin_m * kRangeSigmas;
+  }
+
   /// The point confirms the surface of the cell it was folded into (the first layer from its
-  /// routed one whose window holds it) when it lies on or above it: above the cell's mean less
-  /// kRangeSigmas range errors of the layer.
+  /// routed one whose window holds it) when it lies on it (on_surface).
   void confirm_end(const Layers& layers, std::int32_t code, const RayState& ray, float z) noexcept {
     for (int layer = code; layer < kLayerCount; ++layer) {
       if (!windows_.contains(layer, ray.end[layer])) {
@@ -826,9 +902,7 @@ class FreeSpace<Config, true> {
       }
       const CellView cell = view_of(layers, layer, ray.end[layer]);
       if (cell.weight > 0.0F) {
-        // On its surface: not below the cell's mean by more than the range noise (a point on the
-        // ground beneath a vanished rover lies below it and confirms nothing).
-        if (z > cell.height - consts_[layer].rise_margin_m * kRangeSigmas) {
+        if (on_surface(layer, cell, z)) {
           write_record(grids_[layer].cell_unchecked(ray.end[layer]), [this](FreeSpaceCell& rec) {
             (void)touch(rec, stamp_);
             confirm(rec);
@@ -1049,7 +1123,19 @@ class FreeSpace<Config, true> {
   float sigma_c_[3]{};       ///< kSightRangeSigmas sigma(r) = c0 + c1 r + c2 r^2 (m)
   CellIndex sight_anchor_{0, 0};
   static constexpr bool kSight = kConfigEveryLineOfSight<Config>;
-  std::conditional_t<kSight, SightTable, NoSightTable> sight_{};
+  // The table's confirmations (SightFeed): per CCM cell, and per finest cell of an OMG layer,
+  // the highest point of the frame (m); a Kalman finest layer's frame batch instead.
+  static constexpr bool kKalmanFine = Config::kFineKind == FineKind::kKalman;
+  static constexpr std::size_t kTopFine = (Layers::kHasFine && !kKalmanFine) ? kFineRecords : 0U;
+  static constexpr std::size_t kTopCount = kTopFine + kCcmRecords > 0U ? kTopFine + kCcmRecords : 1U;
+  /// What table mode keeps: the table, the frame's highest points, what the update path is fed.
+  struct SightParts {
+    SightTable table;
+    float tops[kTopCount];
+    SightFeed feed;
+    const KalmanFrameSum* fine_sums;  ///< the update path's Kalman frame batch (begin_sight)
+  };
+  std::conditional_t<kSight, SightParts, NoSightTable> sight_{};
   std::uint32_t contradicted_[kMaxContradictedCells]{};
   RunCell run_[kMaxRunCells]{};
   std::uint32_t contradicted_count_ = 0U;

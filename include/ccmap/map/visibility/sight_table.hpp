@@ -142,6 +142,22 @@ class SightTable;
 /// What a stack without the table carries in its place.
 struct NoSightTable {};
 
+/// What the update path feeds the free-space stage with in table mode (free_space.hpp,
+/// begin_sight): the table, chunk by chunk, and what the frame's confirmations read
+/// (docs/design.md 12): per cell, the highest of the points the frame folded into it (m, map
+/// frame; -infinity: none), which the stage compares with the cell's surface after the frame as
+/// a walked ray's point is (FreeSpace::on_surface). For a CCM cell the points are the first of
+/// each run of consecutive points folded into it (a store a run: every point's would cost the
+/// flight cycle more than its budget leaves, docs/performance.md 13), for an OMG cell every
+/// point; a Kalman finest layer needs none (the stage reads its frame batch's mean,
+/// KalmanFrameSum). Frame scratch, reset by begin_sight: an upset in it can confirm a cell (keep
+/// it one more frame) or miss one confirmation, never empty a cell by itself.
+struct SightFeed {
+  SightTable* table = nullptr;
+  float* ccm_top = nullptr;   ///< per CCM cell, in the layers' storage order (LayerSet::ccm_storage)
+  float* fine_top = nullptr;  ///< per finest cell of a piece-wise constant (OMG) layer; else nullptr
+};
+
 class SightTable {
  public:
   /// Empties the table for a new frame.
