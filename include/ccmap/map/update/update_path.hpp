@@ -415,7 +415,7 @@ class UpdatePath {
   template <bool kGate>
   __attribute__((always_inline)) void apply(Layers& layers, const StackParams& params, std::size_t i, const float* weights, bool unit_weights,
              ChunkCounts& c, ChunkRuns& runs, Accepts& accepts, const Judge& judge,
-                                             float* ccm_top) noexcept {
+                                             float* ccm_top) noexcept {  // NOLINT(readability-non-const-parameter): written when kTops (WithEveryLineOfSight configs), unused otherwise
     const std::int32_t code = chunk_.code[i];
     // Unsigned (integrity): a negative code, which the front never writes, is refused with them
     // (uncounted) rather than starting the walk below layer 0.

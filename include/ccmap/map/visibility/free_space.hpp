@@ -744,6 +744,32 @@ class FreeSpace<Config, true> {
     }
   }
 
+  /// Table mode: the height (m) of the frame's points in the cell at buffer offset `slot` of
+  /// `layer` that confirm_cell tests: the highest point the update path kept (a CCM or OMG cell;
+  /// -infinity if none), or a Kalman finest cell's frame-batch mean. False (z untouched) for a
+  /// Kalman cell that took no point this frame.
+  [[nodiscard]] bool frame_height(int layer, std::size_t slot, float* z) const noexcept {
+    if constexpr (kSight) {
+      if (Layers::is_ccm(layer)) {
+        *z = sight_.tops[kTopFine + (offset_[layer] - kFineRecords) + slot];
+      } else if constexpr (kKalmanFine) {
+        if (sight_.fine_sums == nullptr || sight_.fine_sums[slot].count == 0U) {
+          return false;
+        }
+        const KalmanFrameSum& sum = sight_.fine_sums[slot];
+        *z = static_cast<float>(sum.sum_height_q14) / (static_cast<float>(sum.count) * 16384.0F);
+      } else {
+        *z = sight_.tops[slot];
+      }
+      return true;
+    } else {
+      (void)layer;
+      (void)slot;
+      (void)z;
+      return false;
+    }
+  }
+
   /// Table mode: true if a point of this frame folded into the known cell `cell` (at `index` of
   /// `layer`, its record `rec`) lies on its surface (on_surface, the rule of a walked ray's
   /// point); the cell is then confirmed (confirm: no evidence this frame, the earlier frames'
@@ -757,20 +783,8 @@ class FreeSpace<Config, true> {
       if (!(cell.weight > 0.0F)) {
         return false;
       }
-      const std::size_t slot = grid::buffer_offset(index, Layers::side(layer));
-      float z = -std::numeric_limits<float>::infinity();
-      if (Layers::is_ccm(layer)) {
-        z = sight_.tops[kTopFine + (offset_[layer] - kFineRecords) + slot];
-      } else if constexpr (kKalmanFine) {
-        if (sight_.fine_sums == nullptr || sight_.fine_sums[slot].count == 0U) {
-          return false;
-        }
-        const KalmanFrameSum& sum = sight_.fine_sums[slot];
-        z = static_cast<float>(sum.sum_height_q14) / (static_cast<float>(sum.count) * 16384.0F);
-      } else {
-        z = sight_.tops[slot];
-      }
-      if (!on_surface(layer, cell, z)) {
+      float z = 0.0F;
+      if (!frame_height(layer, grid::buffer_offset(index, Layers::side(layer)), &z) || !on_surface(layer, cell, z)) {
         return false;
       }
       write_record(rec, [this](FreeSpaceCell& r) {
@@ -1131,9 +1145,9 @@ class FreeSpace<Config, true> {
   /// What table mode keeps: the table, the frame's highest points, what the update path is fed.
   struct SightParts {
     SightTable table;
-    float tops[kTopCount];
+    float tops[kTopCount]{};
     SightFeed feed;
-    const KalmanFrameSum* fine_sums;  ///< the update path's Kalman frame batch (begin_sight)
+    const KalmanFrameSum* fine_sums = nullptr;  ///< the update path's Kalman frame batch (begin_sight)
   };
   std::conditional_t<kSight, SightParts, NoSightTable> sight_{};
   std::uint32_t contradicted_[kMaxContradictedCells]{};
