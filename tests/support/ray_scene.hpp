@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -123,13 +124,49 @@ inline double cast_scene_ray(const AnalyticScene& scene, const double* o, const 
   return -1.0;
 }
 
-/// One frame: every pixel's line of sight cast against the scene; misses give no point.
-inline SceneFrame render_scene(const AnalyticScene& scene, const SceneCamera& cam) {
-  SceneFrame frame;
-  const double oz = scene.plane(cam.x) + cam.height_m;
-  const double o[3] = {cam.x, cam.y, oz};
-  frame.origin = PointXYZ{static_cast<float>(cam.x), static_cast<float>(cam.y), static_cast<float>(oz)};
-  std::uint64_t rng = cam.seed * 0x9E3779B97F4A7C15ULL + 1U;
+namespace detail_scene {
+/// One pixel's line of sight: its unit direction and where it meets the scene (-1: a miss).
+struct PixelCast {
+  double d[3];
+  double t;
+};
+/// The casts of one scene seen from one pose: everything of a frame but its range noise.
+struct SceneCasts {
+  AnalyticScene scene;
+  SceneCamera camera;  ///< its seed and noise are not part of the casts
+  std::vector<PixelCast> pixels;
+};
+inline bool same_rects(const SceneBox& a, const SceneBox& b) {
+  return a.x0 == b.x0 && a.y0 == b.y0 && a.x1 == b.x1 && a.y1 == b.y1 && a.height == b.height;
+}
+inline bool same_rects(const SceneDitch& a, const SceneDitch& b) {
+  return a.x0 == b.x0 && a.y0 == b.y0 && a.x1 == b.x1 && a.y1 == b.y1 && a.depth == b.depth;
+}
+template <typename Rect>
+bool same_rect_lists(const std::vector<Rect>& a, const std::vector<Rect>& b) {
+  if (a.size() != b.size()) {
+    return false;
+  }
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!same_rects(a[i], b[i])) {
+      return false;
+    }
+  }
+  return true;
+}
+/// True if the casts of `c` are those of `scene` from `cam` (every field but seed and noise).
+inline bool casts_match(const SceneCasts& c, const AnalyticScene& scene, const SceneCamera& cam) {
+  const SceneCamera& k = c.camera;
+  return c.scene.slope_x == scene.slope_x && same_rect_lists(c.scene.boxes, scene.boxes) &&
+         same_rect_lists(c.scene.ditches, scene.ditches) && k.x == cam.x && k.y == cam.y &&
+         k.height_m == cam.height_m && k.heading_cos == cam.heading_cos && k.heading_sin == cam.heading_sin &&
+         k.cols == cam.cols && k.rows == cam.rows && k.near_m == cam.near_m && k.far_m == cam.far_m &&
+         k.half_fov_tan == cam.half_fov_tan && k.max_range_m == cam.max_range_m;
+}
+/// Every pixel's cast of `scene` from `cam`, in row-major order.
+inline void cast_pixels(const AnalyticScene& scene, const SceneCamera& cam, std::vector<PixelCast>& out) {
+  out.clear();
+  const double o[3] = {cam.x, cam.y, scene.plane(cam.x) + cam.height_m};
   const double t_far = cam.height_m / cam.far_m;
   const double t_near = cam.height_m / cam.near_m;
   for (int r = 0; r < cam.rows; ++r) {
@@ -137,22 +174,45 @@ inline SceneFrame render_scene(const AnalyticScene& scene, const SceneCamera& ca
     for (int c = 0; c < cam.cols; ++c) {
       const double lateral = cam.half_fov_tan * (cam.cols > 1 ? 2.0 * c / (cam.cols - 1) - 1.0 : 0.0);
       // Direction in the camera's heading frame (forward 1, left `lateral`, down tan_down).
-      double d[3] = {cam.heading_cos - cam.heading_sin * lateral, cam.heading_sin + cam.heading_cos * lateral,
-                     -tan_down};
-      const double norm = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      for (double& v : d) {
+      PixelCast p{{cam.heading_cos - cam.heading_sin * lateral, cam.heading_sin + cam.heading_cos * lateral, -tan_down},
+                  -1.0};
+      const double norm = std::sqrt(p.d[0] * p.d[0] + p.d[1] * p.d[1] + p.d[2] * p.d[2]);
+      for (double& v : p.d) {
         v /= norm;
       }
-      double t = cast_scene_ray(scene, o, d, cam.max_range_m);
-      if (t < 0.0) {
-        continue;
-      }
-      if (cam.noise_per_range_sq > 0.0) {
-        t += detail_scene::gaussian(rng) * cam.noise_per_range_sq * t * t;
-      }
-      frame.points.push_back(PointXYZ{static_cast<float>(o[0] + d[0] * t), static_cast<float>(o[1] + d[1] * t),
-                                      static_cast<float>(o[2] + d[2] * t)});
+      p.t = cast_scene_ray(scene, o, p.d, cam.max_range_m);
+      out.push_back(p);
     }
+  }
+}
+}  // namespace detail_scene
+
+/// One frame: every pixel's line of sight cast against the scene, then its range noise; misses
+/// give no point. The casts do not depend on the seed: those of the last scene and pose are kept
+/// (per thread) and reused when the next frame is of the same scene from the same pose, so a
+/// test folding many noisy frames of one view casts once (the frames are the same bit for bit).
+inline SceneFrame render_scene(const AnalyticScene& scene, const SceneCamera& cam) {
+  thread_local detail_scene::SceneCasts casts;
+  if (casts.pixels.empty() || !detail_scene::casts_match(casts, scene, cam)) {
+    casts.scene = scene;
+    casts.camera = cam;
+    detail_scene::cast_pixels(scene, cam, casts.pixels);
+  }
+  SceneFrame frame;
+  const double oz = scene.plane(cam.x) + cam.height_m;
+  const double o[3] = {cam.x, cam.y, oz};
+  frame.origin = PointXYZ{static_cast<float>(cam.x), static_cast<float>(cam.y), static_cast<float>(oz)};
+  std::uint64_t rng = cam.seed * 0x9E3779B97F4A7C15ULL + 1U;
+  for (const detail_scene::PixelCast& p : casts.pixels) {
+    double t = p.t;
+    if (t < 0.0) {
+      continue;
+    }
+    if (cam.noise_per_range_sq > 0.0) {
+      t += detail_scene::gaussian(rng) * cam.noise_per_range_sq * t * t;
+    }
+    frame.points.push_back(PointXYZ{static_cast<float>(o[0] + p.d[0] * t), static_cast<float>(o[1] + p.d[1] * t),
+                                    static_cast<float>(o[2] + p.d[2] * t)});
   }
   return frame;
 }
