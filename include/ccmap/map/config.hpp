@@ -167,6 +167,14 @@ struct ConfigFreeSpace<Config, std::void_t<decltype(Config::kFreeSpace)>> {
 template <typename Config>
 inline constexpr bool kConfigFreeSpace = detail::ConfigFreeSpace<Config>::value;
 
+/// A Config whose sampled walk takes `kCandidatesPerRay` candidates per walked line of sight
+/// (map/visibility/free_space.hpp, FreeSpace::choose; the presets: 4, detail::kRayCandidates). One
+/// is the even subsample of the frame's points.
+template <typename Base, std::size_t kCandidatesPerRay>
+struct WithRayCandidates : Base {
+  static constexpr std::size_t kRayCandidates = kCandidatesPerRay;
+};
+
 /// Largest number of layers a stack may have (bounds the per-layer parameter arrays).
 inline constexpr int kMaxLayers = 8;
 
