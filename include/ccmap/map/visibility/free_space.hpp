@@ -1,6 +1,8 @@
 // Free space from lines of sight (docs/design.md, "Free space from lines of sight"): after the
 // points of a frame are folded in, a bounded subsample of lines of sight, from the sensor to the
-// frame's points, is walked over every layer (map/visibility/ray_walk.hpp). A line of sight says
+// frame's points, is walked over every layer (map/visibility/ray_walk.hpp): the frame's even
+// subsample gives the slots, each with kRayCandidates candidates, and the candidates whose lines
+// of sight cross hidden ground or a contradicted cell are walked first (choose, score_candidate). A line of sight says
 // the terrain along it lies below it:
 //  - a cell whose surface the rays pass clearly below, in kContradictionsPerFrame rays of a
 //    frame, in free_space_clear_frames frames with no ray ending on the surface in between, is
@@ -96,7 +98,9 @@ inline constexpr std::uint32_t kMaxTargets = 16U;
 inline constexpr std::uint32_t kTargetLevel = 3U;
 /// Levels of a candidate: 0 refused, 1 routed, up to 1 + kHiddenCellsBack + kTargetLevel.
 inline constexpr std::uint32_t kLevels = 8U;
-inline constexpr std::uint8_t kLevelMask = 0x0FU;
+inline constexpr std::uint8_t kLevelMask = 0x07U;
+static_assert(kLevelMask + 1U == kLevels && 1U + static_cast<std::uint32_t>(kHiddenCellsBack) + kTargetLevel < kLevels,
+              "a masked level indexes the level counts");
 inline constexpr std::uint8_t kSlotPoint = 0x40U;  ///< the slot's own point (the even subsample)
 inline constexpr std::uint8_t kChosen = 0x80U;
 /// Unobserved cells of one run along a ray that a drop-off proved further along the run can mark
