@@ -220,8 +220,9 @@ struct StackParams {
   std::uint32_t frame_point_budget = 0U;
   std::uint32_t frame_time_budget_us = 0U;
   /// Free space from lines of sight (docs/design.md, "Free space from lines of sight"): the
-  /// lines of sight walked per frame, from the sensor to an evenly spread subsample of the
-  /// frame's points (a whole number in [0, 65535]; 0 switches the feature off at run time: no
+  /// lines of sight walked per frame, from the sensor to points of the frame: each of an evenly
+  /// spread subsample's points brings 4 candidates (WithRayCandidates), and those whose lines of
+  /// sight cross hidden ground or a contradicted cell are walked first (a whole number in [0, 65535]; 0 switches the feature off at run time: no
   /// cell is cleared, no drop-off marked, the frame costs what it did without it). A stack whose
   /// Config has kFreeSpace = false ignores it. On a stack that carries the viewshed table
   /// (WithEveryLineOfSight, map/visibility/sight_table.hpp) 65535 casts every line of sight of

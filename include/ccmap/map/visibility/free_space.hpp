@@ -1011,8 +1011,8 @@ class FreeSpace<Config, true> {
         const std::int64_t cell_u = std::int64_t{256} << layer;
         const std::int64_t half_u = std::int64_t{128} << layer;
         Target& t = targets_[target_count_++];
-        t.centre[0] = static_cast<float>(std::int64_t{gx} * cell_u + half_u - origin_u_[0]);
-        t.centre[1] = static_cast<float>(std::int64_t{gy} * cell_u + half_u - origin_u_[1]);
+        t.centre[0] = static_cast<float>(static_cast<std::int64_t>(gx) * cell_u + half_u - origin_u_[0]);
+        t.centre[1] = static_cast<float>(static_cast<std::int64_t>(gy) * cell_u + half_u - origin_u_[1]);
         t.half = static_cast<float>(half_u);
       }
     }
