@@ -341,9 +341,17 @@ TEST(FreeSpaceScenes, ADitchSeenFrom17cmIsADropOffWhereTheRaysProveItAndNowhereE
       EXPECT_EQ(q.weight, 0.0F) << "a drop-off answer holds no points";
       // The answering cell must overlap the ditch (a true drop inside it).
       const double w = q.cell_width_m;
-      const double cx0 = std::floor(x / w) * w;
-      const double cy0 = std::floor(y / w) * w;
-      const bool overlaps = cx0 < d.x1 && cx0 + w > d.x0 && cy0 < d.y1 && cy0 + w > d.y0;
+      // A query point on a cell boundary (the 2 cm raster meets every 8 cm boundary) may be
+      // answered by either neighbour (float index rounding: grid::index_of_position): the
+      // cell may start at either side's floor.
+      bool overlaps = false;
+      for (const double ex : {-1e-4, 1e-4}) {
+        for (const double ey : {-1e-4, 1e-4}) {
+          const double cx0 = std::floor((x + ex) / w) * w;
+          const double cy0 = std::floor((y + ey) / w) * w;
+          overlaps = overlaps || (cx0 < d.x1 && cx0 + w > d.x0 && cy0 < d.y1 && cy0 + w > d.y0);
+        }
+      }
       wrong += overlaps ? 0 : 1;
       // Its height is an upper bound of the hidden floor, above the true floor and no higher than
       // the rays that cross the rim to the far wall's top pass over the rim: 0.175 (1 - 1.2 / 2.2)

@@ -167,6 +167,14 @@ struct ConfigFreeSpace<Config, std::void_t<decltype(Config::kFreeSpace)>> {
 template <typename Config>
 inline constexpr bool kConfigFreeSpace = detail::ConfigFreeSpace<Config>::value;
 
+/// A Config whose sampled walk takes `kCandidatesPerRay` candidates per walked line of sight
+/// (map/visibility/free_space.hpp, FreeSpace::choose; the presets: 4, detail::kRayCandidates). One
+/// is the even subsample of the frame's points.
+template <typename Base, std::size_t kCandidatesPerRay>
+struct WithRayCandidates : Base {
+  static constexpr std::size_t kRayCandidates = kCandidatesPerRay;
+};
+
 /// Largest number of layers a stack may have (bounds the per-layer parameter arrays).
 inline constexpr int kMaxLayers = 8;
 
@@ -212,8 +220,9 @@ struct StackParams {
   std::uint32_t frame_point_budget = 0U;
   std::uint32_t frame_time_budget_us = 0U;
   /// Free space from lines of sight (docs/design.md, "Free space from lines of sight"): the
-  /// lines of sight walked per frame, from the sensor to an evenly spread subsample of the
-  /// frame's points (a whole number in [0, 65535]; 0 switches the feature off at run time: no
+  /// lines of sight walked per frame, from the sensor to points of the frame: each of an evenly
+  /// spread subsample's points brings 4 candidates (WithRayCandidates), and those whose lines of
+  /// sight cross hidden ground or a contradicted cell are walked first (a whole number in [0, 65535]; 0 switches the feature off at run time: no
   /// cell is cleared, no drop-off marked, the frame costs what it did without it). A stack whose
   /// Config has kFreeSpace = false ignores it. On a stack that carries the viewshed table
   /// (WithEveryLineOfSight, map/visibility/sight_table.hpp) 65535 casts every line of sight of

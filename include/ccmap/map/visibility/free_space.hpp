@@ -1,6 +1,8 @@
 // Free space from lines of sight (docs/design.md, "Free space from lines of sight"): after the
 // points of a frame are folded in, a bounded subsample of lines of sight, from the sensor to the
-// frame's points, is walked over every layer (map/visibility/ray_walk.hpp). A line of sight says
+// frame's points, is walked over every layer (map/visibility/ray_walk.hpp): the frame's even
+// subsample gives the slots, each with kRayCandidates candidates, and the candidates whose lines
+// of sight cross hidden ground or a contradicted cell are walked first (choose, score_candidate). A line of sight says
 // the terrain along it lies below it:
 //  - a cell whose surface the rays pass clearly below, in kContradictionsPerFrame rays of a
 //    frame, in free_space_clear_frames frames with no ray ending on the surface in between, is
@@ -76,6 +78,31 @@ inline constexpr float kRangeSigmas = 3.0F;
 /// Cells whose first contradiction of a frame is remembered for the frame's end (beyond it, the
 /// frame's further contradicted cells wait for a later frame).
 inline constexpr std::size_t kMaxContradictedCells = 1024U;
+/// Candidates per walked line of sight in the sampled walk (the presets'): the frame's even
+/// subsample brings this many points per slot, and the slots of a batch walk the lines of sight
+/// that prove most (score_candidate). A Config may set its own (WithRayCandidates).
+inline constexpr std::size_t kRayCandidates = 4U;
+template <typename Config, typename = void>
+struct ConfigRayCandidates {
+  static constexpr std::size_t value = kRayCandidates;
+};
+template <typename Config>
+struct ConfigRayCandidates<Config, std::void_t<decltype(Config::kRayCandidates)>> {
+  static constexpr std::size_t value = Config::kRayCandidates;
+};
+/// Cells (of a candidate's routed layer) before its point that are read for hidden ground.
+inline constexpr int kHiddenCellsBack = 2;
+/// Cells with evidence against them that a frame's candidates aim at.
+inline constexpr std::uint32_t kMaxTargets = 16U;
+/// Level added to a candidate whose line of sight crosses such a cell.
+inline constexpr std::uint32_t kTargetLevel = 3U;
+/// Levels of a candidate: 0 refused, 1 routed, up to 1 + kHiddenCellsBack + kTargetLevel.
+inline constexpr std::uint32_t kLevels = 8U;
+inline constexpr std::uint8_t kLevelMask = 0x07U;
+static_assert(kLevelMask + 1U == kLevels && 1U + static_cast<std::uint32_t>(kHiddenCellsBack) + kTargetLevel < kLevels,
+              "a masked level indexes the level counts");
+inline constexpr std::uint8_t kSlotPoint = 0x40U;  ///< the slot's own point (the even subsample)
+inline constexpr std::uint8_t kChosen = 0x80U;
 /// Unobserved cells of one run along a ray that a drop-off proved further along the run can mark
 /// (the nearest ones first; a longer run's later cells are marked only by their own bound).
 inline constexpr std::size_t kMaxRunCells = 64U;
@@ -161,6 +188,8 @@ class FreeSpace<Config, true> {
   static constexpr std::size_t kFineRecords = Layers::kHasFine ? Layers::kFineCellCount : 0U;
   static constexpr std::size_t kCcmRecords = Layers::kCcmLayerCount > 0 ? Layers::kCcmCellCount : 0U;
   static constexpr std::size_t kRecordCount = kFineRecords + kCcmRecords;
+  static constexpr std::size_t kCandidates = ConfigRayCandidates<Config>::value;
+  static_assert(kCandidates >= 1U && kCandidates <= kFrontChunkPoints, "candidates per line of sight: 1 .. a front chunk");
 
   /// Binds one record grid per layer (centred on the origin, every record empty, as init leaves
   /// the layers) and derives the margins. max_range_sq_m2: the routing table's squared ranges.
@@ -601,17 +630,30 @@ class FreeSpace<Config, true> {
       frame.free_rays_refused += static_cast<std::uint32_t>(sampled);
       return;
     }
+    find_targets();
+    // Every slot (a point of the even subsample) brings `per` candidates spread over its stride:
+    // the point itself first, then every gap-th point after it (kCandidates, fewer when the
+    // stride is shorter). A batch of candidates fills one front chunk.
+    const std::size_t per = stride < kCandidates ? stride : kCandidates;
+    const std::size_t gap = stride / per;
+    const std::size_t slots_per_batch = kFrontChunkPoints / per;
     std::size_t count = 0U;
+    std::size_t slots = 0U;
     for (std::size_t idx = phase; idx < n; idx += stride) {
-      batch_index_[count] = static_cast<std::uint32_t>(idx);
-      batch_points_[count] = points[idx];
-      if (++count == kFrontChunkPoints) {
-        run_batch(layers, params, front, chunk, weights, count, pose, sensor_frame, frame);
+      for (std::size_t m = 0U; m < per && idx + m * gap < n; ++m) {
+        batch_index_[count] = static_cast<std::uint32_t>(idx + m * gap);
+        batch_points_[count] = points[idx + m * gap];
+        batch_level_[count] = static_cast<std::uint8_t>(m == 0U ? kSlotPoint : 0U);
+        ++count;
+      }
+      if (++slots == slots_per_batch) {
+        run_batch(layers, params, front, chunk, weights, count, slots, pose, sensor_frame, frame);
         count = 0U;
+        slots = 0U;
       }
     }
-    if (count > 0U) {
-      run_batch(layers, params, front, chunk, weights, count, pose, sensor_frame, frame);
+    if (slots > 0U) {
+      run_batch(layers, params, front, chunk, weights, count, slots, pose, sensor_frame, frame);
     }
     settle(layers, frame);
   }
@@ -812,9 +854,11 @@ class FreeSpace<Config, true> {
     return false;
   }
 
+  /// One batch of candidates (count of them, for `slots` slots): the front places them, each is
+  /// scored (score_candidate), `slots` of them are chosen (choose) and walked in their order.
   void run_batch(Layers& layers, const StackParams& params, const FrontConfig& front, FrontChunk& chunk,
-                 const float* weights, std::size_t count, const FramePose& pose, bool sensor_frame,
-                 FrameCounters& frame) noexcept {
+                 const float* weights, std::size_t count, std::size_t slots, const FramePose& pose,
+                 bool sensor_frame, FrameCounters& frame) noexcept {
     if (sensor_frame) {
       front_sensor_chunk(batch_points_, count, pose, front, kNoFineWindow, chunk);
     } else {
@@ -830,12 +874,147 @@ class FreeSpace<Config, true> {
         const PointXYZ& s = batch_points_[i];
         refused = !(s.x * view_axis_[0] + s.y * view_axis_[1] + s.z * view_axis_[2] > 0.0F);
       }
-      if (refused) {
+      const std::uint32_t level = refused ? 0U : score_candidate(layers, end);
+      batch_level_[i] = static_cast<std::uint8_t>((batch_level_[i] & kSlotPoint) | level);
+    }
+    choose(count, slots);
+    for (std::size_t i = 0; i < count; ++i) {
+      if ((batch_level_[i] & kChosen) == 0U) {
+        continue;
+      }
+      if ((batch_level_[i] & kLevelMask) == 0U) {
         ++frame.free_rays_refused;
         continue;
       }
       ++frame.free_rays;
-      cast(layers, params, end, frame);
+      cast(layers, params, ray_end_of(chunk, i), frame);
+    }
+  }
+
+  /// Marks `slots` of the batch's `count` candidates chosen (kChosen): every candidate of the
+  /// highest levels, then, from the level where the slots run out, the slots' own points of that
+  /// level first, evenly spread, then its other candidates evenly spread. A batch whose
+  /// candidates all score alike walks exactly the even subsample (the slots' own points).
+  void choose(std::size_t count, std::size_t slots) noexcept {
+    std::uint32_t at_level[kLevels]{};
+    std::uint32_t own_at_level[kLevels]{};
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::uint32_t level = batch_level_[i] & kLevelMask;
+      ++at_level[level];
+      own_at_level[level] += (batch_level_[i] & kSlotPoint) != 0U ? 1U : 0U;
+    }
+    auto need = static_cast<std::uint32_t>(slots);
+    std::uint32_t cut = kLevels - 1U;
+    while (cut > 0U && at_level[cut] < need) {
+      need -= at_level[cut];
+      --cut;
+    }
+    // At the cut level: `need` of its candidates, its slots' own points first.
+    const std::uint32_t own = own_at_level[cut];
+    const std::uint32_t own_take = need < own ? need : own;
+    const std::uint32_t other = at_level[cut] - own;
+    const std::uint32_t other_take = need - own_take;
+    std::uint32_t own_rank = 0U, own_picked = 0U, other_rank = 0U, other_picked = 0U;
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::uint32_t level = batch_level_[i] & kLevelMask;
+      bool take = level > cut;
+      if (level == cut) {
+        // The t-th pick of a group of g candidates taking k is its rank floor(t g / k).
+        if ((batch_level_[i] & kSlotPoint) != 0U) {
+          take = own_picked < own_take && own_rank == own_picked * own / own_take;
+          own_picked += take ? 1U : 0U;
+          ++own_rank;
+        } else {
+          take = other_picked < other_take && other_rank == other_picked * other / other_take;
+          other_picked += take ? 1U : 0U;
+          ++other_rank;
+        }
+      }
+      batch_level_[i] = static_cast<std::uint8_t>(batch_level_[i] | (take ? kChosen : 0U));
+    }
+  }
+
+  /// The level of a routed candidate (1 .. kLevels - 1): 1, plus one for each of the cells one
+  /// and two cells (of its routed layer) before its point towards the sensor that no point
+  /// observed (its line of sight crosses hidden ground: a ditch, a crater, a shadow), plus
+  /// kTargetLevel if it passes through a cell with evidence against its surface (find_targets).
+  /// Reads cells unchecked: the level only chooses which lines of sight are walked; the walk
+  /// reads every cell through its check.
+  [[nodiscard]] std::uint32_t score_candidate(const Layers& layers, const RayEnd& end) const noexcept {
+    std::uint32_t level = 1U;
+    const float dx = static_cast<float>(end.u[0] - origin_u_[0]);
+    const float dy = static_cast<float>(end.u[1] - origin_u_[1]);
+    const float ax = dx < 0.0F ? -dx : dx;
+    const float ay = dy < 0.0F ? -dy : dy;
+    const float longest = ax > ay ? ax : ay;
+    if (!(longest > 0.0F)) {
+      return level;
+    }
+    const int routed = end.code;
+    const float cell_u = static_cast<float>(std::int64_t{256} << routed);
+    for (int back = 1; back <= kHiddenCellsBack; ++back) {
+      const float f = static_cast<float>(back) * cell_u / longest;
+      if (!(f < 1.0F)) {
+        break;  // the cell before lies at or behind the sensor
+      }
+      const std::int64_t u[2] = {end.u[0] - static_cast<std::int64_t>(dx * f), end.u[1] - static_cast<std::int64_t>(dy * f)};
+      // Hidden: empty in the routed layer and in every finer layer whose window holds it (a
+      // coarser layer's cell may hold the ground around a ditch: it does not see inside it).
+      bool seen = false;
+      for (int layer = 0; layer <= routed && !seen; ++layer) {
+        const int shift = kRayFracBits + layer;
+        const CellIndex c{static_cast<std::int32_t>(u[0] >> shift), static_cast<std::int32_t>(u[1] >> shift)};
+        seen = windows_.contains(layer, c) && raw_weight(layers, layer, c) > 0.0F;
+      }
+      level += seen ? 0U : 1U;
+    }
+    // Cells with evidence against them: the line of sight passes within half a cell of the
+    // centre, before its point.
+    const float dd = dx * dx + dy * dy;
+    for (std::uint32_t k = 0; k < target_count_; ++k) {
+      const float cx = targets_[k].centre[0];
+      const float cy = targets_[k].centre[1];
+      const float along = cx * dx + cy * dy;
+      const float across = cx * dy - cy * dx;
+      const float h = targets_[k].half;
+      if (along > 0.0F && along < dd && across * across < h * h * dd) {
+        level += kTargetLevel;
+        break;
+      }
+    }
+    return level < kLevels ? level : kLevels - 1U;
+  }
+
+  /// The cells the frame's candidates aim at (score_candidate): known cells whose record holds
+  /// evidence against their surface, or whose record was contradicted in the last frame (one ray
+  /// of it: a far ghost gets about one ray a frame, the evidence rule asks for two), up to
+  /// kMaxTargets of them in record order; their centres relative to the sensor (U units).
+  void find_targets() noexcept {
+    target_count_ = 0U;
+    const auto last = static_cast<std::uint8_t>((frames_ - 1U) & kStampMask);
+    for (int layer = 0; layer < kLayerCount && target_count_ < kMaxTargets; ++layer) {
+      const std::int32_t side = Layers::side(layer);
+      const FreeSpaceCell* recs = records_ + offset_[layer];
+      const auto cells = static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
+      for (std::size_t slot = 0; slot < cells && target_count_ < kMaxTargets; ++slot) {
+        const FreeSpaceCell& r = recs[slot];
+        const bool aimed = r.evidence > 0U || ((r.state & kStampMask) == last && frame_contradictions(r) > 0U);
+        if (!aimed) {
+          continue;
+        }
+        // The global index of the slot: the window's index with that ring position.
+        const CellIndex min = windows_.min[layer];
+        const auto bx = static_cast<std::int32_t>(slot % static_cast<std::size_t>(side));
+        const auto by = static_cast<std::int32_t>(slot / static_cast<std::size_t>(side));
+        const std::int32_t gx = min.x + ((bx - min.x) & (side - 1));
+        const std::int32_t gy = min.y + ((by - min.y) & (side - 1));
+        const std::int64_t cell_u = std::int64_t{256} << layer;
+        const std::int64_t half_u = std::int64_t{128} << layer;
+        Target& t = targets_[target_count_++];
+        t.centre[0] = static_cast<float>(static_cast<std::int64_t>(gx) * cell_u + half_u - origin_u_[0]);
+        t.centre[1] = static_cast<float>(static_cast<std::int64_t>(gy) * cell_u + half_u - origin_u_[1]);
+        t.half = static_cast<float>(half_u);
+      }
     }
   }
 
@@ -1155,6 +1334,15 @@ class FreeSpace<Config, true> {
   std::uint32_t contradicted_count_ = 0U;
   std::uint32_t batch_index_[kFrontChunkPoints]{};
   PointXYZ batch_points_[kFrontChunkPoints]{};
+  /// Per candidate of a batch: its level (kLevelMask), kSlotPoint, kChosen.
+  std::uint8_t batch_level_[kFrontChunkPoints]{};
+  /// A cell the candidates aim at (find_targets): centre relative to the sensor, half width (U).
+  struct Target {
+    float centre[2];
+    float half;
+  };
+  Target targets_[kMaxTargets]{};
+  std::uint32_t target_count_ = 0U;
 };
 
 }  // namespace ccmap::detail
