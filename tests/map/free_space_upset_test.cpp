@@ -18,6 +18,7 @@
 #include "ccmap/map/visibility/sight_table.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/planner/detail/region_walk.hpp"
+#include "support/calibrated_params.hpp"
 #include "support/ray_scene.hpp"
 
 #ifndef CCMAP_FREE_SPACE_UPSET_RECORDS
@@ -119,10 +120,13 @@ struct Fixture {
   }
 };
 
+/// The campaigns' parameters, the thresholds written out: every trial loads the snapshot, and
+/// init()'s calibration is not the subject (support/calibrated_params.hpp).
+template <typename Config>
 StackParams params(float rays) {
   StackParams p = ccmap::default_stack_params(0.04F);
   p.free_space_rays = rays;
-  return p;
+  return ccmap::test::with_calibrated_thresholds<Config>(p);
 }
 
 template <typename Map>
@@ -181,7 +185,7 @@ void drop_campaign(float rays) {
   AnalyticScene ditch;
   ditch.ditches.push_back(SceneDitch{1.2, -1.5, 2.2, 1.5, 0.40});
   auto trained = std::make_unique<Map>();
-  ASSERT_EQ(trained->init(params(rays)), Status::kOk);
+  ASSERT_EQ(trained->init(params<Config>(rays)), Status::kOk);
   for (std::uint64_t k = 1; k <= 3; ++k) {
     fold(*trained, frame_of(ditch, k), nullptr);
   }
@@ -246,7 +250,7 @@ void clearing_campaign(float rays) {
   with_box.boxes.push_back(SceneBox{1.40, -0.15, 1.70, 0.15, 0.15});
   const AnalyticScene empty;
   auto trained = std::make_unique<Map>();
-  ASSERT_EQ(trained->init(params(rays)), Status::kOk);
+  ASSERT_EQ(trained->init(params<Config>(rays)), Status::kOk);
   for (std::uint64_t k = 1; k <= 4; ++k) {
     fold(*trained, frame_of(with_box, k), nullptr);
   }
