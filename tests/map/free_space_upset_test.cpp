@@ -12,12 +12,14 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
 #include "ccmap/map/visibility/sight_table.hpp"
 #include "ccmap/persistence/snapshot.hpp"
 #include "ccmap/planner/detail/region_walk.hpp"
+#include "support/calibrated_params.hpp"
 #include "support/ray_scene.hpp"
 
 #ifndef CCMAP_FREE_SPACE_UPSET_RECORDS
@@ -119,10 +121,13 @@ struct Fixture {
   }
 };
 
+/// The campaigns' parameters, the thresholds written out: every trial loads the snapshot, and
+/// init()'s calibration is not the subject (support/calibrated_params.hpp).
+template <typename Config>
 StackParams params(float rays) {
   StackParams p = ccmap::default_stack_params(0.04F);
   p.free_space_rays = rays;
-  return p;
+  return ccmap::test::with_calibrated_thresholds<Config>(p);
 }
 
 template <typename Map>
@@ -165,6 +170,30 @@ std::unique_ptr<Map> load(const std::vector<std::uint8_t>& snapshot) {
   return m;
 }
 
+/// The trials' map: loaded from the snapshot once, then put back to that state before each trial
+/// by copying the loaded bytes over it in place. A Stack is trivially copyable and its pointers
+/// point into itself, so the bytes are those of a fresh load at the same address; copying them
+/// costs a fraction of a load's checks (the snapshot's CRC, every cell read).
+template <typename Map>
+class LoadedOnce {
+  static_assert(std::is_trivially_copyable<Map>::value, "a Stack is restored from its bytes");
+
+ public:
+  explicit LoadedOnce(const std::vector<std::uint8_t>& snapshot)
+      : map_(load<Map>(snapshot)), bytes_(sizeof(Map)) {
+    std::memcpy(bytes_.data(), static_cast<const void*>(map_.get()), sizeof(Map));
+  }
+  /// The map as loaded: every change of the previous trial undone.
+  Map* fresh() {
+    std::memcpy(static_cast<void*>(map_.get()), bytes_.data(), sizeof(Map));
+    return map_.get();
+  }
+
+ private:
+  std::unique_ptr<Map> map_;
+  std::vector<unsigned char> bytes_;
+};
+
 SceneFrame frame_of(const AnalyticScene& scene, std::uint64_t seed) {
   SceneCamera cam;
   cam.seed = seed;
@@ -181,7 +210,7 @@ void drop_campaign(float rays) {
   AnalyticScene ditch;
   ditch.ditches.push_back(SceneDitch{1.2, -1.5, 2.2, 1.5, 0.40});
   auto trained = std::make_unique<Map>();
-  ASSERT_EQ(trained->init(params(rays)), Status::kOk);
+  ASSERT_EQ(trained->init(params<Config>(rays)), Status::kOk);
   for (std::uint64_t k = 1; k <= 3; ++k) {
     fold(*trained, frame_of(ditch, k), nullptr);
   }
@@ -197,7 +226,8 @@ void drop_campaign(float rays) {
     picked.push_back(other);
   }
   const std::uint32_t scrub = ccmap::detail::ConfigScrubFrames<Config>::value;
-  std::size_t trials = 0;
+  LoadedOnce<Map> trials(snapshot);
+  std::size_t trial_count = 0;
   for (const RecordAt at : picked) {
     const auto& grid = *F::drops(*reference).layer[at.layer];
     // The cell's centre: its global index from the slot within the window.
@@ -217,7 +247,7 @@ void drop_campaign(float rays) {
     const float y = (static_cast<float>(index.y) + 0.5F) * w;
     const ccmap::QueryResult want = reference->query(x, y);
     for (int bit = 0; bit < 48; ++bit) {
-      auto map = load<Map>(snapshot);
+      Map* const map = trials.fresh();
       F::flip(*map, at, bit);
       const ccmap::QueryResult got = map->query(x, y);
       if (got.cell_class == CellClass::kDropOff) {
@@ -228,10 +258,10 @@ void drop_campaign(float rays) {
       EXPECT_TRUE(after.bound_code == 0U && after.evidence == 0U && after.state == 0U) << "bit " << bit << ": not reset";
       EXPECT_EQ(F::inconsistent(*map), 0U);
       EXPECT_NE(map->query(x, y).cell_class, CellClass::kDropOff) << "a reset record still answers a drop-off";
-      ++trials;
+      ++trial_count;
     }
   }
-  std::printf("[ upset ] drop-off records: %zu flips, every one detected within %u frames\n", trials, scrub);
+  std::printf("[ upset ] drop-off records: %zu flips, every one detected within %u frames\n", trial_count, scrub);
 }
 
 /// Clearing: a box seen for four frames, then gone for two (its cells hold evidence against their
@@ -246,7 +276,7 @@ void clearing_campaign(float rays) {
   with_box.boxes.push_back(SceneBox{1.40, -0.15, 1.70, 0.15, 0.15});
   const AnalyticScene empty;
   auto trained = std::make_unique<Map>();
-  ASSERT_EQ(trained->init(params(rays)), Status::kOk);
+  ASSERT_EQ(trained->init(params<Config>(rays)), Status::kOk);
   for (std::uint64_t k = 1; k <= 4; ++k) {
     fold(*trained, frame_of(with_box, k), nullptr);
   }
@@ -269,10 +299,11 @@ void clearing_campaign(float rays) {
   ASSERT_EQ(ref.corrupted_cells, 0U);
   const std::vector<unsigned char> want = F::cells(*reference);
   const std::uint32_t scrub = ccmap::detail::ConfigScrubFrames<Config>::value;
-  std::size_t trials = 0;
+  LoadedOnce<Map> trials(snapshot);
+  std::size_t trial_count = 0;
   for (const RecordAt at : picked) {
     for (int bit = 0; bit < 48; ++bit) {
-      auto map = load<Map>(snapshot);
+      Map* const map = trials.fresh();
       F::flip(*map, at, bit);
       FrameCounters got{};
       for (const SceneFrame& f : next) {
@@ -315,10 +346,10 @@ void clearing_campaign(float rays) {
       const std::uint32_t later = scrub_frames(*map, scrub);
       EXPECT_EQ(got.corrupted_cells + later, 1U) << "bit " << bit << " not counted exactly once";
       EXPECT_EQ(F::inconsistent(*map), 0U);
-      ++trials;
+      ++trial_count;
     }
   }
-  std::printf("[ upset ] evidence records: %zu flips, none cleared a cell the reference keeps\n", trials);
+  std::printf("[ upset ] evidence records: %zu flips, none cleared a cell the reference keeps\n", trial_count);
 }
 
 TEST(FreeSpaceUpset, DropOffRecordFlipsAreDetectedResetAndNeverADropOff) { drop_campaign<CadreConfig>(1024.0F); }

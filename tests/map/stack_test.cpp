@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "ccmap/map/stack.hpp"
+#include "support/calibrated_params.hpp"
 #include "support/ccm_kinds.hpp"
 #include "support/poses.hpp"
 #include "support/reference.hpp"
@@ -64,6 +65,8 @@ std::vector<PointXYZ> grid_cloud(float x0, float x1, float y0, float y1, float s
 TEST(StackRouting, PointsGoToTheFinestLayerThatSatisfiesSectionIVG) {
   StackParams params = default_stack_params(0.04F);
   params.noise = test_stereo();
+  // Initialised once per point: the thresholds written out (their calibration is not the subject).
+  params = test::with_calibrated_thresholds<CadreConfig>(params);
   auto stack = make_stack<CadreConfig>(params);
   using S = Stack<CadreConfig>;
   const PointXYZ sensor{0.0F, 0.0F, 0.0F};

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "ccmap/persistence/exchange.hpp"
+#include "support/calibrated_params.hpp"
 #include "support/ray_scene.hpp"
 #include "support/wire_bytes.hpp"
 
@@ -133,13 +134,18 @@ TEST(FreeSpaceEntry, EveryFlipOfOneTwoOrThreeBitsAndEveryForgedFieldIsRefused) {
 
 // ---- scenes ----
 
+/// The rovers' parameters, the thresholds written out once (support/calibrated_params.hpp): the
+/// tests make many rovers, and init()'s calibration is not their subject.
 StackParams scene_params() {
-  StackParams p = default_stack_params(0.04F);
-  p.free_space_rays = 1024.0F;
-  p.outlier_gate_sigma = 0.0F;  // the paper's update: a ghost stays unless lines of sight clear it
-  p.weight_limit = kNoWeightLimit;
-  p.kalman_min_variance = 1e-30F;
-  return p;
+  static const StackParams params = [] {
+    StackParams p = default_stack_params(0.04F);
+    p.free_space_rays = 1024.0F;
+    p.outlier_gate_sigma = 0.0F;  // the paper's update: a ghost stays unless lines of sight clear it
+    p.weight_limit = kNoWeightLimit;
+    p.kalman_min_variance = 1e-30F;
+    return test::with_calibrated_thresholds<CadreConfig>(p);
+  }();
+  return params;
 }
 
 struct Rover {

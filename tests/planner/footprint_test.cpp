@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <set>
 #include <tuple>
@@ -38,7 +39,49 @@ struct KeptPiece {
   double area;
   double leaf_width;  // of the leaf cell the piece lies in
   detail::RegionAnswer answer;
+  // For contains(): each edge i (vertex i to i + 1) as its vector and length, and the polygon's
+  // bounding box with how far, in tolerances, an accepted point may lie outside the polygon
+  // (seal_piece).
+  std::vector<double> ex, ey, len;
+  double min_x = 0.0, min_y = 0.0, max_x = 0.0, max_y = 0.0;
+  double reach = std::numeric_limits<double>::infinity();
 };
+
+/// Fills the piece's edges and bounding box. An accepted point of a convex polygon lies within
+/// the polygon with each edge pushed out by the tolerance, whose corners are the vertices moved
+/// by tol / sin(theta / 2) (theta: the interior angle there): reach = 1 / min sin(theta / 2), so
+/// contains() may reject outside the box widened by 2 tol reach (twice: the rounding of the edge
+/// tests) without changing an answer. Reach stays infinite (no box test) unless every vertex
+/// turns left or straight on (a convex CCW polygon) and no angle is below ~0.1 degree.
+void seal_piece(KeptPiece& k) {
+  const std::size_t n = k.x.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t j = (i + 1) % n;
+    k.ex.push_back(k.x[j] - k.x[i]);
+    k.ey.push_back(k.y[j] - k.y[i]);
+    k.len.push_back(std::hypot(k.ex.back(), k.ey.back()));
+  }
+  if (n == 0) return;
+  k.min_x = *std::min_element(k.x.begin(), k.x.end());
+  k.max_x = *std::max_element(k.x.begin(), k.x.end());
+  k.min_y = *std::min_element(k.y.begin(), k.y.end());
+  k.max_y = *std::max_element(k.y.begin(), k.y.end());
+  std::vector<std::size_t> edges;  // the edges contains() tests (not of length 0)
+  for (std::size_t i = 0; i < n; ++i) {
+    if (k.len[i] != 0.0) edges.push_back(i);
+  }
+  if (edges.size() < 3) return;
+  double min_half_sin = 1.0;
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const std::size_t a = edges[e], b = edges[(e + 1) % edges.size()];
+    const double cross = (k.ex[a] * k.ey[b] - k.ey[a] * k.ex[b]) / (k.len[a] * k.len[b]);
+    const double dot = (k.ex[a] * k.ex[b] + k.ey[a] * k.ey[b]) / (k.len[a] * k.len[b]);
+    if (cross < -1e-9) return;  // turns right: not a convex CCW polygon
+    // sin(theta / 2) = cos(phi / 2) = sqrt((1 + cos phi) / 2), phi the turn from edge a to b.
+    min_half_sin = std::min(min_half_sin, std::sqrt(std::max(0.0, 0.5 * (1.0 + dot))));
+  }
+  if (min_half_sin > 1e-3) k.reach = 1.0 / min_half_sin;
+}
 
 /// Every piece of the walk (no sliver dropped when min_width is 0).
 template <typename Config>
@@ -59,6 +102,7 @@ std::vector<KeptPiece> walk_pieces(const Stack<Config>& stack, const detail::Ori
     k.area = p.area;
     k.leaf_width = 2.0 * p.half;
     k.answer = a;
+    seal_piece(k);
     pieces.push_back(k);
   };
   const detail::QueryView<Config> view = detail::PlannerAccess<Config>::view(stack);
@@ -69,13 +113,14 @@ std::vector<KeptPiece> walk_pieces(const Stack<Config>& stack, const detail::Ori
 
 /// Point in convex CCW polygon, with a tolerance (m) on each edge.
 bool contains(const KeptPiece& k, double x, double y, double tol) {
+  if (k.reach < std::numeric_limits<double>::infinity()) {
+    const double margin = 2.0 * tol * k.reach;
+    if (x < k.min_x - margin || x > k.max_x + margin || y < k.min_y - margin || y > k.max_y + margin) return false;
+  }
   const std::size_t n = k.x.size();
   for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t j = (i + 1) % n;
-    const double ex = k.x[j] - k.x[i], ey = k.y[j] - k.y[i];
-    const double len = std::hypot(ex, ey);
-    if (len == 0.0) continue;
-    if ((ex * (y - k.y[i]) - ey * (x - k.x[i])) / len < -tol) return false;
+    if (k.len[i] == 0.0) continue;
+    if ((k.ex[i] * (y - k.y[i]) - k.ey[i] * (x - k.x[i])) / k.len[i] < -tol) return false;
   }
   return true;
 }

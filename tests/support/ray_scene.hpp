@@ -7,6 +7,7 @@
 // allocates, uses double.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -163,10 +164,15 @@ inline bool casts_match(const SceneCasts& c, const AnalyticScene& scene, const S
          k.cols == cam.cols && k.rows == cam.rows && k.near_m == cam.near_m && k.far_m == cam.far_m &&
          k.half_fov_tan == cam.half_fov_tan && k.max_range_m == cam.max_range_m;
 }
+/// The camera's centre, map frame (m): `height_m` above the scene's plane at (x, y), where every
+/// line of sight of a frame starts and the frame's origin.
+inline std::array<double, 3> camera_origin(const AnalyticScene& scene, const SceneCamera& cam) {
+  return {cam.x, cam.y, scene.plane(cam.x) + cam.height_m};
+}
 /// Every pixel's cast of `scene` from `cam`, in row-major order.
 inline void cast_pixels(const AnalyticScene& scene, const SceneCamera& cam, std::vector<PixelCast>& out) {
   out.clear();
-  const double o[3] = {cam.x, cam.y, scene.plane(cam.x) + cam.height_m};
+  const std::array<double, 3> o = camera_origin(scene, cam);
   const double t_far = cam.height_m / cam.far_m;
   const double t_near = cam.height_m / cam.near_m;
   for (int r = 0; r < cam.rows; ++r) {
@@ -180,7 +186,7 @@ inline void cast_pixels(const AnalyticScene& scene, const SceneCamera& cam, std:
       for (double& v : p.d) {
         v /= norm;
       }
-      p.t = cast_scene_ray(scene, o, p.d, cam.max_range_m);
+      p.t = cast_scene_ray(scene, o.data(), p.d, cam.max_range_m);
       out.push_back(p);
     }
   }
@@ -199,9 +205,8 @@ inline SceneFrame render_scene(const AnalyticScene& scene, const SceneCamera& ca
     detail_scene::cast_pixels(scene, cam, casts.pixels);
   }
   SceneFrame frame;
-  const double oz = scene.plane(cam.x) + cam.height_m;
-  const double o[3] = {cam.x, cam.y, oz};
-  frame.origin = PointXYZ{static_cast<float>(cam.x), static_cast<float>(cam.y), static_cast<float>(oz)};
+  const std::array<double, 3> o = detail_scene::camera_origin(scene, cam);
+  frame.origin = PointXYZ{static_cast<float>(o[0]), static_cast<float>(o[1]), static_cast<float>(o[2])};
   std::uint64_t rng = cam.seed * 0x9E3779B97F4A7C15ULL + 1U;
   for (const detail_scene::PixelCast& p : casts.pixels) {
     double t = p.t;
