@@ -115,8 +115,11 @@ struct CameraFrame {
   double x = 0.0, y = 0.0;
 };
 
-CameraFrame capture(const sim::StereoCamera& camera, const sim::HeightRaster& raster, const Body& b, std::uint64_t seed) {
+/// `raw`, if given, receives the simulator's frame (its true depths: the drop-off reference).
+CameraFrame capture(const sim::StereoCamera& camera, const sim::HeightRaster& raster, const Body& b, std::uint64_t seed,
+                    sim::StereoFrame* raw = nullptr) {
   const sim::StereoFrame f = camera.capture(raster, sim::Pose2{b.x, b.y, b.yaw}, seed);
+  if (raw != nullptr) *raw = f;
   CameraFrame out;
   out.points.reserve(f.points_sensor.size());
   for (const sim::Point3& p : f.points_sensor) {
@@ -512,12 +515,16 @@ void run_drop_case(const GhostConfig& cfg, DropCase* dc, bool crater, double wid
     return false;
   };
   const double far_edge = crater ? dc->rim_x + 2.0 : dc->rim_x + width_m;
+  std::unique_ptr<DropoffTruth> truth;  // --dropoff-truth: the swath from 0.5 m before the rim to 0.5 m beyond
+  if (cfg.dropoff_truth) truth = make_swath_truth(*maps[1], dc->rim_x - 0.5, far_edge + 0.5, y);
   int picture_frame = -1;
   for (int f = 0;; ++f) {
     const double x = dc->rim_x - 4.0 + 0.1 * f;
     const double range = dc->rim_x - x;
     if (range < 0.2) break;
-    const CameraFrame frame = capture(camera, raster, Body{x, y, 0.0}, cfg.seed * 7919ULL + static_cast<std::uint64_t>(f));
+    sim::StereoFrame raw;
+    const CameraFrame frame =
+        capture(camera, raster, Body{x, y, 0.0}, cfg.seed * 7919ULL + static_cast<std::uint64_t>(f), truth ? &raw : nullptr);
     for (int k = 0; k < 2; ++k) {
       GhostMap& m = *maps[k];
       if (m.move_to(static_cast<float>(x), static_cast<float>(y)) != Status::kOk ||
@@ -556,6 +563,12 @@ void run_drop_case(const GhostConfig& cfg, DropCase* dc, bool crater, double wid
       if (p.status == Status::kOk && p.unknown_found && dc->first_unknown_range_m[k] < 0.0) {
         dc->first_unknown_range_m[k] = range;
       }
+    }
+    if (truth) {
+      add_frame(*truth, camera, raw, raster, dc->rim_x, 3.0,
+                [&](double r) { return double{maps[1]->params().noise.sigma_at_range(static_cast<float>(r))}; });
+      dc->truth.push_back(evaluate_drops(*truth, *maps[1], range, raster, dc->rim_x));
+      if (cfg.log != nullptr) log_truth_row(cfg.log, dc->name, dc->truth.back());
     }
     std::size_t written = 0;
     ExportReport sent{};
@@ -733,6 +746,7 @@ std::string ghost_report(const GhostResult& r, const GhostConfig& c) {
                range_text(dc.team_drop_range_m[1]), range_text(dc.team_drop_range_m[2])});
   }
   s += m.str();
+  if (c.dropoff_truth) s += drop_truth_report(r.drops);
   const ShadowResult& sh = r.shadows;
   s += format("\nFalse drop-offs over 8 m of lunar ground with %d rocks of 8 cm or more (no negative obstacle)\n\n",
               sh.rocks);

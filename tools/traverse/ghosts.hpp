@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "experiments/common.hpp"
+#include "traverse/dropoff_truth.hpp"
 
 namespace ccmap::traverse {
 
@@ -47,6 +48,7 @@ struct GhostConfig {
   double query_step_m = 0.02;         ///< raster of the stack-query evaluation
   experiments::GateSetting gate;      ///< the maps' outlier gate (default: the library's)
   int free_space_rays = 0;            ///< AFTER's lines of sight per frame; 0 = the library's default
+  bool dropoff_truth = false;         ///< the drop-off cases also against DropoffTruth (dropoff_truth.hpp)
   std::string out_dir;                ///< pictures; empty = none
   std::FILE* log = nullptr;
   static GhostConfig quick() {
@@ -103,6 +105,8 @@ struct DropCase {
   /// drop-off entries the rover sent.
   double team_drop_range_m[3] = {-1.0, -1.0, -1.0};
   std::uint64_t drops_sent = 0;
+  /// With GhostConfig::dropoff_truth: AFTER against the reference after every frame.
+  std::vector<DropTruthRow> truth;
 };
 
 /// Where the team mates of a drop-off case are parked: their range to the near rim (m).

@@ -5,6 +5,7 @@
 //                [--rays N]   (AFTER's free_space_rays; default: the library's, StackParams)
 //                [--stride K] (AFTER casts the lines of sight of every K-th point, K = 1, 2, 4, 8, 16:
 //                              the viewshed table, free_space_rays = 65536 - K; 1 = every one)
+//                [--dropoff-truth] (the drop-off cases also against tools/traverse/dropoff_truth.hpp)
 // (the experiments' options, experiments/common.hpp; --data and --paper-cell are accepted and unused).
 #include <cstdio>
 
@@ -34,12 +35,17 @@ int main(int argc, char** argv) {
       ->type_name("K")
       ->check(CLI::IsMember({1, 2, 4, 8, 16}))
       ->excludes("--rays");
+  bool dropoff_truth = false;
+  app->add_flag("--dropoff-truth", dropoff_truth,
+                "also hold AFTER's drop-offs to an independent reference of what the lines of sight prove\n"
+                "(tools/traverse/dropoff_truth.hpp; a progress line per frame)");
   if (const int rc = experiments::parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   if (stride > 0) rays = static_cast<int>(detail::free_space_table_rays(stride));
   traverse::GhostConfig cfg = args.quick ? traverse::GhostConfig::quick() : traverse::GhostConfig{};
   cfg.seed = args.seed;
   cfg.gate = args.gate;
   cfg.free_space_rays = rays;
+  cfg.dropoff_truth = dropoff_truth;
   cfg.out_dir = args.out_dir;
   cfg.log = stderr;
   const traverse::GhostResult r = traverse::run_ghosts(cfg);
