@@ -28,3 +28,7 @@ ccmap_tools_gtest(ccmap_test_tools_team 300)
 add_executable(ccmap_test_tools_ghosts ${CMAKE_CURRENT_LIST_DIR}/ghosts_test.cpp)
 target_link_libraries(ccmap_test_tools_ghosts PRIVATE GTest::gtest_main ccmap_ghosts_lib ccmap_host_flags)
 ccmap_tools_gtest(ccmap_test_tools_ghosts 300)
+
+add_executable(ccmap_test_tools_ghost_truth ${CMAKE_CURRENT_LIST_DIR}/ghost_truth_test.cpp)
+target_link_libraries(ccmap_test_tools_ghost_truth PRIVATE GTest::gtest_main ccmap_ghosts_lib ccmap_host_flags)
+ccmap_tools_gtest(ccmap_test_tools_ghost_truth 120)
