@@ -78,11 +78,15 @@ GhostTruth::CellFacts& GhostTruth::facts(const MapCellView& c) {
   const int i1 = std::min(ground_.nx() - 1, static_cast<int>(std::ceil((x0 + c.w - ground_.origin_x()) / res)));
   const int j0 = std::max(0, static_cast<int>(std::floor((y0 - ground_.origin_y()) / res)));
   const int j1 = std::min(ground_.ny() - 1, static_cast<int>(std::ceil((y0 + c.w - ground_.origin_y()) / res)));
-  double lo = std::numeric_limits<double>::infinity();
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (int j = j0; j <= j1; ++j) {
-    for (int i = i0; i <= i1; ++i) lo = std::min(lo, double{ground_.at(i, j)});
+    for (int i = i0; i <= i1; ++i) {
+      lo = std::min(lo, double{ground_.at(i, j)});
+      hi = std::max(hi, double{ground_.at(i, j)});
+    }
   }
   f.ground_min = lo;
+  f.ground_max = hi;
   f.rock = rock_in_((c.ix + 0.5) * c.w, (c.iy + 0.5) * c.w, c.w);
   return facts_.emplace(key, f).first->second;
 }
@@ -121,7 +125,24 @@ void GhostTruth::before_update(int f, const std::vector<MapCellView>& cells, con
     CellFacts& facts_of = facts(c);
     auto open = open_.find(key);
     if (open == open_.end()) {
-      if (!(c.top - margin > facts_of.ground_min)) continue;  // no true line of sight can pass below it
+      if (!(c.top - margin > facts_of.ground_min)) {
+        // No true line of sight can pass below it. A raised ghost surface all the same?
+        if (!facts_of.within_margin_noted && c.top > facts_of.ground_max + kRaisedM && f > 0 &&
+            !covered_at(c, f, rover_at_) &&
+            first_cover(c, f - 1, mate_at_, &facts_of.mate_checked, &facts_of.first_mate) >= 0) {
+          facts_of.within_margin_noted = true;
+          TruthTrack t;
+          t.layer = c.layer;
+          t.cx = (c.ix + 0.5) * c.w;
+          t.cy = (c.iy + 0.5) * c.w;
+          t.w = c.w;
+          t.ghost = true;
+          t.first_frame = f;
+          t.seen_range_m = std::hypot(t.cx - cam_x, t.cy - cam_y);
+          result_.within_margin.push_back(t);
+        }
+        continue;
+      }
       if (facts_of.mate_checked == std::numeric_limits<int>::max()) continue;  // its one episode is over
       // A rover on it now: its body, not a ghost, and no line reaches past it.
       if (covered_at(c, f, rover_at_)) continue;
@@ -247,6 +268,20 @@ std::string ghost_truth_report(const GhostTruthResult& r) {
                                                : "never")
                               : format("%d, delay %d", k.emptied, k.seen_until_emptied).c_str());
     s += "\n";
+  }
+  s += format("\nGhost cells whose top stands >= %.2f m above the true ground in them but within the clear margin of its\n"
+              "lowest point (no line of sight can pass clearly below them), by layer: cells, camera range when first noted\n",
+              kRaisedM);
+  for (int layer = 0; layer < 8; ++layer) {
+    int n = 0;
+    double lo = 1e9, hi = 0.0;
+    for (const TruthTrack& k : r.within_margin) {
+      if (k.layer != layer) continue;
+      ++n;
+      lo = std::min(lo, k.seen_range_m);
+      hi = std::max(hi, k.seen_range_m);
+    }
+    if (n > 0) s += format("  layer %d: %d cells, %.2f-%.2f m\n", layer, n, lo, hi);
   }
   int real = 0, real_rock = 0, seen_free = 0, seen_rock = 0, lost_free = 0, lost_rock = 0;
   for (const TruthTrack& k : r.tracks) {

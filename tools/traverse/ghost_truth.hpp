@@ -38,6 +38,10 @@
 
 namespace ccmap::traverse {
 
+/// How far above the true ground a ghost's top must stand to count as a raised surface within
+/// the margin (GhostTruthResult::within_margin), m.
+inline constexpr double kRaisedM = 0.05;
+
 /// A line of sight: the camera centre and the true point its pixel sees (world frame, m).
 struct SightLine {
   double ox = 0.0, oy = 0.0, oz = 0.0;
@@ -84,6 +88,10 @@ struct GhostTruthResult {
   int min_rays = 2;
   int frames = 0;
   std::vector<TruthTrack> tracks;
+  /// Ghost cells no line of sight can pass clearly below: in a team mate's past footprint, no rover
+  /// on it, the top at least kRaisedM above the highest true ground in it, but less than the clear
+  /// margin above the lowest (first_frame, and seen_range_m: the camera's range then).
+  std::vector<TruthTrack> within_margin;
   std::uint64_t lines = 0;  ///< lines of sight over all frames
 };
 
@@ -137,6 +145,8 @@ class GhostTruth {
   using Key = std::tuple<int, int, int>;
   struct CellFacts {
     double ground_min = 0.0;
+    double ground_max = 0.0;
+    bool within_margin_noted = false;
     int first_mate = -1;  ///< first frame a team mate covered part of it (-1: none so far)
     int mate_checked = -1;
     int first_rover = -1;
