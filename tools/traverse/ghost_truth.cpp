@@ -113,6 +113,21 @@ int GhostTruth::first_cover(const MapCellView& c, int upto, const std::function<
   return *first;
 }
 
+namespace {
+
+TruthTrack new_track(const MapCellView& c, int f, bool ghost) {
+  TruthTrack t;
+  t.layer = c.layer;
+  t.cx = (c.ix + 0.5) * c.w;
+  t.cy = (c.iy + 0.5) * c.w;
+  t.w = c.w;
+  t.ghost = ghost;
+  t.first_frame = f;
+  return t;
+}
+
+}  // namespace
+
 void GhostTruth::before_update(int f, const std::vector<MapCellView>& cells, const std::vector<SightLine>& lines,
                                double cam_x, double cam_y) {
   result_.frames = f + 1;
@@ -131,13 +146,7 @@ void GhostTruth::before_update(int f, const std::vector<MapCellView>& cells, con
             !covered_at(c, f, rover_at_) &&
             first_cover(c, f - 1, mate_at_, &facts_of.mate_checked, &facts_of.first_mate) >= 0) {
           facts_of.within_margin_noted = true;
-          TruthTrack t;
-          t.layer = c.layer;
-          t.cx = (c.ix + 0.5) * c.w;
-          t.cy = (c.iy + 0.5) * c.w;
-          t.w = c.w;
-          t.ghost = true;
-          t.first_frame = f;
+          TruthTrack t = new_track(c, f, true);
           t.seen_range_m = std::hypot(t.cx - cam_x, t.cy - cam_y);
           result_.within_margin.push_back(t);
         }
@@ -149,14 +158,8 @@ void GhostTruth::before_update(int f, const std::vector<MapCellView>& cells, con
       const bool ghost = f > 0 && first_cover(c, f - 1, mate_at_, &facts_of.mate_checked, &facts_of.first_mate) >= 0;
       const bool real = !ghost && first_cover(c, f, rover_at_, &facts_of.rover_checked, &facts_of.first_rover) < 0;
       if (!ghost && !real) continue;  // the map's own past footprint: neither
-      TruthTrack t;
-      t.layer = c.layer;
-      t.cx = (c.ix + 0.5) * c.w;
-      t.cy = (c.iy + 0.5) * c.w;
-      t.w = c.w;
-      t.ghost = ghost;
+      TruthTrack t = new_track(c, f, ghost);
       t.rock = facts_of.rock;
-      t.first_frame = f;
       result_.tracks.push_back(t);
       open = open_.emplace(key, result_.tracks.size() - 1).first;
     }
