@@ -306,6 +306,23 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
     life_before[r].life.assign(points, -1);
     life_after[r].life.assign(points, -1);
   }
+  std::unique_ptr<GhostTruth> truth;
+  if (cfg.ghost_truth_rays > 0) {
+    std::vector<std::vector<Body>> all(static_cast<std::size_t>(cfg.team_frames));
+    for (int f = 0; f < cfg.team_frames; ++f) all[static_cast<std::size_t>(f)] = team_bodies(f);
+    const auto covers = [all](double x, double y, int f, std::size_t from) {
+      const std::vector<Body>& b = all[static_cast<std::size_t>(f)];
+      for (std::size_t k = from; k < b.size(); ++k) {
+        if (inside_body(b[k], x, y, 0.05)) return true;
+      }
+      return false;
+    };
+    truth = std::make_unique<GhostTruth>(
+        raster, double{map_params(cfg, true).obstacle_fraction}, cfg.ghost_truth_rays,
+        [&terrain](double cx, double cy, double w) { return rock_in_square(*terrain, cx, cy, w); },
+        [covers](double x, double y, int f) { return covers(x, y, f, 1); },
+        [covers](double x, double y, int f) { return covers(x, y, f, 0); });
+  }
   // Every place a rover ever covered (to judge emptied cells), grown by 10 cm.
   auto ever_rover = [&](double cx, double cy, double w, int upto) {
     for (int f = 0; f <= upto; ++f) {
@@ -327,9 +344,15 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
         if (o != r) others.push_back(bodies[static_cast<std::size_t>(o)]);
       }
       CameraFrame frame;
+      std::vector<SightLine> truth_lines;
       {
         const BodyStamp stamp(raster, others);
         frame = capture(camera, raster, bodies[static_cast<std::size_t>(r)], cfg.seed * 1000003ULL + static_cast<std::uint64_t>(f * 3 + r));
+        if (truth && r == 0) {
+          const Body& b = bodies[0];
+          truth_lines = sight_lines(camera, camera.render_depth(raster, sim::Pose2{b.x, b.y, b.yaw}),
+                                    camera.camera_position(raster, sim::Pose2{b.x, b.y, b.yaw}), b.yaw);
+        }
       }
       for (GhostMap* m : {before[r].get(), after[r].get()}) {
         if (m->move_to(static_cast<float>(frame.x), static_cast<float>(frame.y)) != Status::kOk) {
@@ -337,11 +360,14 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
           return out;
         }
         const std::vector<float> w = cell_weights(*m);
+        const bool judged = truth && m == after[0].get();
+        if (judged) truth->before_update(f, map_cells(*m), truth_lines, frame.x, frame.y);
         FrameCounters c{};
         if (m->update_frame_sensor(frame.points.data(), frame.points.size(), frame.pose, &c) != Status::kOk) {
           *error = "frame refused";
           return out;
         }
+        if (judged) truth->after_update(f, map_cells(*m));
         GhostStats& st = m == before[r].get() ? out.before[r] : out.after[r];
         if (m == after[r].get()) {
           out.rays += c.free_rays;
@@ -400,6 +426,7 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
                    out.before[0].area_per_frame.back(), out.after[0].area_per_frame.back());
     }
   }
+  if (truth) out.truth = truth->result();
   for (int r = 0; r < 3; ++r) {
     for (int pass = 0; pass < 2; ++pass) {
       GhostStats& st = pass == 0 ? out.before[r] : out.after[r];

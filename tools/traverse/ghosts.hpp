@@ -28,6 +28,7 @@
 
 #include "experiments/common.hpp"
 #include "traverse/dropoff_truth.hpp"
+#include "traverse/ghost_truth.hpp"
 
 namespace ccmap::traverse {
 
@@ -50,6 +51,9 @@ struct GhostConfig {
   int free_space_rays = 0;            ///< AFTER's lines of sight per frame; 0 = the library's default
   bool dropoff_truth = false;         ///< the drop-off cases also against DropoffTruth (dropoff_truth.hpp)
   std::string out_dir;                ///< pictures; empty = none
+  /// > 0: the reference of issue 31 item 2 on rover 1's AFTER map (ghost_truth.hpp), a cell seen
+  /// in a frame when at least this many true lines of sight pass clearly below it; 0 = off.
+  int ghost_truth_rays = 0;
   std::FILE* log = nullptr;
   static GhostConfig quick() {
     GhostConfig c;
@@ -82,6 +86,7 @@ struct TeamResult {
   /// crater bowl deeper than the cell's obstacle height (true) or not (false).
   int drop_points_true = 0, drop_points_false = 0;
   std::vector<std::string> pictures;
+  GhostTruthResult truth;  ///< GhostConfig::ghost_truth_rays > 0 only
 };
 
 struct DropCase {

@@ -6,6 +6,8 @@
 //                [--stride K] (AFTER casts the lines of sight of every K-th point, K = 1, 2, 4, 8, 16:
 //                              the viewshed table, free_space_rays = 65536 - K; 1 = every one)
 //                [--dropoff-truth] (the drop-off cases also against tools/traverse/dropoff_truth.hpp)
+//                [--ghost-truth N] (issue 31 item 2's reference on rover 1's map: a cell is seen in a
+//                              frame when N true lines of sight pass clearly below it; ghost_truth.hpp)
 // (the experiments' options, experiments/common.hpp; --data and --paper-cell are accepted and unused).
 #include <cstdio>
 
@@ -39,6 +41,12 @@ int main(int argc, char** argv) {
   app->add_flag("--dropoff-truth", dropoff_truth,
                 "also hold AFTER's drop-offs to an independent reference of what the lines of sight prove\n"
                 "(tools/traverse/dropoff_truth.hpp; a progress line per frame)");
+  int truth_rays = 0;
+  app->add_option("--ghost-truth", truth_rays,
+                  "also judge rover 1's ghosts against true lines of sight: a cell is seen in a frame when at least N "
+                  "of them pass clearly below it (issue 31 item 2)")
+      ->type_name("N")
+      ->check(CLI::Range(1, 1000000));
   if (const int rc = experiments::parse_experiment_args(*app, argc, argv, &args); rc >= 0) return rc;
   if (stride > 0) rays = static_cast<int>(detail::free_space_table_rays(stride));
   traverse::GhostConfig cfg = args.quick ? traverse::GhostConfig::quick() : traverse::GhostConfig{};
@@ -47,6 +55,7 @@ int main(int argc, char** argv) {
   cfg.free_space_rays = rays;
   cfg.dropoff_truth = dropoff_truth;
   cfg.out_dir = args.out_dir;
+  cfg.ghost_truth_rays = truth_rays;
   cfg.log = stderr;
   const traverse::GhostResult r = traverse::run_ghosts(cfg);
   if (!r.ok()) {
@@ -55,5 +64,6 @@ int main(int argc, char** argv) {
   }
   std::printf("gate: %s\n\n%s", cfg.gate.describe(default_stack_params(0.04F)).c_str(),
               traverse::ghost_report(r, cfg).c_str());
+  if (truth_rays > 0) std::printf("\n%s", traverse::ghost_truth_report(r.team.truth).c_str());
   return 0;
 }
