@@ -957,7 +957,11 @@ class FreeSpace<Config, true> {
       if (!(f < 1.0F)) {
         break;  // the cell before lies at or behind the sensor
       }
-      const std::int64_t u[2] = {end.u[0] - static_cast<std::int64_t>(dx * f), end.u[1] - static_cast<std::int64_t>(dy * f)};
+      // The step back through int32 (|dx f| < |dx|: within a window, far below 2^31 U): a float to
+      // int64 conversion is a double-precision library call on a single-precision FPU (Cortex-M7:
+      // link.no_soft_double); truncation alike, so the same cells.
+      const std::int64_t u[2] = {end.u[0] - std::int64_t{static_cast<std::int32_t>(dx * f)},
+                                 end.u[1] - std::int64_t{static_cast<std::int32_t>(dy * f)}};
       // Hidden: empty in the routed layer and in every finer layer whose window holds it (a
       // coarser layer's cell may hold the ground around a ditch: it does not see inside it).
       bool seen = false;
