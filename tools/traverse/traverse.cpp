@@ -563,7 +563,9 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
 
   // ---- stack query on a fine raster over the coarsest window ----
   const QueryRaster qr = query_raster(*map, truths, cfg.query_step_m, &result.stack);
-  // The map error: the stack's height against the terrain's surface where it knows the ground.
+  // The map error: the stack's height against the terrain's surface where it knows the ground. A
+  // drop-off answers kOk with weight 0 and its height an upper bound of the hidden floor, not a
+  // measured height: it is not counted here (its area is counted apart, scene.cpp).
   {
     double sum = 0.0;
     std::size_t known = 0, beyond = 0;
@@ -571,7 +573,7 @@ TraverseResult traverse_with(const TraverseConfig& cfg) {
       for (int ix = 0; ix < qr.n; ++ix) {
         const double x = qr.x0 + (ix + 0.5) * qr.step, y = qr.y0 + (iy + 0.5) * qr.step;
         const QueryResult q = map->query(static_cast<float>(x), static_cast<float>(y));
-        if (q.status != Status::kOk) continue;
+        if (q.status != Status::kOk || q.cell_class == CellClass::kDropOff) continue;
         const double e = static_cast<double>(q.height_m) - terrain->height(x, y);
         sum += e * e;
         ++known;

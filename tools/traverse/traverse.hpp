@@ -33,7 +33,8 @@
 // register_frames every frame after the first is registered against the map first
 // (register_frame_sensor(stack, ...), default parameters) and the correction composed into the pose
 // estimate, which carries it to the later frames. height_rms_m: the stack query's height against
-// the terrain's surface over the known points of the final window (the map error).
+// the terrain's surface over the known points of the final window (the map error; a drop-off's
+// answer, an upper bound of a hidden floor, is not a known point).
 //
 // Deterministic by seed (terrain, noise); timings are measured, not simulated.
 #pragma once
@@ -154,7 +155,7 @@ struct TraverseResult {
   double path_length_m = 0.0;
   std::size_t rocks = 0, boxes = 0;
   std::vector<std::string> pictures;    ///< files written
-  double height_rms_m = 0.0;            ///< stack query height against the terrain, known points of the final window
+  double height_rms_m = 0.0;            ///< stack query height against the terrain, known points of the final window (drop-offs not)
   double height_beyond_5cm = 0.0;       ///< share of those points more than 5 cm off
   double final_pose_error_m = 0.0;      ///< the last frame's estimate from the true pose (horizontal)
   double final_yaw_error_rad = 0.0;
