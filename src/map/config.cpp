@@ -22,11 +22,11 @@ StackParams default_stack_params(float finest_cell_width_m) noexcept {
   p.outlier_gate_sigma = 3.0F;
   p.change_min_points = 3.0F;
   p.change_share = 0.08F;
-  // Free space from lines of sight, its ray count set by the headroom budget: 128 lines of sight
-  // stay well inside the stage's 4 M aarch64 instructions per CADRE frame, 512 do not.
-  // docs/performance.md section 13 gives the cost, docs/evaluation.md what 128 rays do and do not
-  // achieve against 512 (docs/design.md, "Free space from lines of sight").
-  p.free_space_rays = 128.0F;
+  // Free space from lines of sight, its ray count set by the budget: 256 lines of sight stay
+  // inside the stage's 4 M aarch64 instructions per CADRE frame and the flight cycle's 43 M, 512
+  // do not. docs/performance.md section 13 gives the cost, docs/evaluation.md what 256 rays do and
+  // do not achieve against 128 and 512 (docs/design.md, "Free space from lines of sight").
+  p.free_space_rays = 256.0F;
   p.free_space_clear_frames = 3.0F;
   p.sensor_view_axis = {0.0F, 0.0F, 0.0F};
   p.noise = sensor::cadre_stereo();

@@ -98,7 +98,7 @@ AnalyticScene ditch_scene() {
 }
 
 TEST(FreeSpaceTargeting, TheRaysOverADitchProveItsNearEdgeWhereTheEvenSubsampleDoesNot) {
-  // 128 rays, the presets' default, over the scenes' 120 x 90 camera (10,800 points): the even
+  // 128 rays (half the presets' default) over the scenes' 120 x 90 camera (10,800 points): the even
   // subsample walks one point in 85, few of them beyond the rim. The lines of sight to the far
   // wall and beyond pass over the ditch's hidden inside: the targeted walk spends its rays there.
   const SceneDitch d = ditch_scene().ditches[0];

@@ -89,7 +89,7 @@ StackParams map_params(const GhostConfig& config, bool free_space) {
   return p;
 }
 
-/// What AFTER casts per frame, in words: "128 lines of sight walked", "every line of sight",
+/// What AFTER casts per frame, in words: "256 lines of sight walked", "every line of sight",
 /// "one line of sight in 4" (the viewshed table fed by one point in 4).
 std::string rays_description(const GhostConfig& config) {
   const float rays = map_params(config, true).free_space_rays;

@@ -242,8 +242,8 @@ struct StackParams {
 /// CADRE defaults: W_l = 1000, tau = 0.8, min weight 5, obstacles at 75 % of a cell,
 /// 20 deg maximum inclination (tan 20 deg = 0.364), the CADRE stereo model, calibrated
 /// thresholds; the outlier gate at 3 sigma with the change rule 3 points / 8 % (docs/design.md,
-/// "Outlier gate and change", says how they were chosen); free space from 128 lines of sight per
-/// frame (the count the flight cycle's budget allows), a cell cleared after 3 contradicting frames, no sensor view axis (docs/design.md, "Free
+/// "Outlier gate and change", says how they were chosen); free space from 256 lines of sight per
+/// frame (within the stage's share of the flight cycle's budget), a cell cleared after 3 contradicting frames, no sensor view axis (docs/design.md, "Free
 /// space from lines of sight"). Set outlier_gate_sigma = 0 for the paper's update,
 /// free_space_rays = 0 for no free space.
 [[nodiscard]] StackParams default_stack_params(float finest_cell_width_m) noexcept;

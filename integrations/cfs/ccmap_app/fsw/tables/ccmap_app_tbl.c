@@ -12,7 +12,7 @@ CCMAP_APP_ParamTable_t CCMAP_APP_Params = {
     .OutlierGateSigma  = 3.0f,
     .FramePointBudget  = 0,
     .FrameTimeBudgetUs = 0,
-    .FreeSpaceRays     = 128.0f,
+    .FreeSpaceRays     = 256.0f,
     .CycleBudgetUs     = 80000,
 };
 
