@@ -51,6 +51,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <type_traits>
 
@@ -94,6 +95,8 @@ struct ConfigRayCandidates<Config, std::void_t<decltype(Config::kRayCandidates)>
 inline constexpr int kHiddenCellsBack = 2;
 /// Cells with evidence against them that a frame's candidates aim at.
 inline constexpr std::uint32_t kMaxTargets = 16U;
+/// Records find_targets reads as words at once (a multiple of 2: two 4-byte records a word).
+inline constexpr std::size_t kAimGroup = 16U;
 /// Level added to a candidate whose line of sight crosses such a cell.
 inline constexpr std::uint32_t kTargetLevel = 3U;
 /// Levels of a candidate: 0 refused, 1 routed, up to 1 + kHiddenCellsBack + kTargetLevel.
@@ -993,31 +996,53 @@ class FreeSpace<Config, true> {
   /// evidence against their surface, or whose record was contradicted in the last frame (one ray
   /// of it: a far ghost gets about one ray a frame, the evidence rule asks for two), up to
   /// kMaxTargets of them in record order; their centres relative to the sensor (U units).
+  /// Cost: only a record whose evidence or contradiction bits are not all zero can be aimed, so
+  /// the records are read kAimGroup at a time as words and a group with none of those bits set
+  /// is passed with one test (most groups); the records of the other groups are judged one by one.
   void find_targets() noexcept {
     target_count_ = 0U;
     const auto last = static_cast<std::uint8_t>((frames_ - 1U) & kStampMask);
+    // The bits of a record, as the word its 4 bytes make, that an aimed record has one of.
+    const FreeSpaceCell aim_cell{0U, 0xFFU, kContradictionMask};
+    std::uint32_t aim_bits = 0U;
+    std::memcpy(&aim_bits, &aim_cell, sizeof aim_bits);
+    const std::uint64_t aim_pair = (std::uint64_t{aim_bits} << 32U) | aim_bits;
     for (int layer = 0; layer < kLayerCount && target_count_ < kMaxTargets; ++layer) {
       const std::int32_t side = Layers::side(layer);
       const FreeSpaceCell* recs = records_ + offset_[layer];
       const auto cells = static_cast<std::size_t>(side) * static_cast<std::size_t>(side);
-      for (std::size_t slot = 0; slot < cells && target_count_ < kMaxTargets; ++slot) {
-        const FreeSpaceCell& r = recs[slot];
-        const bool aimed = r.evidence > 0U || ((r.state & kStampMask) == last && frame_contradictions(r) > 0U);
-        if (!aimed) {
-          continue;
+      for (std::size_t group = 0; group < cells && target_count_ < kMaxTargets; group += kAimGroup) {
+        const std::size_t group_end = cells - group < kAimGroup ? cells : group + kAimGroup;
+        if (group_end - group == kAimGroup) {
+          std::uint64_t words[kAimGroup / 2U];
+          std::memcpy(words, recs + group, sizeof words);
+          std::uint64_t any = 0U;
+          for (const std::uint64_t w : words) {
+            any |= w;
+          }
+          if ((any & aim_pair) == 0U) {
+            continue;  // no record of the group can be aimed
+          }
         }
-        // The global index of the slot: the window's index with that ring position.
-        const CellIndex min = windows_.min[layer];
-        const auto bx = static_cast<std::int32_t>(slot % static_cast<std::size_t>(side));
-        const auto by = static_cast<std::int32_t>(slot / static_cast<std::size_t>(side));
-        const std::int32_t gx = min.x + ((bx - min.x) & (side - 1));
-        const std::int32_t gy = min.y + ((by - min.y) & (side - 1));
-        const std::int64_t cell_u = std::int64_t{256} << layer;
-        const std::int64_t half_u = std::int64_t{128} << layer;
-        Target& t = targets_[target_count_++];
-        t.centre[0] = static_cast<float>(static_cast<std::int64_t>(gx) * cell_u + half_u - origin_u_[0]);
-        t.centre[1] = static_cast<float>(static_cast<std::int64_t>(gy) * cell_u + half_u - origin_u_[1]);
-        t.half = static_cast<float>(half_u);
+        for (std::size_t slot = group; slot < group_end && target_count_ < kMaxTargets; ++slot) {
+          const FreeSpaceCell& r = recs[slot];
+          const bool aimed = r.evidence > 0U || ((r.state & kStampMask) == last && frame_contradictions(r) > 0U);
+          if (!aimed) {
+            continue;
+          }
+          // The global index of the slot: the window's index with that ring position.
+          const CellIndex min = windows_.min[layer];
+          const auto bx = static_cast<std::int32_t>(slot % static_cast<std::size_t>(side));
+          const auto by = static_cast<std::int32_t>(slot / static_cast<std::size_t>(side));
+          const std::int32_t gx = min.x + ((bx - min.x) & (side - 1));
+          const std::int32_t gy = min.y + ((by - min.y) & (side - 1));
+          const std::int64_t cell_u = std::int64_t{256} << layer;
+          const std::int64_t half_u = std::int64_t{128} << layer;
+          Target& t = targets_[target_count_++];
+          t.centre[0] = static_cast<float>(static_cast<std::int64_t>(gx) * cell_u + half_u - origin_u_[0]);
+          t.centre[1] = static_cast<float>(static_cast<std::int64_t>(gy) * cell_u + half_u - origin_u_[1]);
+          t.half = static_cast<float>(half_u);
+        }
       }
     }
   }
