@@ -1091,7 +1091,14 @@ class FreeSpace<Config, true> {
     ray.length_m = std::sqrt(full_dx * full_dx + full_dy * full_dy) * walked;
     ray.dx_m = static_cast<float>(walk.delta[0]) * metres_per_u;
     ray.dy_m = static_cast<float>(walk.delta[1]) * metres_per_u;
-    walk_ray(windows_, walk, [&](const RayVisit& v) { visit(layers, v, ray, frame); });
+    walk_ray(windows_, walk, [&](const RayVisit& v) {
+      // Most visits are a coarser layer's empty cell under a finer window, which visit() passes
+      // by (that cell reads as empty through its check too): passed here, without the call.
+      if (!v.walk_layer && !(raw_weight(layers, v.layer, v.index) > 0.0F)) {
+        return;
+      }
+      visit(layers, v, ray, frame);
+    });
   }
 
   /// The share of the full ray (origin to point) the walk covers: |walked delta| / |full delta|
