@@ -1158,10 +1158,9 @@ class FreeSpace<Config, true> {
     const float z_in = ray.z0 + v.t_in * ray.dz;
     const float z_out = ray.z0 + v.t_out * ray.dz;
     const float z_hi = z_in > z_out ? z_in : z_out;
-    FreeSpaceCell& rec = grids_[layer].cell_unchecked(v.index);
     if (cell.weight > 0.0F) {
       if (top_above(cell, layer, z_hi) && below_surface(layers, layer, v, ray)) {
-        write_record(rec, [&](FreeSpaceCell& r) {
+        write_record(grids_[layer].cell_unchecked(v.index), [&](FreeSpaceCell& r) {
           (void)touch(r, stamp_);
           if (frame_contradictions(r) == 0U) {
             remember(layer, v.index);  // listed once per frame: at its first contradiction
@@ -1201,6 +1200,7 @@ class FreeSpace<Config, true> {
     }
     const bool proves_drop = ray.has_ground && z_hi < ray.ground_m - consts_[layer].step_m;
     bool now = false;
+    FreeSpaceCell& rec = grids_[layer].cell_unchecked(v.index);
     write_record(rec, [&](FreeSpaceCell& r) {
       lower_bound(r, z_hi);
       now = proves_drop && add_drop_ray(r);
