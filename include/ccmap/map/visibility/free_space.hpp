@@ -471,6 +471,14 @@ class FreeSpace<Config, true> {
   using CcmCellType = typename Layers::CcmCellType;
   using FineCell = typename Layers::FineCell;
 
+  /// Weight, height (m) and height co-moment of a cell: a CCM cell's mean height and S_zz, a
+  /// constant cell's height (and 0: a 4 cm cell is one surface).
+  struct CellView {
+    float weight;
+    float height;
+    float s_zz;
+  };
+
   /// What one ray carries along its walk.
   struct RayState {
     float z0;            ///< sensor height (m)
@@ -486,6 +494,11 @@ class FreeSpace<Config, true> {
     std::uint32_t run;   ///< unobserved cells since the last known stretch (entries of run_)
     float dx_m;          ///< horizontal x change over the walked segment (m, map frame)
     float dy_m;          ///< horizontal y change over the walked segment (m, map frame)
+    // The coarser layers' cells visit() last read for an unobserved walk-layer cell, per layer:
+    // the walk crosses several finer cells of each, and no cell changes during a frame's walks.
+    CellIndex coarse_index[kMaxLayers];
+    CellView coarse_view[kMaxLayers];  ///< weight 0 for a cell outside its window or empty
+    bool coarse_read[kMaxLayers];      ///< coarse_index and coarse_view hold a cell of the layer
   };
 
   /// An unobserved cell of the current run (see mark_run).
@@ -493,14 +506,6 @@ class FreeSpace<Config, true> {
     FreeSpaceCell* record;
     std::int32_t layer;
     bool marked;  ///< this ray counted a drop-off in it already
-  };
-
-  /// Weight, height (m) and height co-moment of a cell: a CCM cell's mean height and S_zz, a
-  /// constant cell's height (and 0: a 4 cm cell is one surface).
-  struct CellView {
-    float weight;
-    float height;
-    float s_zz;
   };
 
   [[nodiscard]] CellView view_of(const Layers& layers, int layer, CellIndex index) const noexcept {
@@ -1179,10 +1184,12 @@ class FreeSpace<Config, true> {
       // The stack's view here: the first coarser layer holding data at this stretch.
       for (int j = layer + 1; j < kLayerCount; ++j) {
         const CellIndex c{v.index.x >> (j - layer), v.index.y >> (j - layer)};
-        if (!windows_.contains(j, c)) {
-          continue;
+        if (!ray.coarse_read[j] || c.x != ray.coarse_index[j].x || c.y != ray.coarse_index[j].y) {
+          ray.coarse_view[j] = windows_.contains(j, c) ? view_of(layers, j, c) : CellView{0.0F, 0.0F, 0.0F};
+          ray.coarse_index[j] = c;
+          ray.coarse_read[j] = true;
         }
-        const CellView coarse = view_of(layers, j, c);
+        const CellView& coarse = ray.coarse_view[j];
         if (coarse.weight > 0.0F) {
           track_ground(j, coarse.height, v.t_out, ray);
           // Observed here, at the coarser layer's resolution, where the ray passes at or above
