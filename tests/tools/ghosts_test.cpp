@@ -1,9 +1,11 @@
 // CI check of the free-space experiment (tools/traverse/ghosts.cpp) at its --quick size,
 // in-process. At the library's default ray count (256 lines of sight per frame, what the stage's
 // share of the flight cycle's instruction budget allows): nothing real is lost to clearing, no
-// rock shadow and no open ground becomes a drop-off, and a ditch and a crater show drop-offs in
-// the rover's swath, and the path query's first hazard at their rim, before it is within its
-// stopping distance, where the map without free space shows only their far side.
+// rock shadow and no open ground becomes a drop-off (the shadow scene; on the team's ground none
+// of rover 1's drop-offs lies outside a crater's bowl and steep inner wall), and a ditch and a
+// crater show drop-offs in the rover's swath, and the path query's first hazard at their rim,
+// before it is within its stopping distance, where the map without free space shows only their
+// far side.
 // At 512 lines of sight (the model's capability, twice the default's cost): rover 1's ghosts of its
 // team mates shrink, and the first hazard of the path query lies at each rim in time
 // (docs/evaluation.md, "Ghosts and drop-offs", gives both runs).
@@ -27,6 +29,10 @@ void expect_nothing_real_lost_and_no_false_drop(const tr::GhostResult& r) {
   }
   EXPECT_EQ(r.shadows.drop_near_rocks_m2[1], 0.0) << "a rock's shadow became a drop-off";
   EXPECT_EQ(r.shadows.drop_open_m2[1], 0.0) << "open ground became a drop-off";
+  // Rover 1's final map on the team's ground: every drop-off answer lies in a crater bowl or on a
+  // crater's steep inner wall within its rim (tools/traverse/ghosts.hpp, drop_place).
+  EXPECT_EQ(r.team.drop_points_elsewhere, 0) << "a drop-off outside every crater's bowl and inner wall";
+  EXPECT_EQ(r.team.drop_points_wall + r.team.drop_points_elsewhere, r.team.drop_points_false);
 }
 
 }  // namespace

@@ -29,6 +29,10 @@ add_executable(ccmap_test_tools_ghosts ${CMAKE_CURRENT_LIST_DIR}/ghosts_test.cpp
 target_link_libraries(ccmap_test_tools_ghosts PRIVATE GTest::gtest_main ccmap_ghosts_lib ccmap_host_flags)
 ccmap_tools_gtest(ccmap_test_tools_ghosts 300)
 
+add_executable(ccmap_test_tools_drop_place ${CMAKE_CURRENT_LIST_DIR}/drop_place_test.cpp)
+target_link_libraries(ccmap_test_tools_drop_place PRIVATE GTest::gtest_main ccmap_ghosts_lib ccmap_host_flags)
+ccmap_tools_gtest(ccmap_test_tools_drop_place 60)
+
 add_executable(ccmap_test_tools_dropoff_truth ${CMAKE_CURRENT_LIST_DIR}/dropoff_truth_test.cpp)
 target_link_libraries(ccmap_test_tools_dropoff_truth PRIVATE GTest::gtest_main ccmap_ghosts_lib ccmap_host_flags)
 ccmap_tools_gtest(ccmap_test_tools_dropoff_truth 120)

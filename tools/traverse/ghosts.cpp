@@ -11,6 +11,7 @@
 #include "experiments/canvas.hpp"
 #include "layer_images.hpp"
 #include "png.hpp"
+#include "sim/hazard.hpp"
 #include "sim/stereo.hpp"
 #include "sim/terrain.hpp"
 #include "traverse/scene.hpp"
@@ -179,6 +180,34 @@ bool free_ground(const sim::ProceduralTerrain& t, double x, double y) {
   }
   return hi - lo < 0.04;
 }
+
+}  // namespace
+
+DropPlace drop_place(const sim::ProceduralTerrain& terrain, double x, double y, double w, double obstacle_fraction) {
+  const double x0 = std::floor(x / w) * w, y0 = std::floor(y / w) * w;
+  const double step = obstacle_fraction * w;
+  double deepest = 0.0;
+  for (int b = 0; b < 5; ++b) {
+    for (int a = 0; a < 5; ++a) {
+      deepest = std::max(deepest, terrain.negative_depth(x0 + (a + 0.5) * w / 5, y0 + (b + 0.5) * w / 5));
+    }
+  }
+  if (deepest > step) return DropPlace::kBowl;
+  const double cx = x0 + 0.5 * w, cy = y0 + 0.5 * w;
+  bool inside_rim = false;
+  for (const sim::Crater& c : terrain.craters()) {
+    inside_rim = inside_rim || std::hypot(cx - c.x, cy - c.y) < 0.5 * c.diameter_m;
+  }
+  if (!inside_rim) return DropPlace::kElsewhere;
+  sim::HazardParams hp;
+  hp.min_obstacle_height_m = step;
+  hp.max_slope_deg = kMaxSlopeDeg;
+  hp.sample_spacing_m = 0.01;
+  const sim::HazardGrid g = sim::compute_hazard_grid(terrain, x0, y0, w, 1, 1, hp);
+  return g.at(0, 0).hazard() ? DropPlace::kInnerWall : DropPlace::kElsewhere;
+}
+
+namespace {
 
 // ---------------------------------------------------------------------------------------------
 // Team
@@ -445,15 +474,20 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
     for (int i = 0; i < ras.nx; ++i) {
       const QueryResult q = after[0]->query(static_cast<float>(ras.x(i)), static_cast<float>(ras.y(j)));
       if (q.cell_class != CellClass::kDropOff) continue;
-      const double w = q.cell_width_m;
-      const double cx0 = std::floor(ras.x(i) / w) * w, cy0 = std::floor(ras.y(j) / w) * w;
-      double deepest = 0.0;
-      for (int b = 0; b < 5; ++b) {
-        for (int a = 0; a < 5; ++a) {
-          deepest = std::max(deepest, terrain->negative_depth(cx0 + (a + 0.5) * w / 5, cy0 + (b + 0.5) * w / 5));
-        }
+      switch (drop_place(*terrain, ras.x(i), ras.y(j), double{q.cell_width_m},
+                         double{map_params(cfg, true).obstacle_fraction})) {
+        case DropPlace::kBowl:
+          ++out.drop_points_true;
+          break;
+        case DropPlace::kInnerWall:
+          ++out.drop_points_false;
+          ++out.drop_points_wall;
+          break;
+        case DropPlace::kElsewhere:
+          ++out.drop_points_false;
+          ++out.drop_points_elsewhere;
+          break;
       }
-      (deepest > 0.75 * w ? out.drop_points_true : out.drop_points_false) += 1;
     }
   }
   if (!cfg.out_dir.empty()) {
@@ -747,10 +781,13 @@ std::string ghost_report(const GhostResult& r, const GhostConfig& c) {
   }
   s += t.str();
   s += format("\nlines of sight walked %llu, refused %llu; drop-offs marked %llu; rover 1's final map: %d drop-off\n"
-              "points (of the %.2f m raster) in cells holding a crater bowl deeper than the cell's obstacle height, %d not\n\n",
+              "points (of the %.2f m raster) in cells holding a crater bowl deeper than the cell's obstacle height, %d not:\n"
+              "%d on a crater's inner wall within its rim (a hazard in the terrain's truth: steeper than %.0f deg or a\n"
+              "step of relief), %d elsewhere\n\n",
               static_cast<unsigned long long>(r.team.rays), static_cast<unsigned long long>(r.team.refused),
               static_cast<unsigned long long>(r.team.drops_after), r.team.drop_points_true,
-              c.query_step_m > 0.04 ? c.query_step_m : 0.04, r.team.drop_points_false);
+              c.query_step_m > 0.04 ? c.query_step_m : 0.04, r.team.drop_points_false, r.team.drop_points_wall,
+              kMaxSlopeDeg, r.team.drop_points_elsewhere);
   s += format("Negative obstacles approached at 0.1 m per frame (range: camera to the near rim; stopping distance %.1f m)\n\n",
               kStoppingDistanceM);
   experiments::Table d({"obstacle", "map", "drop-off in swath at", "first path hazard at", "its front", "class",

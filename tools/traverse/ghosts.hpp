@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "experiments/common.hpp"
+#include "sim/terrain.hpp"
 #include "traverse/dropoff_truth.hpp"
 #include "traverse/ghost_truth.hpp"
 
@@ -83,11 +84,27 @@ struct TeamResult {
   GhostStats before[3], after[3];
   std::uint64_t rays = 0, refused = 0, drops_after = 0;
   /// Rover 1's final map (after): drop-off answers on the raster whose answering cell holds a
-  /// crater bowl deeper than the cell's obstacle height (true) or not (false).
+  /// crater bowl deeper than the cell's obstacle height (true) or not (false); of the latter, those
+  /// on a crater's inner wall (DropPlace::kInnerWall) and those elsewhere (false drop-offs).
   int drop_points_true = 0, drop_points_false = 0;
+  int drop_points_wall = 0, drop_points_elsewhere = 0;
   std::vector<std::string> pictures;
   GhostTruthResult truth;  ///< GhostConfig::ghost_truth_rays > 0 only
 };
+
+/// Where a drop-off answer lies on the true terrain, judged over the answering cell: the square
+/// [i w, (i + 1) w) x [j w, (j + 1) w) of width w (m) holding (x, y), obstacle step
+/// obstacle_fraction w.
+///  - kBowl: a crater bowl or ditch deeper than the step in the cell (sim::ProceduralTerrain::
+///    negative_depth at 5 x 5 points of the cell);
+///  - kInnerWall: not that, but the cell's centre lies inside a crater's rim circle (closer to its
+///    centre than half its diameter) and the true cell is a hazard of the traverse's truth
+///    (sim::compute_hazard_grid, 1 cm samples: relief over the step or slope over 20 deg, scene.hpp's
+///    kMaxSlopeDeg): the crater's upper inner wall, a hazard whichever class the map gives it;
+///  - kElsewhere: anything else (open ground, a rock's shadow, a rim's outer flank, a gentle
+///    slope): a false drop-off.
+enum class DropPlace { kBowl, kInnerWall, kElsewhere };
+DropPlace drop_place(const sim::ProceduralTerrain& terrain, double x, double y, double w, double obstacle_fraction);
 
 struct DropCase {
   std::string name;
