@@ -470,12 +470,12 @@ TeamResult run_team(const GhostConfig& cfg, std::string* error) {
       st.mean_life_frames = st.points_ever > 0 ? sum / st.points_ever : 0.0;
     }
   }
+  const double obstacle_fraction = double{map_params(cfg, true).obstacle_fraction};
   for (int j = 0; j < ras.ny; ++j) {
     for (int i = 0; i < ras.nx; ++i) {
       const QueryResult q = after[0]->query(static_cast<float>(ras.x(i)), static_cast<float>(ras.y(j)));
       if (q.cell_class != CellClass::kDropOff) continue;
-      switch (drop_place(*terrain, ras.x(i), ras.y(j), double{q.cell_width_m},
-                         double{map_params(cfg, true).obstacle_fraction})) {
+      switch (drop_place(*terrain, ras.x(i), ras.y(j), double{q.cell_width_m}, obstacle_fraction)) {
         case DropPlace::kBowl:
           ++out.drop_points_true;
           break;
