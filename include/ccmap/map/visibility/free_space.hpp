@@ -2,7 +2,8 @@
 // points of a frame are folded in, a bounded subsample of lines of sight, from the sensor to the
 // frame's points, is walked over every layer (map/visibility/ray_walk.hpp): the frame's even
 // subsample gives the slots, each with kRayCandidates candidates, and the candidates whose lines
-// of sight cross hidden ground or a contradicted cell are walked first (choose, score_candidate). A line of sight says
+// of sight cross hidden ground, pass below a known cell's top just before a point on ground below
+// it, or cross a contradicted cell are walked first (choose, score_candidate). A line of sight says
 // the terrain along it lies below it:
 //  - a cell whose surface the rays pass clearly below, in kContradictionsPerFrame rays of a
 //    frame, in free_space_clear_frames frames with no ray ending on the surface in between, is
@@ -91,13 +92,16 @@ template <typename Config>
 struct ConfigRayCandidates<Config, std::void_t<decltype(Config::kRayCandidates)>> {
   static constexpr std::size_t value = Config::kRayCandidates;
 };
-/// Cells (of a candidate's routed layer) before its point that are read for hidden ground.
+/// Cells (of a candidate's routed layer) before its point that are read for hidden ground and for
+/// a known top above the line of sight.
 inline constexpr int kHiddenCellsBack = 2;
 /// Cells with evidence against them that a frame's candidates aim at.
 inline constexpr std::uint32_t kMaxTargets = 16U;
 /// Records find_targets reads as words at once (a multiple of 2: two 4-byte records a word).
 inline constexpr std::size_t kAimGroup = 16U;
-/// Level added to a candidate whose line of sight crosses such a cell.
+/// Level added to a candidate whose line of sight crosses such a cell, or passes below the top of a
+/// known cell of the kHiddenCellsBack before its point by the clear margin and ends more than that
+/// margin below the cell's mean (score_candidate).
 inline constexpr std::uint32_t kTargetLevel = 3U;
 /// Levels of a candidate: 0 refused, 1 routed, up to 1 + kHiddenCellsBack + kTargetLevel.
 inline constexpr std::uint32_t kLevels = 8U;
@@ -530,17 +534,25 @@ class FreeSpace<Config, true> {
     }
   }
 
+  /// The cell as stored, unchecked (only to choose which lines of sight are walked: the walk reads
+  /// the cell through view_of). Weight 0 for an empty cell.
+  [[nodiscard]] CellView raw_view(const Layers& layers, int layer, CellIndex index) const noexcept {
+    if (Layers::is_ccm(layer)) {
+      const CcmCellType& c = layers.ccm_grid(layer).cell_unchecked(index);
+      return CellView{c.weight, c.mean_z, c.s_zz};
+    }
+    if constexpr (Layers::kHasFine) {
+      const FineCell& c = layers.fine.cell_unchecked(index);
+      return CellView{c.weight, c.height, 0.0F};
+    } else {
+      return CellView{0.0F, 0.0F, 0.0F};
+    }
+  }
+
   /// The cell's weight as stored, unchecked: only to skip an empty cell early (view_of reads
   /// the cell through its check before anything of it is used).
   [[nodiscard]] float raw_weight(const Layers& layers, int layer, CellIndex index) const noexcept {
-    if (Layers::is_ccm(layer)) {
-      return layers.ccm_grid(layer).cell_unchecked(index).weight;
-    }
-    if constexpr (Layers::kHasFine) {
-      return layers.fine.cell_unchecked(index).weight;
-    } else {
-      return 0.0F;
-    }
+    return raw_view(layers, layer, index).weight;
   }
 
   /// True if the top of the cell's surface stands above height z (m) by more than the layer's
@@ -945,9 +957,14 @@ class FreeSpace<Config, true> {
   /// The level of a routed candidate (1 .. kLevels - 1): 1, plus one for each of the cells one
   /// and two cells (of its routed layer) before its point towards the sensor that no point
   /// observed (its line of sight crosses hidden ground: a ditch, a crater, a shadow), plus
-  /// kTargetLevel if it passes through a cell with evidence against its surface (find_targets).
-  /// Reads cells unchecked: the level only chooses which lines of sight are walked; the walk
-  /// reads every cell through its check.
+  /// kTargetLevel if, at one of those two places, the top of the finest known cell stands above
+  /// the line of sight by the layer's clear margin (top_above) while the candidate's point lies
+  /// more than that margin below the cell's mean (the line reached ground an obstacle's height
+  /// below the surface the map holds just before it: a ghost, from the first frame it is gone,
+  /// before any record holds evidence; a line grazing a rock's top ends on the rock, near the
+  /// mean of the cells it passes, and is not promoted), or if it passes through a cell with
+  /// evidence against its surface (find_targets). Reads cells unchecked: the level only chooses which
+  /// lines of sight are walked; the walk reads every cell through its check.
   [[nodiscard]] std::uint32_t score_candidate(const Layers& layers, const RayEnd& end) const noexcept {
     std::uint32_t level = 1U;
     const float dx = static_cast<float>(end.u[0] - origin_u_[0]);
@@ -960,6 +977,7 @@ class FreeSpace<Config, true> {
     }
     const int routed = end.code;
     const float cell_u = static_cast<float>(std::int64_t{256} << routed);
+    bool below = false;
     for (int back = 1; back <= kHiddenCellsBack; ++back) {
       const float f = static_cast<float>(back) * cell_u / longest;
       if (!(f < 1.0F)) {
@@ -977,8 +995,23 @@ class FreeSpace<Config, true> {
         const int shift = kRayFracBits + layer;
         const CellIndex c{static_cast<std::int32_t>(u[0] >> shift), static_cast<std::int32_t>(u[1] >> shift)};
         seen = windows_.contains(layer, c) && raw_weight(layers, layer, c) > 0.0F;
+        if (seen && !below) {
+          // A known cell whose top stands above the line of sight there by the clear margin, and
+          // the line's point more than the margin below the cell's mean: it passes below a
+          // surface and reaches ground beyond it (a ghost).
+          // The point's test first: most candidates end on the surface of the cells before them.
+          const CellView view = raw_view(layers, layer, c);
+          if (end.z + consts_[layer].clear_margin_m < view.height) {
+            // The line's height there (m, map frame): the fraction f of the way back to the sensor.
+            const float z = end.z - f * (end.z - origin_z_);
+            below = top_above(view, layer, z);
+          }
+        }
       }
       level += seen ? 0U : 1U;
+    }
+    if (below) {
+      return level + kTargetLevel < kLevels ? level + kTargetLevel : kLevels - 1U;
     }
     // Cells with evidence against them: the line of sight passes within half a cell of the
     // centre, before its point.
