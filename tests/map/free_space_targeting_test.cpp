@@ -60,16 +60,22 @@ FrameCounters fold(Map& map, const SceneFrame& f) {
   return c;
 }
 
-/// Query points (2 cm raster) of the rectangle that answer `cls`.
-template <typename Map>
-int count_class(const Map& map, double x0, double y0, double x1, double y1, CellClass cls) {
+/// Query points (2 cm raster) of the rectangle whose class satisfies `pred`.
+template <typename Map, typename Pred>
+int count_where(const Map& map, double x0, double y0, double x1, double y1, Pred pred) {
   int n = 0;
   for (double x = x0; x <= x1; x += 0.02) {
     for (double y = y0; y <= y1; y += 0.02) {
-      n += map.query(static_cast<float>(x), static_cast<float>(y)).cell_class == cls ? 1 : 0;
+      n += pred(map.query(static_cast<float>(x), static_cast<float>(y)).cell_class) ? 1 : 0;
     }
   }
   return n;
+}
+
+/// Query points (2 cm raster) of the rectangle that answer `cls`.
+template <typename Map>
+int count_class(const Map& map, double x0, double y0, double x1, double y1, CellClass cls) {
+  return count_where(map, x0, y0, x1, y1, [cls](CellClass c) { return c == cls; });
 }
 
 /// Two stacks' snapshots (every layer's cells, every free-space record, the stage's frame count)
@@ -162,11 +168,10 @@ TEST(FreeSpaceTargeting, AFarGhostIsClearedWhereTheEvenSubsampleLeavesIt) {
       << "the even subsample cleared the far ghost too: this scene does not test the targeting";
 }
 
-/// Query points (2 cm raster) of the rectangle that answer a lethal class (obstacle, steep, drop).
+/// Query points (2 cm raster) of the rectangle that answer a lethal class (ccmap::is_lethal).
 template <typename Map>
 int count_lethal(const Map& map, double x0, double y0, double x1, double y1) {
-  return count_class(map, x0, y0, x1, y1, CellClass::kObstacle) + count_class(map, x0, y0, x1, y1, CellClass::kSteep) +
-         count_class(map, x0, y0, x1, y1, CellClass::kDropOff);
+  return count_where(map, x0, y0, x1, y1, [](CellClass c) { return ccmap::is_lethal(c); });
 }
 
 TEST(FreeSpaceTargeting, LinesOfSightEndingJustBehindAGoneBoxAreWalkedFirstFromItsFirstEmptyFrame) {

@@ -1010,11 +1010,16 @@ class FreeSpace<Config, true> {
       }
       level += seen ? 0U : 1U;
     }
-    if (below) {
-      return level + kTargetLevel < kLevels ? level + kTargetLevel : kLevels - 1U;
+    if (below || crosses_target(dx, dy)) {
+      level += kTargetLevel;
     }
-    // Cells with evidence against them: the line of sight passes within half a cell of the
-    // centre, before its point.
+    return level < kLevels ? level : kLevels - 1U;
+  }
+
+  /// True if the line of sight from the sensor to (dx, dy) (U units, relative to the sensor)
+  /// passes within half a cell of the centre of a cell with evidence against it (find_targets),
+  /// before its point.
+  [[nodiscard]] bool crosses_target(float dx, float dy) const noexcept {
     const float dd = dx * dx + dy * dy;
     for (std::uint32_t k = 0; k < target_count_; ++k) {
       const float cx = targets_[k].centre[0];
@@ -1023,11 +1028,10 @@ class FreeSpace<Config, true> {
       const float across = cx * dy - cy * dx;
       const float h = targets_[k].half;
       if (along > 0.0F && along < dd && across * across < h * h * dd) {
-        level += kTargetLevel;
-        break;
+        return true;
       }
     }
-    return level < kLevels ? level : kLevels - 1U;
+    return false;
   }
 
   /// The cells the frame's candidates aim at (score_candidate): known cells whose record holds
